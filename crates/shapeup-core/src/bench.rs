@@ -1,0 +1,98 @@
+//! The standard benchmark scenarios (`shapeup bench`, criterion benches): a mesh with its
+//! 2 % lowest vertices (by y) fixed and its 2 % highest moved by (0.25 D, 0.1 D, 0), D the
+//! bounding-box diagonal, under one of three shape models.
+
+use crate::mesh::{Mesh, PolygonReport};
+use crate::scene::{GroupSpec, LoadedScene, MeshSettings, Scene, SceneError, SelectionSpec, SolverSettings, Targets};
+use std::path::PathBuf;
+
+/// A shape model of the benchmarks.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Scenario {
+    /// Edge springs (multiplier 10).
+    Springs,
+    /// Triangle strain (10) + bending (10).
+    StrainBending,
+    /// Isometric one-rings (100).
+    Iso,
+}
+
+impl Scenario {
+    /// Every scenario, in table order.
+    pub const ALL: [Scenario; 3] = [Scenario::Springs, Scenario::StrainBending, Scenario::Iso];
+
+    /// Short name (`springs`, `strain+bending`, `iso`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Scenario::Springs => "springs",
+            Scenario::StrainBending => "strain+bending",
+            Scenario::Iso => "iso",
+        }
+    }
+
+    /// Shape groups: (type, multiplier).
+    fn shape(self) -> &'static [(&'static str, f64)] {
+        match self {
+            Scenario::Springs => &[("edge_spring", 10.0)],
+            Scenario::StrainBending => &[("triangle_strain", 10.0), ("bending", 10.0)],
+            Scenario::Iso => &[("iso_one_ring", 100.0)],
+        }
+    }
+}
+
+/// The vertices used by a triangle, sorted by y: the lowest and highest `fraction` of them
+/// (at least one each).
+pub fn extreme_vertices(mesh: &Mesh, fraction: f64) -> (Vec<usize>, Vec<usize>) {
+    let mut used = vec![false; mesh.num_vertices()];
+    mesh.triangles.iter().flatten().for_each(|&v| used[v as usize] = true);
+    let mut order: Vec<usize> = (0..mesh.num_vertices()).filter(|&v| used[v]).collect();
+    order.sort_by(|&a, &b| mesh.positions[a].y.total_cmp(&mesh.positions[b].y));
+    let k = ((order.len() as f64 * fraction).ceil() as usize).clamp(1, order.len() / 2);
+    let low = order[..k].to_vec();
+    let high = order[order.len() - k..].to_vec();
+    (low, high)
+}
+
+/// The benchmark scene of `scenario` on `mesh`.
+pub fn scenario_scene(scenario: Scenario, mesh: &Mesh, mesh_path: PathBuf) -> Scene {
+    let (low, high) = extreme_vertices(mesh, 0.02);
+    let (lo, hi) = mesh.bounding_box();
+    let d = (hi - lo).length();
+    let mut groups: Vec<GroupSpec> = scenario
+        .shape()
+        .iter()
+        .map(|&(kind, weight)| GroupSpec {
+            kind: kind.into(),
+            name: kind.into(),
+            weight,
+            selection: SelectionSpec::All,
+            targets: Targets::default(),
+            options: Default::default(),
+        })
+        .collect();
+    for (name, vertices, translate) in [("fixed", low, [0.0; 3]), ("moved", high, [0.25 * d, 0.1 * d, 0.0])] {
+        groups.push(GroupSpec {
+            kind: "position".into(),
+            name: name.into(),
+            weight: 1.0,
+            selection: SelectionSpec::Vertices(vertices),
+            targets: Targets { translate, ..Default::default() },
+            options: Default::default(),
+        });
+    }
+    Scene {
+        mesh: MeshSettings { path: mesh_path.clone(), normalize: true, tetrahedralize: false },
+        solver: SolverSettings::default(),
+        groups,
+        base_dir: PathBuf::new(),
+        file: mesh_path,
+    }
+}
+
+/// Builds the benchmark system of `scenario` on an already loaded mesh.
+///
+/// # Errors
+/// As [`Scene::build`].
+pub fn load_scenario(scenario: Scenario, mesh: &Mesh, mesh_path: PathBuf) -> Result<LoadedScene, SceneError> {
+    scenario_scene(scenario, mesh, mesh_path).build(mesh.clone(), PolygonReport::default(), 0.0)
+}

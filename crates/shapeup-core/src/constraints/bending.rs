@@ -1,0 +1,220 @@
+//! Bending: keeps the length of the mean-curvature normal at its rest value.
+//!
+//! Term: ω ‖H(q) − p‖² with H(q) = Σ_j (c_ij / A_i)(q_i − q_j) the cotan Laplacian of interior
+//! vertex i (rest cotan weights c_ij and vertex area A_i), ω = 0.01 A_i, and
+//! p = ‖H⁰‖ H/‖H‖ (H⁰ = H(x⁰)); if ‖H‖ < 1e-10, p = ‖H⁰‖ n̄ with n̄ the normalized sum of the
+//! unit normals of i's triangles; p = 0 if ‖H⁰‖ < 1e-12. With flip prevention, p is negated
+//! when sign(n̄·H) ≠ sign(n̄⁰·H⁰) and ‖H‖ > 1e-5.
+
+use super::{BuildContext, Constraint, ConstraintError, ConstraintType, Params, RowSink, non_empty};
+use crate::geometry::{RestGeometry, triangle_normal};
+use glam::DVec3;
+
+/// The cotan Laplacian row of one vertex: H(q) = Σ_j (c_ij / A_i)(q_i − q_j). Shared by
+/// bending and smoothing.
+#[derive(Debug, Clone)]
+pub(crate) struct LaplacianRow {
+    /// `[i, j₁, …, j_k]`: the centre first.
+    pub vertices: Vec<u32>,
+    /// Coefficient of each vertex of `vertices` in H (the centre's is Σ_j c_ij / A_i).
+    pub coeffs: Vec<f64>,
+}
+
+impl LaplacianRow {
+    /// The row of vertex `i` from the rest geometry's cotan weights and vertex area.
+    pub fn new(rest: &RestGeometry, i: usize) -> Self {
+        let stencil = rest.laplacian_stencil(i);
+        let mut vertices = vec![i as u32];
+        let mut coeffs = vec![stencil.iter().map(|&(_, w)| w).sum()];
+        for (j, w) in stencil {
+            vertices.push(j);
+            coeffs.push(-w);
+        }
+        LaplacianRow { vertices, coeffs }
+    }
+
+    /// H(q).
+    #[inline]
+    pub fn apply(&self, q: &[DVec3]) -> DVec3 {
+        self.vertices.iter().zip(&self.coeffs).map(|(&v, &c)| c * q[v as usize]).sum()
+    }
+
+    /// Emits the row as row 0.
+    pub fn rows(&self, sink: &mut RowSink) {
+        for (&v, &c) in self.vertices.iter().zip(&self.coeffs) {
+            sink.push(0, v, c);
+        }
+    }
+}
+
+/// Bending of one interior vertex.
+#[derive(Debug, Clone)]
+pub struct Bending {
+    row: LaplacianRow,
+    /// i's triangles, for the normal n̄.
+    triangles: Vec<[u32; 3]>,
+    rest_norm: f64,
+    /// sign(n̄⁰ · H⁰), for flip prevention.
+    rest_sign: f64,
+    prevent_flips: bool,
+    weight: f64,
+}
+
+impl Bending {
+    /// Bending of interior vertex `i` of the rest geometry.
+    pub fn new(rest: &RestGeometry, i: usize, prevent_flips: bool) -> Self {
+        let row = LaplacianRow::new(rest, i);
+        let triangles: Vec<[u32; 3]> = rest.triangles.iter().filter(|t| t.contains(&(i as u32))).copied().collect();
+        let h0 = row.apply(&rest.positions);
+        let n0 = mean_normal(&triangles, &rest.positions);
+        Bending {
+            row,
+            triangles,
+            rest_norm: h0.length(),
+            rest_sign: n0.dot(h0).signum(),
+            prevent_flips,
+            weight: 0.01 * rest.vertex_areas[i],
+        }
+    }
+}
+
+/// n̄: the normalized sum of the unit normals of `triangles` at positions `q`.
+fn mean_normal(triangles: &[[u32; 3]], q: &[DVec3]) -> DVec3 {
+    triangles
+        .iter()
+        .map(|t| triangle_normal(q[t[0] as usize], q[t[1] as usize], q[t[2] as usize]))
+        .sum::<DVec3>()
+        .normalize_or_zero()
+}
+
+impl Constraint for Bending {
+    fn kind(&self) -> &'static str {
+        "bending"
+    }
+    fn vertices(&self) -> &[u32] {
+        &self.row.vertices
+    }
+    fn element_weight(&self) -> f64 {
+        self.weight
+    }
+    fn num_rows(&self) -> usize {
+        1
+    }
+    fn rows(&self, sink: &mut RowSink) {
+        self.row.rows(sink);
+    }
+    fn project(&self, q: &[DVec3], out: &mut [DVec3]) {
+        if self.rest_norm < 1e-12 {
+            out[0] = DVec3::ZERO;
+            return;
+        }
+        let h = self.row.apply(q);
+        let length = h.length();
+        let mut p = if length < 1e-10 {
+            self.rest_norm * mean_normal(&self.triangles, q)
+        } else {
+            h * (self.rest_norm / length)
+        };
+        if self.prevent_flips && length > 1e-5 && mean_normal(&self.triangles, q).dot(h).signum() != self.rest_sign {
+            p = -p;
+        }
+        out[0] = p;
+    }
+}
+
+/// Builds a [`Bending`] on every selected interior vertex. Option `prevent_flips` (default false).
+#[derive(Debug, Clone, Copy)]
+pub struct BendingType;
+
+impl ConstraintType for BendingType {
+    fn name(&self) -> &'static str {
+        "bending"
+    }
+    fn summary(&self) -> &'static str {
+        "bending: each interior vertex keeps its mean curvature magnitude"
+    }
+    fn options(&self) -> &'static [&'static str] {
+        &["prevent_flips"]
+    }
+    fn default_multiplier(&self) -> f64 {
+        10.0
+    }
+    fn build(&self, ctx: &BuildContext, params: &mut Params) -> Result<Vec<Box<dyn Constraint>>, ConstraintError> {
+        let prevent_flips = params.take_bool("bending", "prevent_flips", false)?;
+        let rest = ctx.rest;
+        let built = (0..rest.num_vertices())
+            .filter(|&i| rest.topology.is_interior(i) && ctx.selection.contains(i as u32))
+            .map(|i| Box::new(Bending::new(rest, i, prevent_flips)) as Box<dyn Constraint>)
+            .collect();
+        non_empty(built, "bending", "interior vertices")
+    }
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+    use crate::constraints::test_util::{Rng, dist2};
+
+    /// A closed octahedron-like bumpy mesh: every vertex interior, nonzero curvature.
+    pub(crate) fn octahedron() -> RestGeometry {
+        let p = vec![DVec3::X, -DVec3::X, DVec3::Y, -DVec3::Y, DVec3::Z * 1.3, -DVec3::Z * 0.8];
+        let t = vec![[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]];
+        RestGeometry::new(p, t, vec![])
+    }
+
+    #[test]
+    fn projection_lies_on_sphere_of_rest_norm_and_is_closest() {
+        let rest = octahedron();
+        let c = Bending::new(&rest, 4, false);
+        let mut rng = Rng(3);
+        for _ in 0..30 {
+            let q: Vec<DVec3> = rest.positions.iter().map(|&x| x + 0.3 * rng.vec3()).collect();
+            let cq = c.apply(&q);
+            let mut p = [DVec3::ZERO];
+            c.project(&q, &mut p);
+            assert!((p[0].length() - c.rest_norm).abs() < 1e-12);
+            let d = dist2(&cq, &p);
+            for _ in 0..200 {
+                let s = rng.vec3().normalize() * c.rest_norm;
+                assert!(d <= (cq[0] - s).length_squared() + 1e-12);
+            }
+        }
+    }
+
+    #[test]
+    fn rest_state_has_zero_energy_and_rows_are_translation_invariant() {
+        let rest = octahedron();
+        let c = Bending::new(&rest, 0, true);
+        assert!(c.energy(&rest.positions) < 1e-24);
+        let shifted: Vec<DVec3> = rest.positions.iter().map(|&x| x + DVec3::new(3.0, -1.0, 2.0)).collect();
+        assert!(c.energy(&shifted) < 1e-20);
+    }
+
+    #[test]
+    fn flip_prevention_negates_an_inverted_curvature() {
+        let rest = octahedron();
+        let with = Bending::new(&rest, 4, true);
+        let without = Bending::new(&rest, 4, false);
+        // Push the apex through the equator: H points the other way relative to the normal.
+        let mut q = rest.positions.clone();
+        q[4] = DVec3::Z * -0.5;
+        let (mut a, mut b) = ([DVec3::ZERO], [DVec3::ZERO]);
+        with.project(&q, &mut a);
+        without.project(&q, &mut b);
+        assert!((a[0] + b[0]).length() < 1e-12, "{a:?} vs {b:?}");
+    }
+
+    #[test]
+    fn vanishing_curvature_projects_along_the_normal() {
+        let rest = octahedron();
+        let c = Bending::new(&rest, 4, false);
+        // Flatten the apex into the equator plane: H ≈ 0.
+        let mut q = rest.positions.clone();
+        q[4] = DVec3::ZERO;
+        q[5] = DVec3::Z * -0.8;
+        let mut p = [DVec3::ZERO];
+        c.project(&q, &mut p);
+        assert!((p[0].length() - c.rest_norm).abs() < 1e-12);
+        assert!(p[0].is_finite());
+    }
+}

@@ -1,0 +1,357 @@
+//! Constraints: the `w‖C q − p(q)‖²` terms of the ShapeUp / Projective Dynamics energy.
+//!
+//! A constraint type is one file: a struct implementing [`Constraint`] (its rows of C, its
+//! projection p and its element weight ω) and a unit struct implementing [`ConstraintType`]
+//! (how a scene or the editor builds it on a selection), listed once in [`registry`]. Assembly,
+//! factorization, the parallel local step, energies and the editor's list are generic over them.
+//!
+//! Rows are numbered from 0 inside a constraint: a constraint never learns where its rows land
+//! in the global system (the assembler adds the offset and the weight).
+
+use crate::geometry::{RestGeometry, WorkingFrame};
+use glam::DVec3;
+use std::any::Any;
+use std::fmt::Debug;
+
+mod bending;
+mod edge_spring;
+mod floor;
+// mod iso_one_ring;
+mod position;
+mod smoothing;
+// mod tet_strain;
+// mod triangle_strain;
+
+pub use bending::{Bending, BendingType};
+pub use edge_spring::{EdgeSpring, EdgeSpringType};
+pub use floor::{Floor, FloorType};
+// pub use iso_one_ring::{IsoOneRing, IsoOneRingType};
+pub use position::{Position, PositionType};
+pub use smoothing::{Smoothing, SmoothingType};
+// pub use tet_strain::{TetStrain, TetStrainType};
+// pub use triangle_strain::{TriangleStrain, TriangleStrainType};
+
+/// One entry of a constraint's selection matrix C_i: `C[row, vertex] = coeff`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RowEntry {
+    /// Row within the constraint, `0..num_rows()`.
+    pub row: u32,
+    /// Vertex index (column of C).
+    pub vertex: u32,
+    /// Coefficient.
+    pub coeff: f64,
+}
+
+/// Collects the rows of C a constraint emits ([`Constraint::rows`]).
+#[derive(Debug, Default, Clone)]
+pub struct RowSink {
+    /// Entries in emission order.
+    pub entries: Vec<RowEntry>,
+}
+
+impl RowSink {
+    /// Adds `C[row, vertex] += coeff`.
+    pub fn push(&mut self, row: usize, vertex: u32, coeff: f64) {
+        self.entries.push(RowEntry { row: row as u32, vertex, coeff });
+    }
+}
+
+/// A constraint term `ω ‖C q − p(q)‖²_F` (the group multiplier g is applied by its group).
+///
+/// - `C q` is `num_rows()×3`: each row is a linear combination of vertex positions, given by
+///   [`Constraint::rows`].
+/// - `p(q)` is the closest point to `C q` on the constraint set, written by
+///   [`Constraint::project`].
+///
+/// Implementations are immutable during a solve (`&self`): the local step projects all
+/// constraints in parallel into disjoint slices of one buffer.
+pub trait Constraint: Any + Send + Sync + Debug {
+    /// The type's name, as in scene files (`"edge_spring"`, …).
+    fn kind(&self) -> &'static str;
+    /// The vertices the constraint reads (every column of its rows).
+    fn vertices(&self) -> &[u32];
+    /// The element weight ω_i (rest length, area, volume, … as in the math reference).
+    fn element_weight(&self) -> f64;
+    /// Number of rows k_i of C_i; fixed after construction.
+    fn num_rows(&self) -> usize;
+    /// Emits the rows of C_i, numbered `0..num_rows()`.
+    fn rows(&self, sink: &mut RowSink);
+    /// Writes the projection p_i(q) (`num_rows()` rows) into `out`.
+    fn project(&self, q: &[DVec3], out: &mut [DVec3]);
+
+    /// `C_i q`, computed from [`Constraint::rows`] (for tests and diagnostics, not the solver's
+    /// hot path, which uses the assembled matrix).
+    fn apply(&self, q: &[DVec3]) -> Vec<DVec3> {
+        let mut sink = RowSink::default();
+        self.rows(&mut sink);
+        let mut cq = vec![DVec3::ZERO; self.num_rows()];
+        for e in &sink.entries {
+            cq[e.row as usize] += e.coeff * q[e.vertex as usize];
+        }
+        cq
+    }
+
+    /// The term's energy without the group multiplier: ω ‖C q − p(q)‖².
+    fn energy(&self, q: &[DVec3]) -> f64 {
+        let cq = self.apply(q);
+        let mut p = vec![DVec3::ZERO; self.num_rows()];
+        self.project(q, &mut p);
+        self.element_weight() * cq.iter().zip(&p).map(|(a, b)| (*a - *b).length_squared()).sum::<f64>()
+    }
+}
+
+/// Which vertices a constraint group applies to.
+///
+/// Per-vertex constraints (bending, smoothing, iso_one_ring, floor, position) take the chosen
+/// vertices; edge, triangle and tetrahedron constraints take the elements all of whose vertices
+/// are chosen.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Selection {
+    /// Every vertex.
+    All,
+    /// `chosen[i]` for each vertex i.
+    Vertices(Vec<bool>),
+}
+
+impl Selection {
+    /// A selection of the listed vertex indices out of `n` (indices must be `< n`).
+    pub fn from_indices(n: usize, indices: &[usize]) -> Self {
+        let mut chosen = vec![false; n];
+        for &i in indices {
+            if let Some(c) = chosen.get_mut(i) {
+                *c = true;
+            }
+        }
+        Selection::Vertices(chosen)
+    }
+
+    /// Whether vertex `v` is chosen.
+    pub fn contains(&self, v: u32) -> bool {
+        match self {
+            Selection::All => true,
+            Selection::Vertices(chosen) => chosen.get(v as usize).copied().unwrap_or(false),
+        }
+    }
+
+    /// Whether every vertex of an element is chosen.
+    pub fn contains_all(&self, element: &[u32]) -> bool {
+        element.iter().all(|&v| self.contains(v))
+    }
+}
+
+/// What a [`ConstraintType`] needs to build constraints.
+#[derive(Debug, Clone, Copy)]
+pub struct BuildContext<'a> {
+    /// Rest shape (working frame) with its topology and rest quantities.
+    pub rest: &'a RestGeometry,
+    /// The vertices the group applies to.
+    pub selection: &'a Selection,
+    /// The working frame, to convert options given in input units (e.g. a floor height).
+    pub frame: &'a WorkingFrame,
+}
+
+/// An error building constraints from a scene entry or the editor.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ConstraintError {
+    /// No constraint type has this name.
+    #[error("unknown constraint type \"{0}\" (known: {known})", known = type_names().join(", "))]
+    UnknownType(String),
+    /// An option that this constraint type does not take.
+    #[error("unknown key \"{key}\" for a {kind} constraint{hint}", hint = hint_for(&allowed_hint(*allowed)))]
+    UnknownOption {
+        /// Constraint type.
+        kind: &'static str,
+        /// The key as written.
+        key: String,
+        /// The keys it does take.
+        allowed: &'static [&'static str],
+    },
+    /// An option with a value of the wrong type or out of range.
+    #[error("{kind} option \"{key}\": {problem}")]
+    BadOption {
+        /// Constraint type.
+        kind: &'static str,
+        /// The key.
+        key: String,
+        /// What is wrong, and what is expected.
+        problem: String,
+    },
+    /// The selection contains no element this type can constrain.
+    #[error("the {kind} group selects no {element} (check its vertices, box or sphere)")]
+    NothingSelected {
+        /// Constraint type.
+        kind: &'static str,
+        /// "vertices", "edges", "triangles", …
+        element: &'static str,
+    },
+}
+
+fn allowed_hint(allowed: &[&str]) -> String {
+    allowed.join(", ")
+}
+
+fn hint_for(list: &str) -> String {
+    if list.is_empty() { " (it takes no options)".into() } else { format!(" (allowed: {list})") }
+}
+
+/// Type-specific options of a constraint group (e.g. `strain_freedom`), taken one by one by the
+/// builder; whatever is left is reported as an unknown key.
+#[derive(Debug, Clone, Default)]
+pub struct Params {
+    map: serde_json::Map<String, serde_json::Value>,
+}
+
+impl Params {
+    /// Options from a JSON object (scene entries are converted to JSON values first).
+    pub fn new(map: serde_json::Map<String, serde_json::Value>) -> Self {
+        Params { map }
+    }
+
+    /// Sets an option (used by the editor and tests).
+    pub fn with(mut self, key: &str, value: impl Into<serde_json::Value>) -> Self {
+        self.map.insert(key.to_string(), value.into());
+        self
+    }
+
+    /// Takes a finite number option, or `default` when absent.
+    ///
+    /// # Errors
+    /// [`ConstraintError::BadOption`] if the value is not a finite number.
+    pub fn take_f64(&mut self, kind: &'static str, key: &str, default: f64) -> Result<f64, ConstraintError> {
+        match self.map.remove(key) {
+            None => Ok(default),
+            Some(v) => v.as_f64().filter(|x| x.is_finite()).ok_or_else(|| ConstraintError::BadOption {
+                kind,
+                key: key.into(),
+                problem: format!("expected a number, found {v}"),
+            }),
+        }
+    }
+
+    /// Takes a boolean option, or `default` when absent.
+    ///
+    /// # Errors
+    /// [`ConstraintError::BadOption`] if the value is not a boolean.
+    pub fn take_bool(&mut self, kind: &'static str, key: &str, default: bool) -> Result<bool, ConstraintError> {
+        match self.map.remove(key) {
+            None => Ok(default),
+            Some(v) => v.as_bool().ok_or_else(|| ConstraintError::BadOption {
+                kind,
+                key: key.into(),
+                problem: format!("expected true or false, found {v}"),
+            }),
+        }
+    }
+
+    /// Fails on the first option nobody took.
+    ///
+    /// # Errors
+    /// [`ConstraintError::UnknownOption`] naming the key.
+    pub fn finish(self, kind: &'static str, allowed: &'static [&'static str]) -> Result<(), ConstraintError> {
+        match self.map.into_iter().next() {
+            None => Ok(()),
+            Some((key, _)) => Err(ConstraintError::UnknownOption { kind, key, allowed }),
+        }
+    }
+}
+
+/// A kind of constraint as users see it: a name, a default multiplier, and how to build its
+/// constraints on a selection.
+pub trait ConstraintType: Sync {
+    /// Name used in scene files and the editor (`"edge_spring"`).
+    fn name(&self) -> &'static str;
+    /// One line for menus and `--help`.
+    fn summary(&self) -> &'static str;
+    /// The option keys [`ConstraintType::build`] takes (besides the common ones).
+    fn options(&self) -> &'static [&'static str];
+    /// The editor's default group multiplier g (math reference, "Notes").
+    fn default_multiplier(&self) -> f64;
+    /// Builds this type's constraints on `ctx.selection`, taking its options from `params`.
+    ///
+    /// # Errors
+    /// [`ConstraintError`] for a bad option or a selection with nothing to constrain.
+    fn build(&self, ctx: &BuildContext, params: &mut Params) -> Result<Vec<Box<dyn Constraint>>, ConstraintError>;
+}
+
+/// Every constraint type, in the order menus list them.
+pub fn registry() -> &'static [&'static dyn ConstraintType] {
+    &[
+        &EdgeSpringType,
+        // &TriangleStrainType,
+        &BendingType,
+        // &IsoOneRingType,
+        &SmoothingType,
+        // &TetStrainType,
+        &PositionType,
+        &FloorType,
+    ]
+}
+
+/// The names of every constraint type.
+pub fn type_names() -> Vec<&'static str> {
+    registry().iter().map(|t| t.name()).collect()
+}
+
+/// Looks a constraint type up by name.
+///
+/// # Errors
+/// [`ConstraintError::UnknownType`] listing the known names.
+pub fn constraint_type(name: &str) -> Result<&'static dyn ConstraintType, ConstraintError> {
+    registry()
+        .iter()
+        .copied()
+        .find(|t| t.name() == name)
+        .ok_or_else(|| ConstraintError::UnknownType(name.to_string()))
+}
+
+/// Builds the constraints of a type on a selection: looks up `kind`, passes `params` and rejects
+/// options it did not take.
+///
+/// # Errors
+/// As [`constraint_type`] and [`ConstraintType::build`], and an unknown option.
+pub fn build_constraints(
+    kind: &str,
+    ctx: &BuildContext,
+    mut params: Params,
+) -> Result<Vec<Box<dyn Constraint>>, ConstraintError> {
+    let ty = constraint_type(kind)?;
+    let built = ty.build(ctx, &mut params)?;
+    params.finish(ty.name(), ty.options())?;
+    Ok(built)
+}
+
+/// Fails with [`ConstraintError::NothingSelected`] when a builder produced nothing.
+pub(crate) fn non_empty(
+    built: Vec<Box<dyn Constraint>>,
+    kind: &'static str,
+    element: &'static str,
+) -> Result<Vec<Box<dyn Constraint>>, ConstraintError> {
+    if built.is_empty() { Err(ConstraintError::NothingSelected { kind, element }) } else { Ok(built) }
+}
+
+#[cfg(test)]
+pub(crate) mod test_util {
+    //! Shared helpers for projection tests.
+    use super::*;
+
+    /// `‖a − b‖_F²` of two row lists.
+    pub fn dist2(a: &[DVec3], b: &[DVec3]) -> f64 {
+        a.iter().zip(b).map(|(x, y)| (*x - *y).length_squared()).sum()
+    }
+
+    /// A small deterministic pseudo-random generator (xorshift), so tests need no extra crate.
+    pub struct Rng(pub u64);
+    impl Rng {
+        /// Uniform in [-1, 1).
+        pub fn uniform(&mut self) -> f64 {
+            self.0 ^= self.0 << 13;
+            self.0 ^= self.0 >> 7;
+            self.0 ^= self.0 << 17;
+            (self.0 >> 11) as f64 / (1u64 << 52) as f64 - 1.0
+        }
+        /// A vector with entries uniform in [-1, 1).
+        pub fn vec3(&mut self) -> DVec3 {
+            DVec3::new(self.uniform(), self.uniform(), self.uniform())
+        }
+    }
+}

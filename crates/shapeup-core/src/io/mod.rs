@@ -1,0 +1,387 @@
+//! Mesh input and output.
+//!
+//! | format | read | write |
+//! |--------|------|-------|
+//! | Wavefront `.obj` | `v`, `f` (any polygon size, `i`, `i/t`, `i//n`, `i/t/n`, negative indices) | `v` + `f` |
+//! | Stanford `.ply` | ascii, binary little and big endian, any numeric types | binary little endian (default), big endian, ascii |
+//! | `.stl` | ascii and binary | binary |
+//! | `.off` | `OFF` (and `COFF`, `NOFF`, … whose extra values are ignored) | `OFF` |
+//!
+//! **Vertex order is preserved**: every reader returns the file's vertices, all of them (also
+//! those no face uses), in file order, so that vertex indices in scene files and selections stay
+//! valid. STL is the exception as it stores no shared vertices: its readers merge exactly equal
+//! coordinates into one vertex, numbered in order of first occurrence, so an STL file we wrote
+//! reads back with the same connectivity (but without unreferenced vertices, see [`stl`]).
+//!
+//! Polygons are fan-triangulated by [`Mesh::from_polygons`]; what that changed is returned in
+//! [`LoadedMesh::report`]. Tetrahedra are not stored by any of these formats and are not written.
+//!
+//! Every reader is hand-written (the crates available reorder or drop vertices, or do not report
+//! where a file is broken); no input makes them panic, and counts from a header never size an
+//! allocation beyond [`MAX_PREALLOCATION`]. Every writer goes through [`write_atomic`].
+
+pub mod obj;
+pub mod off;
+pub mod ply;
+pub mod stl;
+
+use std::fs::{self, File, OpenOptions};
+use std::io::{self, BufRead, BufReader, BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use crate::mesh::{Mesh, MeshError, PolygonReport};
+
+pub use ply::PlyEncoding;
+
+/// Most elements any reader reserves room for up front, whatever a header claims; vectors grow
+/// past it as data actually arrives.
+pub const MAX_PREALLOCATION: usize = 1 << 20;
+
+/// An error reading or writing a mesh file. Each message is one line naming the file and, where
+/// there is one, the line (text formats) or byte offset and element (binary formats).
+#[derive(Debug, thiserror::Error)]
+pub enum IoError {
+    /// The file could not be opened.
+    #[error("cannot open {}: {source}", path.display())]
+    Open {
+        /// The file.
+        path: PathBuf,
+        /// The operating system's error.
+        source: io::Error,
+    },
+    /// Reading failed part-way (not a format problem).
+    #[error("error reading {}: {source}", path.display())]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// The operating system's error.
+        source: io::Error,
+    },
+    /// A text file (or the text header of a binary one) is malformed at a line.
+    #[error("{}: line {line}: {message}", path.display())]
+    Parse {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line number.
+        line: usize,
+        /// What is wrong and what was expected.
+        message: String,
+    },
+    /// A binary file is malformed (usually truncated) at a byte offset.
+    #[error("{}: byte offset {offset}: {message}", path.display())]
+    Binary {
+        /// The file.
+        path: PathBuf,
+        /// Offset from the start of the file where the problem was found.
+        offset: u64,
+        /// What is wrong (naming the element and its index) and what was expected.
+        message: String,
+    },
+    /// A well-formed file that holds no usable mesh (no vertices, no triangles).
+    #[error("{}: {message}", path.display())]
+    Invalid {
+        /// The file.
+        path: PathBuf,
+        /// What is missing.
+        message: String,
+    },
+    /// The file extension is not one of the supported formats.
+    #[error("{}: unsupported mesh format {} (supported: {})", path.display(), describe_extension(extension), SUPPORTED)]
+    UnsupportedFormat {
+        /// The file.
+        path: PathBuf,
+        /// Its extension (empty when it has none).
+        extension: String,
+    },
+    /// The elements read do not form a valid mesh (index out of range, non-finite coordinate).
+    #[error("{}: invalid mesh: {source}", path.display())]
+    Mesh {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong with the mesh.
+        source: MeshError,
+    },
+    /// Writing (or replacing) the file failed; the previous file, if any, is untouched.
+    #[error("cannot write {}: {source}", path.display())]
+    Write {
+        /// The target file.
+        path: PathBuf,
+        /// The operating system's (or the writer's) error.
+        source: io::Error,
+    },
+}
+
+const SUPPORTED: &str = ".obj, .ply, .stl, .off";
+
+fn describe_extension(extension: &str) -> String {
+    if extension.is_empty() { "(no extension)".to_owned() } else { format!("'.{extension}'") }
+}
+
+/// A mesh read from a file, with what triangulation changed.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LoadedMesh {
+    /// The mesh, vertices in file order.
+    pub mesh: Mesh,
+    /// Polygons split into fans and degenerate faces dropped.
+    pub report: PolygonReport,
+}
+
+/// The formats [`read_mesh`] understands.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MeshFormat {
+    /// Wavefront OBJ.
+    Obj,
+    /// Stanford PLY.
+    Ply,
+    /// STL, ascii or binary.
+    Stl,
+    /// Object File Format.
+    Off,
+}
+
+impl MeshFormat {
+    /// The format named by a path's extension (case-insensitive).
+    ///
+    /// # Errors
+    /// [`IoError::UnsupportedFormat`] for any other extension.
+    pub fn from_path(path: &Path) -> Result<Self, IoError> {
+        let extension = path.extension().map(|e| e.to_string_lossy().into_owned()).unwrap_or_default();
+        match extension.to_ascii_lowercase().as_str() {
+            "obj" => Ok(Self::Obj),
+            "ply" => Ok(Self::Ply),
+            "stl" => Ok(Self::Stl),
+            "off" => Ok(Self::Off),
+            _ => Err(IoError::UnsupportedFormat { path: path.to_path_buf(), extension }),
+        }
+    }
+}
+
+/// How [`write_mesh_with`] encodes a mesh.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum WriteFormat {
+    /// Wavefront OBJ, coordinates with enough digits to read back exactly.
+    Obj,
+    /// PLY with `double` coordinates and `list uchar int vertex_indices` faces.
+    Ply(PlyEncoding),
+    /// Binary STL (`f32` coordinates, one normal per face; unreferenced vertices are lost).
+    StlBinary,
+    /// OFF, coordinates with enough digits to read back exactly.
+    Off,
+}
+
+impl WriteFormat {
+    /// The default encoding for a path's extension: `.obj`, `.ply` (binary little endian),
+    /// `.stl` (binary), `.off`.
+    ///
+    /// # Errors
+    /// [`IoError::UnsupportedFormat`] for any other extension.
+    pub fn from_path(path: &Path) -> Result<Self, IoError> {
+        Ok(match MeshFormat::from_path(path)? {
+            MeshFormat::Obj => Self::Obj,
+            MeshFormat::Ply => Self::Ply(PlyEncoding::BinaryLittleEndian),
+            MeshFormat::Stl => Self::StlBinary,
+            MeshFormat::Off => Self::Off,
+        })
+    }
+}
+
+/// Reads a mesh, choosing the format from the extension (`.obj`, `.ply`, `.stl`, `.off`,
+/// case-insensitive). Vertices keep their file order (see the [module docs](self)).
+///
+/// # Errors
+/// [`IoError`] naming `path`: unsupported extension, file not found, malformed content (with the
+/// line or byte offset), or an invalid mesh.
+pub fn read_mesh(path: &Path) -> Result<LoadedMesh, IoError> {
+    let format = MeshFormat::from_path(path)?;
+    let file = File::open(path).map_err(|source| IoError::Open { path: path.to_path_buf(), source })?;
+    let reader = BufReader::new(file);
+    match format {
+        MeshFormat::Obj => obj::read_obj(reader, path),
+        MeshFormat::Ply => ply::read_ply(reader, path),
+        MeshFormat::Stl => stl::read_stl(reader, path),
+        MeshFormat::Off => off::read_off(reader, path),
+    }
+}
+
+/// Writes a mesh in the default encoding for the extension (see [`WriteFormat::from_path`]),
+/// atomically.
+///
+/// # Errors
+/// [`IoError::UnsupportedFormat`], [`IoError::Mesh`] if the mesh does not validate, or
+/// [`IoError::Write`].
+pub fn write_mesh(path: &Path, mesh: &Mesh) -> Result<(), IoError> {
+    write_mesh_with(path, mesh, WriteFormat::from_path(path)?)
+}
+
+/// Writes a mesh in the given encoding, whatever the extension, atomically.
+///
+/// # Errors
+/// [`IoError::Mesh`] if the mesh does not validate (nothing is written), or [`IoError::Write`].
+pub fn write_mesh_with(path: &Path, mesh: &Mesh, format: WriteFormat) -> Result<(), IoError> {
+    // A `Mesh` has public fields; refuse to write indices that would not read back.
+    mesh.validate().map_err(|source| IoError::Mesh { path: path.to_path_buf(), source })?;
+    write_atomic(path, |w| match format {
+        WriteFormat::Obj => obj::write_obj(w, mesh),
+        WriteFormat::Ply(encoding) => ply::write_ply(w, mesh, encoding),
+        WriteFormat::StlBinary => stl::write_stl_binary(w, mesh),
+        WriteFormat::Off => off::write_off(w, mesh),
+    })
+}
+
+/// Distinguishes temp files of concurrent writes from one process.
+static TEMP_COUNTER: AtomicU64 = AtomicU64::new(0);
+
+/// Writes a file atomically: `write` fills a temp file `.NAME.tmp-PID-N` in the target's
+/// directory (buffered), which is flushed, synced to disk and renamed over `path`. Readers see
+/// either the old file or the complete new one; on any error the temp file is removed and the
+/// target is untouched.
+///
+/// # Errors
+/// [`IoError::Write`] naming `path`, from creating the temp file, from `write`, or from the
+/// rename.
+pub fn write_atomic(path: &Path, write: impl FnOnce(&mut dyn Write) -> io::Result<()>) -> Result<(), IoError> {
+    let write_error = |source| IoError::Write { path: path.to_path_buf(), source };
+    let file_name = path
+        .file_name()
+        .ok_or_else(|| write_error(io::Error::new(io::ErrorKind::InvalidInput, "the path names no file")))?;
+    let dir = match path.parent() {
+        Some(dir) if !dir.as_os_str().is_empty() => dir,
+        _ => Path::new("."),
+    };
+    let n = TEMP_COUNTER.fetch_add(1, Ordering::Relaxed);
+    let temp = dir.join(format!(".{}.tmp-{}-{n}", file_name.to_string_lossy(), std::process::id()));
+
+    let file = OpenOptions::new().write(true).create(true).truncate(true).open(&temp).map_err(write_error)?;
+    let result = (|| {
+        let mut buffered = BufWriter::new(file);
+        write(&mut buffered)?;
+        let file = buffered.into_inner().map_err(io::IntoInnerError::into_error)?;
+        file.sync_all()?;
+        drop(file);
+        fs::rename(&temp, path)
+    })();
+    if let Err(source) = result {
+        // Best effort: the temp file is ours and must not linger; the original error matters more.
+        let _ = fs::remove_file(&temp);
+        return Err(write_error(source));
+    }
+    // Make the rename itself durable where directories can be synced (not on Windows).
+    if let Ok(d) = File::open(dir) {
+        let _ = d.sync_all();
+    }
+    Ok(())
+}
+
+/// Line-by-line reading of a text file with 1-based line numbers, `\n` or `\r\n` endings and
+/// invalid UTF-8 replaced (it only ever occurs in comments and names).
+pub(crate) struct Lines<R> {
+    reader: R,
+    bytes: Vec<u8>,
+    text: String,
+    /// Number of the line last returned (0 before the first).
+    pub(crate) number: usize,
+    /// Bytes consumed so far, line endings included.
+    pub(crate) consumed: u64,
+}
+
+impl<R: BufRead> Lines<R> {
+    pub(crate) fn new(reader: R) -> Self {
+        Self { reader, bytes: Vec::new(), text: String::new(), number: 0, consumed: 0 }
+    }
+
+    /// The next line's number and text without its line ending, or `None` at the end of the file.
+    pub(crate) fn next_line(&mut self) -> io::Result<Option<(usize, &str)>> {
+        self.bytes.clear();
+        let read = self.reader.read_until(b'\n', &mut self.bytes)?;
+        if read == 0 {
+            return Ok(None);
+        }
+        self.number += 1;
+        self.consumed += read as u64;
+        if self.bytes.last() == Some(&b'\n') {
+            self.bytes.pop();
+        }
+        if self.bytes.last() == Some(&b'\r') {
+            self.bytes.pop();
+        }
+        self.text.clear();
+        self.text.push_str(&String::from_utf8_lossy(&self.bytes));
+        Ok(Some((self.number, &self.text)))
+    }
+
+    /// The underlying reader, positioned just after the last line returned.
+    pub(crate) fn into_inner(self) -> R {
+        self.reader
+    }
+}
+
+/// Builds the mesh from polygons, attributing any error to `path`.
+pub(crate) fn build_mesh(
+    path: &Path,
+    positions: Vec<glam::DVec3>,
+    polygons: &[Vec<u32>],
+) -> Result<LoadedMesh, IoError> {
+    let (mesh, report) = Mesh::from_polygons(positions, polygons)
+        .map_err(|source| IoError::Mesh { path: path.to_path_buf(), source })?;
+    Ok(LoadedMesh { mesh, report })
+}
+
+/// Parses one coordinate, naming it in the error.
+pub(crate) fn parse_coordinate(token: &str, what: &str) -> Result<f64, String> {
+    token.parse::<f64>().map_err(|_| format!("{what} '{token}' is not a number"))
+}
+
+/// `Vec::with_capacity` bounded by [`MAX_PREALLOCATION`], for counts read from a file.
+pub(crate) fn bounded_vec<T>(claimed: usize) -> Vec<T> {
+    Vec::with_capacity(claimed.min(MAX_PREALLOCATION))
+}
+
+/// Writes an `f64` with the shortest representation that parses back to the same value.
+pub(crate) fn write_f64(w: &mut dyn Write, x: f64) -> io::Result<()> {
+    // `Debug` is shortest-round-trip and switches to exponent notation for tiny/huge values
+    // (unlike `Display`, which would spell out 300 zeros).
+    write!(w, "{x:?}")
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used, clippy::expect_used)]
+    use super::*;
+
+    #[test]
+    fn format_from_extension_is_case_insensitive() {
+        assert_eq!(MeshFormat::from_path(Path::new("a/b.OBJ")).unwrap(), MeshFormat::Obj);
+        assert_eq!(MeshFormat::from_path(Path::new("b.Ply")).unwrap(), MeshFormat::Ply);
+        assert_eq!(
+            WriteFormat::from_path(Path::new("x.stl")).unwrap(),
+            WriteFormat::StlBinary,
+            "binary STL by default"
+        );
+        let err = MeshFormat::from_path(Path::new("mesh.dae")).unwrap_err().to_string();
+        assert!(err.contains("mesh.dae") && err.contains("'.dae'") && err.contains(".obj, .ply, .stl, .off"), "{err}");
+        let err = MeshFormat::from_path(Path::new("mesh")).unwrap_err().to_string();
+        assert!(err.contains("(no extension)"), "{err}");
+    }
+
+    #[test]
+    fn lines_strip_crlf_and_count() {
+        let mut lines = Lines::new(&b"a\r\nb\n\nc"[..]);
+        assert_eq!(lines.next_line().unwrap(), Some((1, "a")));
+        assert_eq!(lines.next_line().unwrap(), Some((2, "b")));
+        assert_eq!(lines.next_line().unwrap(), Some((3, "")));
+        assert_eq!(lines.next_line().unwrap(), Some((4, "c")));
+        assert_eq!(lines.number, 4);
+        assert_eq!(lines.next_line().unwrap(), None);
+    }
+
+    #[test]
+    fn f64_written_round_trips() {
+        for x in [0.1, -1.0 / 3.0, 1e-300, 1.7976931348623157e308, 5e-324, -0.0, 123_456_789.123_456_79] {
+            let mut out = Vec::new();
+            write_f64(&mut out, x).unwrap();
+            let back: f64 = String::from_utf8(out).unwrap().parse().unwrap();
+            assert_eq!(back.to_bits(), x.to_bits());
+        }
+    }
+}

@@ -1,0 +1,216 @@
+//! From a parsed [`Scene`] to a solvable system: load the mesh, map it to the working frame,
+//! resolve selections and build each group.
+
+use super::{GroupSpec, Scene, SceneError, SelectionSpec, Targets};
+use crate::constraints::{BuildContext, Params, Position, Selection, build_constraints};
+use crate::geometry::{RestGeometry, WorkingFrame};
+use crate::io::read_mesh;
+use crate::mesh::{Mesh, PolygonReport};
+use crate::solver::{ConstraintGroup, GroupId, SolveError, SolveReport, SolverParams, System};
+use glam::{DQuat, DVec3};
+use std::time::Instant;
+
+/// A scene with its mesh loaded and its constraints built: ready to solve.
+#[derive(Debug)]
+pub struct LoadedScene {
+    /// The parsed scene.
+    pub scene: Scene,
+    /// The mesh as read (input frame).
+    pub mesh: Mesh,
+    /// What loading changed (polygons split, degenerate faces dropped).
+    pub polygon_report: PolygonReport,
+    /// Input ↔ working frame.
+    pub frame: WorkingFrame,
+    /// Rest geometry in the working frame.
+    pub rest: RestGeometry,
+    /// The constraint system.
+    pub system: System,
+    /// The system's id of each scene group, in scene order.
+    pub group_ids: Vec<GroupId>,
+    /// Seconds to read the mesh.
+    pub load_seconds: f64,
+    /// Seconds to build rest geometry and constraints.
+    pub build_seconds: f64,
+}
+
+impl Scene {
+    /// Reads the mesh and builds every group.
+    ///
+    /// # Errors
+    /// [`SceneError`] naming the scene file and the entry (bad selection, option, mesh file…).
+    pub fn load(&self) -> Result<LoadedScene, SceneError> {
+        let t = Instant::now();
+        let loaded = read_mesh(&self.mesh_path()).map_err(|source| SceneError::Mesh { path: self.file.clone(), source })?;
+        let load_seconds = t.elapsed().as_secs_f64();
+        self.build(loaded.mesh, loaded.report, load_seconds)
+    }
+
+    /// Builds the scene's groups on an already loaded mesh.
+    ///
+    /// # Errors
+    /// As [`Scene::load`], but for the mesh file itself.
+    pub fn build(&self, mesh: Mesh, polygon_report: PolygonReport, load_seconds: f64) -> Result<LoadedScene, SceneError> {
+        let t = Instant::now();
+        let invalid = |entry: &str, message: String| SceneError::Invalid { path: self.file.clone(), entry: entry.into(), message };
+        if self.mesh.tetrahedralize {
+            return Err(invalid(
+                "[mesh]",
+                "tetrahedralize = true is not available in this version (it comes with dynamic mode); remove it".into(),
+            ));
+        }
+        if mesh.triangles.is_empty() && mesh.tetrahedra.is_empty() {
+            return Err(invalid("[mesh]", format!("{} has no faces", self.mesh_path().display())));
+        }
+        let frame = if self.mesh.normalize { WorkingFrame::fit(&mesh.positions) } else { WorkingFrame::IDENTITY };
+        let working: Vec<DVec3> = mesh.positions.iter().map(|&p| frame.to_working(p)).collect();
+        let rest = RestGeometry::new(working, mesh.triangles.clone(), mesh.tetrahedra.clone());
+        let params = SolverParams {
+            iterations: self.solver.iterations,
+            tolerance: self.solver.tolerance,
+            factorization: self.solver.factorization,
+        };
+        let mut system = System::new(mesh.num_vertices(), params);
+        let mut group_ids = Vec::with_capacity(self.groups.len());
+        for (i, spec) in self.groups.iter().enumerate() {
+            let entry = format!("constraints[{i}] (\"{}\")", spec.name);
+            let group = build_group(spec, &mesh, &rest, &frame).map_err(|m| invalid(&entry, m))?;
+            group_ids.push(system.add_group(group).map_err(|e| invalid(&entry, e.to_string()))?);
+        }
+        Ok(LoadedScene {
+            scene: self.clone(),
+            mesh,
+            polygon_report,
+            frame,
+            rest,
+            system,
+            group_ids,
+            load_seconds,
+            build_seconds: t.elapsed().as_secs_f64(),
+        })
+    }
+}
+
+/// The vertex indices a selection picks, in order (listed order, or ascending).
+fn select(spec: &SelectionSpec, mesh: &Mesh) -> Result<Vec<usize>, String> {
+    let n = mesh.num_vertices();
+    let inside = |f: &dyn Fn(DVec3) -> bool| (0..n).filter(|&i| f(mesh.positions[i])).collect();
+    Ok(match spec {
+        SelectionSpec::All => (0..n).collect(),
+        SelectionSpec::Vertices(list) => {
+            if let Some(&v) = list.iter().find(|&&v| v >= n) {
+                return Err(format!("vertex {v} is out of range (the mesh has {n} vertices: 0..{})", n - 1));
+            }
+            list.clone()
+        }
+        SelectionSpec::Box { min, max } => {
+            let (lo, hi) = (DVec3::from(*min), DVec3::from(*max));
+            inside(&|p| p.cmpge(lo).all() && p.cmple(hi).all())
+        }
+        SelectionSpec::Sphere { center, radius } => {
+            let c = DVec3::from(*center);
+            inside(&|p| (p - c).length() <= *radius)
+        }
+    })
+}
+
+fn build_group(spec: &GroupSpec, mesh: &Mesh, rest: &RestGeometry, frame: &WorkingFrame) -> Result<ConstraintGroup, String> {
+    let picked = select(&spec.selection, mesh)?;
+    let constraints = if spec.kind == "position" {
+        if !spec.options.is_empty() {
+            let keys: Vec<&str> = spec.options.keys().map(String::as_str).collect();
+            return Err(format!(
+                "unknown key \"{}\" for a position constraint (allowed: vertices, box, sphere, translate, rotate, targets)",
+                keys[0]
+            ));
+        }
+        let targets = position_targets(&picked, &spec.targets, mesh)?;
+        let vertices: Vec<u32> = picked.iter().map(|&v| v as u32).collect();
+        let working = targets.into_iter().map(|t| frame.to_working(t)).collect();
+        match Position::new(vertices, working) {
+            Some(p) => vec![Box::new(p) as Box<dyn crate::constraints::Constraint>],
+            None => return Err("the position group selects no vertices (check its vertices, box or sphere)".into()),
+        }
+    } else {
+        let selection = match spec.selection {
+            SelectionSpec::All => Selection::All,
+            _ => Selection::from_indices(mesh.num_vertices(), &picked),
+        };
+        let ctx = BuildContext { rest, selection: &selection, frame };
+        build_constraints(&spec.kind, &ctx, Params::new(spec.options.clone())).map_err(|e| e.to_string())?
+    };
+    Ok(ConstraintGroup::new(spec.name.clone(), spec.weight, constraints))
+}
+
+/// Targets (input frame) of a position group's vertices: explicit, or rest rotated about the
+/// centre (default: the selection's centroid) then translated.
+fn position_targets(picked: &[usize], targets: &Targets, mesh: &Mesh) -> Result<Vec<DVec3>, String> {
+    let mut seen = vec![false; mesh.num_vertices()];
+    for &v in picked {
+        if std::mem::replace(&mut seen[v], true) {
+            return Err(format!("vertex {v} is listed twice"));
+        }
+    }
+    if let Some(explicit) = &targets.explicit {
+        if explicit.len() != picked.len() {
+            return Err(format!("{} targets given for {} selected vertices (one per vertex)", explicit.len(), picked.len()));
+        }
+        return Ok(explicit.iter().map(|&t| DVec3::from(t)).collect());
+    }
+    let rest: Vec<DVec3> = picked.iter().map(|&v| mesh.positions[v]).collect();
+    let translate = DVec3::from(targets.translate);
+    let rotated = match &targets.rotate {
+        None => rest,
+        Some(r) => {
+            let center = r.center.map(DVec3::from).unwrap_or_else(|| rest.iter().copied().sum::<DVec3>() / rest.len().max(1) as f64);
+            let q = DQuat::from_axis_angle(DVec3::from(r.axis).normalize(), r.angle_deg.to_radians());
+            rest.iter().map(|&p| center + q * (p - center)).collect()
+        }
+    };
+    Ok(rotated.into_iter().map(|p| p + translate).collect())
+}
+
+impl LoadedScene {
+    /// Rest positions in the working frame.
+    pub fn rest_positions(&self) -> &[DVec3] {
+        &self.rest.positions
+    }
+
+    /// Static solve from the rest shape: `iterations` local-global iterations (default: the
+    /// scene's steps × iterations). Returns the positions in the working frame.
+    ///
+    /// # Errors
+    /// [`SceneError::Solve`] for a singular system.
+    pub fn solve_static(&mut self, iterations: Option<usize>) -> Result<(Vec<DVec3>, SolveReport), SceneError> {
+        let iterations = iterations.unwrap_or(self.scene.solver.iterations * self.scene.solver.steps);
+        let mut q = self.rest.positions.clone();
+        let report = self
+            .system
+            .solve(&mut q, iterations, self.scene.solver.tolerance)
+            .map_err(|source| SceneError::Solve { path: self.scene.file.clone(), source })?;
+        Ok((q, report))
+    }
+
+    /// Working-frame positions mapped back to the input frame.
+    pub fn to_input(&self, q: &[DVec3]) -> Vec<DVec3> {
+        q.iter().map(|&p| self.frame.to_input(p)).collect()
+    }
+
+    /// Input-frame positions mapped to the working frame.
+    pub fn to_working(&self, positions: &[DVec3]) -> Vec<DVec3> {
+        positions.iter().map(|&p| self.frame.to_working(p)).collect()
+    }
+
+    /// The input mesh with its positions replaced by `q` (working frame) mapped back.
+    pub fn mesh_at(&self, q: &[DVec3]) -> Mesh {
+        Mesh { positions: self.to_input(q), triangles: self.mesh.triangles.clone(), tetrahedra: self.mesh.tetrahedra.clone() }
+    }
+
+    /// E of input-frame positions under the scene's constraints (working frame).
+    ///
+    /// # Errors
+    /// Wrong vertex count, or no constraints.
+    pub fn energy_of(&mut self, positions: &[DVec3]) -> Result<crate::solver::Energy, SolveError> {
+        let q = self.to_working(positions);
+        self.system.energy(&q)
+    }
+}

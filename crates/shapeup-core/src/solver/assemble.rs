@@ -1,0 +1,256 @@
+//! Assembly: stacks every constraint's rows of C into one sparse matrix and builds the global
+//! matrix Σ w_i C_iᵀ C_i, once per change of the constraint set.
+//!
+//! Vertices that no constraint touches are left out of the system (they keep their positions);
+//! the others are renumbered densely ("solved" vertices).
+
+use super::SolveError;
+use crate::constraints::{Constraint, RowSink};
+use crate::topology::connected_pieces;
+use rayon::prelude::*;
+
+/// Rows of one group inside the stacked matrix.
+#[derive(Debug, Clone)]
+pub(crate) struct GroupRows {
+    /// First row of the group.
+    pub start: usize,
+    /// Row offset of each constraint relative to `start`, plus the end (len = constraints + 1).
+    pub offsets: Vec<usize>,
+}
+
+impl GroupRows {
+    /// The group's rows as a range in the stacked matrix.
+    pub fn range(&self) -> std::ops::Range<usize> {
+        self.start..self.start + self.offsets.last().copied().unwrap_or(0)
+    }
+}
+
+/// The stacked selection matrix C, its weighted transpose and the global matrix's pattern.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Assembly {
+    /// Original index of each solved vertex.
+    pub solved: Vec<u32>,
+    /// Solved index of each original vertex (`u32::MAX`: not in the system).
+    pub solved_index: Vec<u32>,
+    /// C as CSR over original vertex indices: row r has entries `c_ptr[r]..c_ptr[r+1]`.
+    pub c_ptr: Vec<usize>,
+    /// Column (original vertex) of each entry of C.
+    pub c_col: Vec<u32>,
+    /// Coefficient of each entry of C.
+    pub c_val: Vec<f64>,
+    /// Element weight ω of each row.
+    pub row_weight: Vec<f64>,
+    /// Rows of each group.
+    pub groups: Vec<GroupRows>,
+    /// Group of each row.
+    pub row_group: Vec<u32>,
+    /// Cᵀ by solved vertex: entries `ct_ptr[v]..ct_ptr[v+1]` are (row, ω·coeff).
+    pub ct_ptr: Vec<usize>,
+    /// Row of each entry of Cᵀ.
+    pub ct_row: Vec<u32>,
+    /// ω·coeff of each entry of Cᵀ (the group multiplier is applied in `ct_weighted`).
+    pub ct_base: Vec<f64>,
+    /// Lower triangle of the global matrix, CSC over solved vertices: column pointers.
+    pub lhs_col_ptr: Vec<usize>,
+    /// Row index of each stored entry (sorted within a column, diagonal first).
+    pub lhs_row_idx: Vec<usize>,
+    /// Per group: Σ_{i in group} ω_i C_iᵀC_i on the pattern (without the multiplier).
+    pub group_lhs: Vec<Vec<f64>>,
+}
+
+impl Assembly {
+    /// Stacks the rows of `groups` (each a list of constraints) over `n` vertices.
+    pub fn new(n: usize, groups: &[&[Box<dyn Constraint>]]) -> Self {
+        let mut a = Assembly { c_ptr: vec![0], ..Default::default() };
+        let mut sink = RowSink::default();
+        for (g, constraints) in groups.iter().enumerate() {
+            let start = a.row_weight.len();
+            let mut offsets = Vec::with_capacity(constraints.len() + 1);
+            offsets.push(0);
+            for c in constraints.iter() {
+                sink.entries.clear();
+                c.rows(&mut sink);
+                a.push_rows(&mut sink, c.num_rows(), c.element_weight(), g as u32);
+                offsets.push(a.row_weight.len() - start);
+            }
+            a.groups.push(GroupRows { start, offsets });
+        }
+        a.number_solved_vertices(n);
+        a.build_transpose();
+        a.build_lhs_pattern();
+        a
+    }
+
+    /// Appends one constraint's rows, merging repeated vertices and dropping zero coefficients.
+    fn push_rows(&mut self, sink: &mut RowSink, num_rows: usize, weight: f64, group: u32) {
+        sink.entries.sort_unstable_by_key(|e| (e.row, e.vertex));
+        let mut k = 0;
+        for row in 0..num_rows as u32 {
+            let row_start = self.c_col.len();
+            while k < sink.entries.len() && sink.entries[k].row == row {
+                let e = sink.entries[k];
+                if self.c_col.len() > row_start && self.c_col.last() == Some(&e.vertex) {
+                    if let Some(v) = self.c_val.last_mut() {
+                        *v += e.coeff;
+                    }
+                } else {
+                    self.c_col.push(e.vertex);
+                    self.c_val.push(e.coeff);
+                }
+                k += 1;
+            }
+            // Drop exact zeros (e.g. a cotan weight of a right angle) so that they do not pull
+            // an otherwise untouched vertex into the system.
+            let mut w = row_start;
+            for r in row_start..self.c_col.len() {
+                if self.c_val[r] != 0.0 {
+                    self.c_col[w] = self.c_col[r];
+                    self.c_val[w] = self.c_val[r];
+                    w += 1;
+                }
+            }
+            self.c_col.truncate(w);
+            self.c_val.truncate(w);
+            self.c_ptr.push(self.c_col.len());
+            self.row_weight.push(weight);
+            self.row_group.push(group);
+        }
+    }
+
+    fn number_solved_vertices(&mut self, n: usize) {
+        let mut touched = vec![false; n];
+        for &v in &self.c_col {
+            touched[v as usize] = true;
+        }
+        self.solved_index = vec![u32::MAX; n];
+        for (v, _) in touched.iter().enumerate().filter(|(_, t)| **t) {
+            self.solved_index[v] = self.solved.len() as u32;
+            self.solved.push(v as u32);
+        }
+    }
+
+    /// Number of solved vertices.
+    pub fn num_solved(&self) -> usize {
+        self.solved.len()
+    }
+
+    /// Number of rows of the stacked C.
+    pub fn num_rows(&self) -> usize {
+        self.row_weight.len()
+    }
+
+    fn build_transpose(&mut self) {
+        let ns = self.num_solved();
+        let mut count = vec![0usize; ns + 1];
+        for &v in &self.c_col {
+            count[self.solved_index[v as usize] as usize + 1] += 1;
+        }
+        for i in 0..ns {
+            count[i + 1] += count[i];
+        }
+        let mut next = count.clone();
+        self.ct_row = vec![0; self.c_col.len()];
+        self.ct_base = vec![0.0; self.c_col.len()];
+        for r in 0..self.num_rows() {
+            for k in self.c_ptr[r]..self.c_ptr[r + 1] {
+                let s = self.solved_index[self.c_col[k] as usize] as usize;
+                self.ct_row[next[s]] = r as u32;
+                self.ct_base[next[s]] = self.row_weight[r] * self.c_val[k];
+                next[s] += 1;
+            }
+        }
+        self.ct_ptr = count;
+    }
+
+    /// The entries (solved row ≥ solved column) of Σ CᵀC's lower triangle, then per group
+    /// Σ ω C_iᵀC_i on that pattern.
+    fn build_lhs_pattern(&mut self) {
+        let ns = self.num_solved();
+        let rows: Vec<usize> = (0..self.num_rows()).collect();
+        let mut pairs: Vec<u64> = rows
+            .par_iter()
+            .flat_map_iter(|&r| {
+                let cols = &self.c_col[self.c_ptr[r]..self.c_ptr[r + 1]];
+                let idx = &self.solved_index;
+                cols.iter().flat_map(move |&a| {
+                    cols.iter().filter_map(move |&b| {
+                        let (sa, sb) = (idx[a as usize] as u64, idx[b as usize] as u64);
+                        (sa >= sb).then_some((sb << 32) | sa)
+                    })
+                })
+            })
+            .collect();
+        pairs.par_sort_unstable();
+        pairs.dedup();
+        let mut col_ptr = vec![0usize; ns + 1];
+        let mut row_idx = Vec::with_capacity(pairs.len());
+        for &p in &pairs {
+            col_ptr[(p >> 32) as usize + 1] += 1;
+            row_idx.push((p & 0xffff_ffff) as usize);
+        }
+        for j in 0..ns {
+            col_ptr[j + 1] += col_ptr[j];
+        }
+        self.lhs_col_ptr = col_ptr;
+        self.lhs_row_idx = row_idx;
+        self.group_lhs = (0..self.groups.len()).map(|g| self.group_values(g)).collect();
+    }
+
+    /// Σ_{rows r of group g} ω_r c_r c_rᵀ on the lower-triangle pattern.
+    fn group_values(&self, g: usize) -> Vec<f64> {
+        let mut values = vec![0.0; self.lhs_row_idx.len()];
+        for r in self.groups[g].range() {
+            let (lo, hi) = (self.c_ptr[r], self.c_ptr[r + 1]);
+            for a in lo..hi {
+                let sa = self.solved_index[self.c_col[a] as usize] as usize;
+                for b in lo..hi {
+                    let sb = self.solved_index[self.c_col[b] as usize] as usize;
+                    if sa >= sb {
+                        let slot = self.slot(sa, sb);
+                        values[slot] += self.row_weight[r] * self.c_val[a] * self.c_val[b];
+                    }
+                }
+            }
+        }
+        values
+    }
+
+    /// Index of entry (row, col), row ≥ col, in the lower-triangle storage.
+    fn slot(&self, row: usize, col: usize) -> usize {
+        let (lo, hi) = (self.lhs_col_ptr[col], self.lhs_col_ptr[col + 1]);
+        // The pattern holds every pair of every row, so the entry exists.
+        lo + self.lhs_row_idx[lo..hi].partition_point(|&r| r < row)
+    }
+
+    /// Checks that every connected piece of the solved vertices is anchored: some row in it is
+    /// not translation invariant (its coefficients do not sum to zero, as a position or floor
+    /// row) and has a positive weight (`multipliers`: per group). Otherwise the static system is singular: translating the piece costs nothing.
+    pub fn check_anchored(&self, multipliers: &[f64]) -> Result<(), SolveError> {
+        let ns = self.num_solved();
+        let links: Vec<Vec<u32>> = (0..self.num_rows())
+            .map(|r| self.c_col[self.c_ptr[r]..self.c_ptr[r + 1]].iter().map(|&v| self.solved_index[v as usize]).collect())
+            .collect();
+        let (piece, count) = connected_pieces(ns, links.iter().map(|l| l.as_slice()));
+        let mut anchored = vec![false; count];
+        for (r, link) in links.iter().enumerate() {
+            let vals = &self.c_val[self.c_ptr[r]..self.c_ptr[r + 1]];
+            let sum: f64 = vals.iter().sum();
+            let scale: f64 = vals.iter().map(|v| v.abs()).sum();
+            let weight = self.row_weight[r] * multipliers[self.row_group[r] as usize];
+            if weight > 0.0 && sum.abs() > 1e-9 * scale {
+                if let Some(&v) = link.first() {
+                    anchored[piece[v as usize] as usize] = true;
+                }
+            }
+        }
+        if let Some(p) = anchored.iter().position(|a| !a) {
+            let members: Vec<usize> = (0..ns).filter(|&v| piece[v] as usize == p).collect();
+            return Err(SolveError::Unanchored {
+                piece_size: members.len(),
+                vertex: members.first().map(|&v| self.solved[v] as usize).unwrap_or(0),
+                num_pieces: count,
+            });
+        }
+        Ok(())
+    }
+}

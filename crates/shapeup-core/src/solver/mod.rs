@@ -1,0 +1,498 @@
+//! The local-global solver (ShapeUp, Bouaziz et al. 2012).
+//!
+//! Minimizes E(q) = Σ_i w_i ‖C_i q − p_i(q)‖² by alternating
+//! 1. the **local step**: P_i = p_i(q) for every constraint, in parallel, and
+//! 2. the **global step**: solve (Σ w_i C_iᵀC_i) q = Σ w_i C_iᵀ P_i for x, y and z with a
+//!    Cholesky factor computed once per change of the constraint set.
+//!
+//! E never increases from one iteration to the next. [`System`] owns the constraint groups;
+//! adding or removing a group re-assembles and re-analyzes the matrix, changing a multiplier
+//! only refactors it numerically, and moving a handle's targets changes neither.
+
+mod assemble;
+mod cholesky;
+mod global;
+mod local;
+
+pub use cholesky::{FactorError, Factorization};
+
+use crate::constraints::{Constraint, Position};
+use assemble::Assembly;
+use cholesky::SparseCholesky;
+use glam::DVec3;
+use std::time::Instant;
+
+/// Solver settings. Each default is written once, here and in the scene contract.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SolverParams {
+    /// Local-global iterations per solve (default 10).
+    pub iterations: usize,
+    /// Stop early when the relative energy change of an iteration is below this (default 0: off).
+    pub tolerance: f64,
+    /// Factorization layout (default: chosen by faer).
+    pub factorization: Factorization,
+}
+
+impl Default for SolverParams {
+    fn default() -> Self {
+        SolverParams { iterations: 10, tolerance: 0.0, factorization: Factorization::Auto }
+    }
+}
+
+/// A named set of constraints of one type sharing a multiplier g (w_i = ω_i · g).
+#[derive(Debug)]
+pub struct ConstraintGroup {
+    /// Display name, unique by convention (`"shape"`, `"handle 1"`).
+    pub name: String,
+    /// Constraint type name (`"edge_spring"`, …).
+    pub kind: String,
+    /// The multiplier g ≥ 0.
+    pub multiplier: f64,
+    /// The constraints.
+    pub constraints: Vec<Box<dyn Constraint>>,
+}
+
+impl ConstraintGroup {
+    /// A group of `constraints` named `name` with multiplier `multiplier`; its kind is that of
+    /// its first constraint.
+    pub fn new(name: impl Into<String>, multiplier: f64, constraints: Vec<Box<dyn Constraint>>) -> Self {
+        let kind = constraints.first().map(|c| c.kind()).unwrap_or("empty").to_string();
+        ConstraintGroup { name: name.into(), kind, multiplier, constraints }
+    }
+
+    /// Total number of rows of its constraints.
+    pub fn num_rows(&self) -> usize {
+        self.constraints.iter().map(|c| c.num_rows()).sum()
+    }
+}
+
+/// A handle to a group of a [`System`]; stays valid until that group is removed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct GroupId(pub u32);
+
+/// An error from the solver. Messages are one line and say what to do.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SolveError {
+    /// No constraint at all.
+    #[error("there are no constraints to solve (add a shape constraint and a position handle)")]
+    NoConstraints,
+    /// A connected piece of constrained vertices has no position-like constraint (static mode).
+    #[error(
+        "singular system: a connected piece of {piece_size} vertices (e.g. vertex {vertex}) has no position \
+         constraint, so it can move freely ({num_pieces} piece(s) in all); add a position group that touches it"
+    )]
+    Unanchored {
+        /// Number of vertices of the piece.
+        piece_size: usize,
+        /// One of its vertices (original index).
+        vertex: usize,
+        /// Number of connected pieces.
+        num_pieces: usize,
+    },
+    /// The factorization found the matrix singular or indefinite.
+    #[error(
+        "singular system: {0}; some vertices are not held in place by the constraints (add a position \
+         group, or a shape constraint over all vertices)"
+    )]
+    Singular(FactorError),
+    /// The solve produced NaN or infinity.
+    #[error("the solve produced non-finite positions (the system is numerically singular); check the weights")]
+    NonFinite,
+    /// A negative or non-finite multiplier.
+    #[error("group \"{name}\": weight must be a finite number ≥ 0, found {value}")]
+    BadWeight {
+        /// Group name.
+        name: String,
+        /// The value given.
+        value: f64,
+    },
+    /// A group id that is not (or no longer) in the system.
+    #[error("no constraint group with id {0}")]
+    UnknownGroup(u32),
+    /// Targets for a group that is not a position group, or of the wrong count.
+    #[error("group \"{name}\" {problem}")]
+    BadTargets {
+        /// Group name.
+        name: String,
+        /// What is wrong.
+        problem: String,
+    },
+    /// Positions of the wrong length.
+    #[error("expected {expected} positions, got {found}")]
+    WrongLength {
+        /// Vertices of the system.
+        expected: usize,
+        /// Length given.
+        found: usize,
+    },
+}
+
+/// What must be redone before the next iteration.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Stale {
+    /// Factorization up to date.
+    Fresh,
+    /// Only multipliers changed: numeric refactorization on the same pattern.
+    Values,
+    /// Groups were added or removed: re-assemble, re-analyze, refactor.
+    Pattern,
+}
+
+/// Energy of a configuration, in total and per group (each including its multiplier).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Energy {
+    /// E(q) = Σ_i w_i ‖C_i q − p_i(q)‖².
+    pub total: f64,
+    /// (group, its share of E) for every group, in id order.
+    pub per_group: Vec<(GroupId, f64)>,
+}
+
+/// What a [`System::solve`] did.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct SolveReport {
+    /// E after each iteration.
+    pub energies: Vec<f64>,
+    /// Seconds spent in local steps.
+    pub local_seconds: f64,
+    /// Seconds spent in global steps.
+    pub global_seconds: f64,
+    /// Seconds spent (re)assembling and factoring before the iterations.
+    pub setup_seconds: f64,
+}
+
+/// The ShapeUp system: constraint groups over n vertices, their assembled matrix, its factor and
+/// the buffers an iteration uses (allocated when the constraint set changes, never per iteration).
+#[derive(Debug)]
+pub struct System {
+    num_vertices: usize,
+    params: SolverParams,
+    /// Groups by id; removed ones leave `None` so ids stay stable.
+    slots: Vec<Option<ConstraintGroup>>,
+    stale: Stale,
+    /// Slot index of each group in assembly order.
+    order: Vec<usize>,
+    assembly: Assembly,
+    factor: Option<SparseCholesky>,
+    /// w_r · coeff for each entry of Cᵀ (multipliers applied).
+    ct_weighted: Vec<f64>,
+    /// Projections P, one row per constraint row.
+    projections: Vec<DVec3>,
+    /// C q, for energies.
+    cq: Vec<DVec3>,
+    /// Right-hand side / solution, column-major (x, y, z) over solved vertices.
+    rhs: Vec<f64>,
+    assembled: bool,
+}
+
+impl System {
+    /// An empty system over `num_vertices` vertices.
+    pub fn new(num_vertices: usize, params: SolverParams) -> Self {
+        System {
+            num_vertices,
+            params,
+            slots: Vec::new(),
+            stale: Stale::Pattern,
+            order: Vec::new(),
+            assembly: Assembly::default(),
+            factor: None,
+            ct_weighted: Vec::new(),
+            projections: Vec::new(),
+            cq: Vec::new(),
+            rhs: Vec::new(),
+            assembled: false,
+        }
+    }
+
+    /// Number of vertices.
+    pub fn num_vertices(&self) -> usize {
+        self.num_vertices
+    }
+
+    /// The solver settings.
+    pub fn params(&self) -> &SolverParams {
+        &self.params
+    }
+
+    /// Changes the settings (a new factorization layout re-analyzes the matrix).
+    pub fn set_params(&mut self, params: SolverParams) {
+        if params.factorization != self.params.factorization {
+            self.mark(Stale::Pattern);
+        }
+        self.params = params;
+    }
+
+    /// Adds a group; the next solve re-assembles the system.
+    ///
+    /// # Errors
+    /// [`SolveError::BadWeight`] for a negative or non-finite multiplier.
+    pub fn add_group(&mut self, group: ConstraintGroup) -> Result<GroupId, SolveError> {
+        check_weight(&group.name, group.multiplier)?;
+        self.slots.push(Some(group));
+        self.mark(Stale::Pattern);
+        Ok(GroupId(self.slots.len() as u32 - 1))
+    }
+
+    /// Removes a group and returns it; the next solve re-assembles the system.
+    pub fn remove_group(&mut self, id: GroupId) -> Option<ConstraintGroup> {
+        let removed = self.slots.get_mut(id.0 as usize)?.take();
+        if removed.is_some() {
+            self.mark(Stale::Pattern);
+        }
+        removed
+    }
+
+    /// The group with this id.
+    pub fn group(&self, id: GroupId) -> Option<&ConstraintGroup> {
+        self.slots.get(id.0 as usize)?.as_ref()
+    }
+
+    /// Every group with its id, in id order.
+    pub fn groups(&self) -> impl Iterator<Item = (GroupId, &ConstraintGroup)> {
+        self.slots.iter().enumerate().filter_map(|(i, g)| g.as_ref().map(|g| (GroupId(i as u32), g)))
+    }
+
+    /// Total number of constraints.
+    pub fn num_constraints(&self) -> usize {
+        self.groups().map(|(_, g)| g.constraints.len()).sum()
+    }
+
+    /// Sets a group's multiplier g; the next solve refactors numerically (same pattern).
+    ///
+    /// # Errors
+    /// Unknown group, or a negative or non-finite weight.
+    pub fn set_multiplier(&mut self, id: GroupId, multiplier: f64) -> Result<(), SolveError> {
+        let group = self.slots.get_mut(id.0 as usize).and_then(Option::as_mut).ok_or(SolveError::UnknownGroup(id.0))?;
+        check_weight(&group.name, multiplier)?;
+        if group.multiplier != multiplier {
+            group.multiplier = multiplier;
+            self.mark(Stale::Values);
+        }
+        Ok(())
+    }
+
+    /// Moves the targets of a position group (working frame); no refactorization is needed.
+    ///
+    /// # Errors
+    /// Unknown group, not a position group, or a target count different from its vertex count.
+    pub fn set_position_targets(&mut self, id: GroupId, targets: &[DVec3]) -> Result<(), SolveError> {
+        let group = self.slots.get_mut(id.0 as usize).and_then(Option::as_mut).ok_or(SolveError::UnknownGroup(id.0))?;
+        let name = group.name.clone();
+        let bad = |problem: String| SolveError::BadTargets { name: name.clone(), problem };
+        let [constraint] = group.constraints.as_mut_slice() else {
+            return Err(bad("is not a position group".into()));
+        };
+        let any: &mut dyn std::any::Any = constraint.as_mut();
+        let position = any.downcast_mut::<Position>().ok_or_else(|| bad("is not a position group".into()))?;
+        let expected = position.targets().len();
+        if !position.set_targets(targets) {
+            return Err(bad(format!("has {expected} vertices but {} targets were given", targets.len())));
+        }
+        Ok(())
+    }
+
+    fn mark(&mut self, stale: Stale) {
+        self.stale = match (self.stale, stale) {
+            (Stale::Pattern, _) | (_, Stale::Pattern) => Stale::Pattern,
+            _ => Stale::Values,
+        };
+        if stale == Stale::Pattern {
+            self.assembled = false;
+        }
+    }
+
+    fn multipliers(&self) -> Vec<f64> {
+        self.order.iter().map(|&s| self.slots[s].as_ref().map_or(0.0, |g| g.multiplier)).collect()
+    }
+
+    /// Stacks the rows of every group (once per change of the constraint set).
+    fn ensure_assembled(&mut self) -> Result<(), SolveError> {
+        if self.assembled {
+            return Ok(());
+        }
+        self.order = (0..self.slots.len()).filter(|&s| self.slots[s].is_some()).collect();
+        let lists: Vec<&[Box<dyn Constraint>]> =
+            self.order.iter().filter_map(|&s| self.slots[s].as_ref().map(|g| g.constraints.as_slice())).collect();
+        if lists.iter().all(|l| l.is_empty()) {
+            return Err(SolveError::NoConstraints);
+        }
+        self.assembly = Assembly::new(self.num_vertices, &lists);
+        let rows = self.assembly.num_rows();
+        self.projections = vec![DVec3::ZERO; rows];
+        self.cq = vec![DVec3::ZERO; rows];
+        self.rhs = vec![0.0; 3 * self.assembly.num_solved()];
+        self.factor = None;
+        self.assembled = true;
+        self.update_weights();
+        Ok(())
+    }
+
+    /// Applies the current multipliers to Cᵀ W.
+    fn update_weights(&mut self) {
+        let g = self.multipliers();
+        let a = &self.assembly;
+        self.ct_weighted = (0..a.ct_row.len()).map(|k| a.ct_base[k] * g[a.row_group[a.ct_row[k] as usize] as usize]).collect();
+    }
+
+    /// Brings the factorization up to date: re-assembly and symbolic analysis after the
+    /// constraint set changed, numeric refactorization after a multiplier changed.
+    ///
+    /// # Errors
+    /// [`SolveError::Unanchored`] or [`SolveError::Singular`] for a singular system.
+    pub fn prepare(&mut self) -> Result<(), SolveError> {
+        if self.stale == Stale::Fresh {
+            return Ok(());
+        }
+        self.ensure_assembled()?;
+        let g = self.multipliers();
+        self.assembly.check_anchored(&g)?;
+        if self.factor.is_none() {
+            let a = &self.assembly;
+            self.factor = Some(
+                SparseCholesky::analyze(
+                    a.num_solved(),
+                    a.lhs_col_ptr.clone(),
+                    a.lhs_row_idx.clone(),
+                    self.params.factorization,
+                )
+                .map_err(SolveError::Singular)?,
+            );
+        }
+        self.update_weights();
+        let mut values = vec![0.0; self.assembly.lhs_row_idx.len()];
+        for (group, &gk) in self.assembly.group_lhs.iter().zip(&g) {
+            values.iter_mut().zip(group).for_each(|(v, x)| *v += gk * x);
+        }
+        if let Some(factor) = self.factor.as_mut() {
+            factor.factorize(&values).map_err(SolveError::Singular)?;
+        }
+        self.stale = Stale::Fresh;
+        Ok(())
+    }
+
+    /// One local-global iteration from q (positions of all n vertices, working frame).
+    ///
+    /// # Errors
+    /// As [`System::prepare`], or [`SolveError::NonFinite`].
+    pub fn step(&mut self, q: &mut [DVec3]) -> Result<(), SolveError> {
+        self.check_length(q)?;
+        self.prepare()?;
+        // Local step: P_i = p_i(q) for every constraint, in parallel.
+        self.local_step(q);
+        // Global step: solve (Σ w_i C_iᵀC_i) q = Σ w_i C_iᵀ P_i for x, y and z.
+        self.global_step(q)
+    }
+
+    /// Runs `iterations` local-global iterations from q, recording E after each; stops early
+    /// when `tolerance` > 0 and the relative energy change of an iteration is below it.
+    ///
+    /// # Errors
+    /// As [`System::step`].
+    pub fn solve(&mut self, q: &mut [DVec3], iterations: usize, tolerance: f64) -> Result<SolveReport, SolveError> {
+        self.check_length(q)?;
+        let mut report = SolveReport::default();
+        let t = Instant::now();
+        self.prepare()?;
+        report.setup_seconds = t.elapsed().as_secs_f64();
+        let mut t = Instant::now();
+        self.local_step(q);
+        report.local_seconds += t.elapsed().as_secs_f64();
+        let mut previous = self.energy_of_projections(q);
+        for _ in 0..iterations {
+            // Each pass: global step from the last projections, then the local step at the new
+            // q, whose projections give E(q) and feed the next global step.
+            t = Instant::now();
+            self.global_step(q)?;
+            report.global_seconds += t.elapsed().as_secs_f64();
+            t = Instant::now();
+            self.local_step(q);
+            report.local_seconds += t.elapsed().as_secs_f64();
+            let energy = self.energy_of_projections(q);
+            report.energies.push(energy);
+            let change = (previous - energy).abs();
+            previous = energy;
+            if tolerance > 0.0 && change <= tolerance * energy.abs().max(f64::MIN_POSITIVE) {
+                break;
+            }
+        }
+        Ok(report)
+    }
+
+    /// E(q) and its share per group, without solving (the matrix need not be invertible).
+    ///
+    /// # Errors
+    /// [`SolveError::NoConstraints`] or a wrong length.
+    pub fn energy(&mut self, q: &[DVec3]) -> Result<Energy, SolveError> {
+        self.check_length(q)?;
+        self.ensure_assembled()?;
+        self.local_step(q);
+        global::apply_c(&self.assembly, q, &mut self.cq);
+        let per_group = self
+            .order
+            .iter()
+            .zip(&self.assembly.groups)
+            .map(|(&slot, rows)| {
+                let g = self.slots[slot].as_ref().map_or(0.0, |g| g.multiplier);
+                (GroupId(slot as u32), g * self.weighted_residual(rows.range()))
+            })
+            .collect::<Vec<_>>();
+        Ok(Energy { total: per_group.iter().map(|(_, e)| e).sum(), per_group })
+    }
+
+    /// Local step: every projection P_i = p_i(q), in parallel.
+    fn local_step(&mut self, q: &[DVec3]) {
+        for (&slot, rows) in self.order.iter().zip(&self.assembly.groups) {
+            if let Some(group) = &self.slots[slot] {
+                local::project_all(&group.constraints, &rows.offsets, q, &mut self.projections[rows.range()]);
+            }
+        }
+    }
+
+    /// Global step: q = (Σ w CᵀC)⁻¹ Σ w Cᵀ P over the solved vertices.
+    fn global_step(&mut self, q: &mut [DVec3]) -> Result<(), SolveError> {
+        global::right_hand_side(&self.assembly, &self.ct_weighted, &self.projections, None, &mut self.rhs);
+        if let Some(factor) = self.factor.as_mut() {
+            factor.solve_in_place(&mut self.rhs);
+        }
+        if !self.rhs.iter().all(|x| x.is_finite()) {
+            return Err(SolveError::NonFinite);
+        }
+        global::scatter(&self.assembly, &self.rhs, q);
+        Ok(())
+    }
+
+    /// E(q) from the current projections (which must be p(q)).
+    fn energy_of_projections(&mut self, q: &[DVec3]) -> f64 {
+        global::apply_c(&self.assembly, q, &mut self.cq);
+        let g = self.multipliers();
+        self.assembly.groups.iter().zip(&g).map(|(rows, gk)| gk * self.weighted_residual(rows.range())).sum()
+    }
+
+    /// Σ_r ω_r ‖(Cq)_r − P_r‖² over a range of rows (no multiplier).
+    fn weighted_residual(&self, rows: std::ops::Range<usize>) -> f64 {
+        rows.map(|r| self.assembly.row_weight[r] * (self.cq[r] - self.projections[r]).length_squared()).sum()
+    }
+
+    fn check_length(&self, q: &[DVec3]) -> Result<(), SolveError> {
+        if q.len() == self.num_vertices {
+            Ok(())
+        } else {
+            Err(SolveError::WrongLength { expected: self.num_vertices, found: q.len() })
+        }
+    }
+
+    /// Number of vertices in the linear system (those some constraint touches), once assembled.
+    pub fn num_solved_vertices(&self) -> usize {
+        self.assembly.num_solved()
+    }
+
+    /// Stored entries of the global matrix's lower triangle and of its Cholesky factor (0, 0
+    /// before the first solve).
+    pub fn factor_sizes(&self) -> (usize, usize) {
+        self.factor.as_ref().map_or((0, 0), |f| (f.nnz(), f.nnz_l()))
+    }
+}
+
+fn check_weight(name: &str, value: f64) -> Result<(), SolveError> {
+    if value.is_finite() && value >= 0.0 { Ok(()) } else { Err(SolveError::BadWeight { name: name.into(), value }) }
+}

@@ -1,0 +1,291 @@
+//! Solver invariants: monotone energy, exact translations, rotation equivariance, recovery of
+//! rigid motions, agreement with a dense solve, singular systems, dirty-state handling.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use glam::{DQuat, DVec3};
+use shapeup_core::constraints::{BuildContext, Params, Position, Selection, build_constraints};
+use shapeup_core::geometry::{RestGeometry, WorkingFrame};
+use shapeup_core::mesh::Mesh;
+use shapeup_core::solver::{ConstraintGroup, SolveError, SolverParams, System};
+
+fn data(name: &str) -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data").join(name)
+}
+
+fn spot() -> Mesh {
+    let m = shapeup_core::io::read_mesh(&data("spot.obj")).unwrap().mesh;
+    // Work in the normalized frame, as scenes do.
+    let f = WorkingFrame::fit(&m.positions);
+    Mesh::new(m.positions.iter().map(|&p| f.to_working(p)).collect(), m.triangles).unwrap()
+}
+
+/// A flat n×n grid in the xz-plane, side 1, centred at the origin.
+fn grid(n: usize) -> Mesh {
+    let mut p = Vec::new();
+    for i in 0..n {
+        for j in 0..n {
+            p.push(DVec3::new(i as f64 / (n - 1) as f64 - 0.5, 0.0, j as f64 / (n - 1) as f64 - 0.5));
+        }
+    }
+    let mut t = Vec::new();
+    for i in 0..n - 1 {
+        for j in 0..n - 1 {
+            let v = (i * n + j) as u32;
+            let n = n as u32;
+            t.push([v, v + 1, v + n + 1]);
+            t.push([v, v + n + 1, v + n]);
+        }
+    }
+    Mesh::new(p, t).unwrap()
+}
+
+/// The 2 % lowest and highest vertices by y (or by x for a flat mesh).
+fn ends(mesh: &Mesh, axis: usize) -> (Vec<usize>, Vec<usize>) {
+    let mut order: Vec<usize> = (0..mesh.num_vertices()).collect();
+    order.sort_by(|&a, &b| mesh.positions[a][axis].total_cmp(&mesh.positions[b][axis]));
+    let k = (mesh.num_vertices() / 50).max(2);
+    (order[..k].to_vec(), order[order.len() - k..].to_vec())
+}
+
+fn shape_group(kind: &str, weight: f64, rest: &RestGeometry) -> ConstraintGroup {
+    let ctx = BuildContext { rest, selection: &Selection::All, frame: &WorkingFrame::IDENTITY };
+    ConstraintGroup::new(kind, weight, build_constraints(kind, &ctx, Params::default()).unwrap())
+}
+
+fn handle(name: &str, vertices: &[usize], targets: Vec<DVec3>) -> ConstraintGroup {
+    let c = Position::new(vertices.iter().map(|&v| v as u32).collect(), targets).unwrap();
+    ConstraintGroup::new(name, 1.0, vec![Box::new(c)])
+}
+
+/// A system with the given shape groups and two handles: `low` at rest, `high` moved by `f`.
+fn system(mesh: &Mesh, shapes: &[(&str, f64)], low: &[usize], high: &[usize], f: impl Fn(DVec3) -> DVec3) -> System {
+    let rest = RestGeometry::new(mesh.positions.clone(), mesh.triangles.clone(), vec![]);
+    let mut s = System::new(mesh.num_vertices(), SolverParams::default());
+    for &(kind, w) in shapes {
+        s.add_group(shape_group(kind, w, &rest)).unwrap();
+    }
+    s.add_group(handle("fixed", low, low.iter().map(|&v| mesh.positions[v]).collect())).unwrap();
+    s.add_group(handle("moved", high, high.iter().map(|&v| f(mesh.positions[v])).collect())).unwrap();
+    s
+}
+
+const MODELS: [&[(&str, f64)]; 4] = [
+    &[("edge_spring", 10.0)],
+    &[("triangle_strain", 10.0), ("bending", 10.0)],
+    &[("iso_one_ring", 100.0)],
+    &[("edge_spring", 10.0), ("smoothing", 1.0)],
+];
+
+#[test]
+fn energy_never_increases() {
+    let mesh = spot();
+    let (low, high) = ends(&mesh, 1);
+    for model in MODELS {
+        let mut s = system(&mesh, model, &low, &high, |p| p + DVec3::new(0.3, 0.1, -0.1));
+        let mut q = mesh.positions.clone();
+        let report = s.solve(&mut q, 30, 0.0).unwrap();
+        assert_eq!(report.energies.len(), 30);
+        assert!(report.energies[0] > 1e-6, "{model:?}: the handles deform the shape");
+        for w in report.energies.windows(2) {
+            assert!(w[1] <= w[0] * (1.0 + 1e-12) + 1e-15, "{model:?}: E rose from {} to {}", w[0], w[1]);
+        }
+        assert!(report.energies[29] < report.energies[0], "{model:?}: E decreased overall");
+    }
+}
+
+#[test]
+fn translating_every_handle_translates_the_rest_shape_exactly() {
+    let mesh = spot();
+    let (low, high) = ends(&mesh, 1);
+    let t = DVec3::new(0.7, -0.2, 1.3);
+    for model in MODELS {
+        let rest = RestGeometry::new(mesh.positions.clone(), mesh.triangles.clone(), vec![]);
+        let mut s = System::new(mesh.num_vertices(), SolverParams::default());
+        for &(kind, w) in model {
+            s.add_group(shape_group(kind, w, &rest)).unwrap();
+        }
+        for (name, vs) in [("a", &low), ("b", &high)] {
+            s.add_group(handle(name, vs, vs.iter().map(|&v| mesh.positions[v] + t).collect())).unwrap();
+        }
+        let mut q = mesh.positions.clone();
+        s.solve(&mut q, 20, 0.0).unwrap();
+        let err = q.iter().zip(&mesh.positions).map(|(a, b)| (*a - (*b + t)).length()).fold(0.0, f64::max);
+        assert!(err < 1e-9, "{model:?}: max deviation from rest + t is {err}");
+    }
+}
+
+#[test]
+fn rotating_input_and_targets_rotates_the_result() {
+    let mesh = spot();
+    let (low, high) = ends(&mesh, 1);
+    let r = DQuat::from_axis_angle(DVec3::new(1.0, 2.0, -0.5).normalize(), 0.9);
+    let shift = DVec3::new(0.2, 0.0, -0.4);
+    let moved = |p: DVec3| p + DVec3::new(0.25, 0.1, 0.0);
+    for model in MODELS {
+        let mut a = system(&mesh, model, &low, &high, moved);
+        let mut qa = mesh.positions.clone();
+        a.solve(&mut qa, 15, 0.0).unwrap();
+
+        let rotated = Mesh::new(mesh.positions.iter().map(|&p| r * p + shift).collect(), mesh.triangles.clone()).unwrap();
+        let mut b = system(&rotated, model, &low, &high, |p| {
+            // the same handle motion, expressed in the rotated frame
+            let original = r.inverse() * (p - shift);
+            r * moved(original) + shift
+        });
+        let mut qb = rotated.positions.clone();
+        b.solve(&mut qb, 15, 0.0).unwrap();
+        let err = qa.iter().zip(&qb).map(|(x, y)| (r * *x + shift - *y).length()).fold(0.0, f64::max);
+        assert!(err < 1e-8, "{model:?}: rotated solve differs by {err}");
+    }
+}
+
+#[test]
+fn rigidly_moved_handles_recover_the_rigid_motion() {
+    // Rotation-invariant models (iso one-ring, triangle strain) reach zero energy at a rigid
+    // motion of the rest shape: with handles moved rigidly, the solve converges to it.
+    let mesh = spot();
+    let (low, high) = ends(&mesh, 1);
+    let r = DQuat::from_axis_angle(DVec3::new(0.3, 1.0, 0.2).normalize(), 0.6);
+    let rigid = |p: DVec3| r * p + DVec3::new(0.1, 0.2, -0.3);
+    for model in [&[("iso_one_ring", 100.0)][..], &[("triangle_strain", 10.0)][..]] {
+        let rest = RestGeometry::new(mesh.positions.clone(), mesh.triangles.clone(), vec![]);
+        let mut s = System::new(mesh.num_vertices(), SolverParams::default());
+        for &(kind, w) in model {
+            s.add_group(shape_group(kind, w, &rest)).unwrap();
+        }
+        for (name, vs) in [("a", &low), ("b", &high)] {
+            s.add_group(handle(name, vs, vs.iter().map(|&v| rigid(mesh.positions[v])).collect())).unwrap();
+        }
+        let mut q = mesh.positions.clone();
+        let report = s.solve(&mut q, 400, 0.0).unwrap();
+        let err = q.iter().zip(&mesh.positions).map(|(a, b)| (*a - rigid(*b)).length()).fold(0.0, f64::max);
+        assert!(err < 1e-4, "{model:?}: max distance to the rigid motion {err}");
+        assert!(*report.energies.last().unwrap() < 1e-10);
+    }
+}
+
+#[test]
+fn one_global_step_matches_a_dense_solve() {
+    let mesh = grid(5);
+    let (low, high) = ends(&mesh, 0);
+    let mut s = system(&mesh, &[("edge_spring", 10.0), ("bending", 3.0)], &low, &high, |p| p + DVec3::Y * 0.3);
+    // Dense reference: assemble Σ w CᵀC and Σ w CᵀP from each constraint's own rows.
+    let n = mesh.num_vertices();
+    let q0: Vec<DVec3> = mesh.positions.iter().enumerate().map(|(i, &p)| p + DVec3::Y * 0.01 * (i % 3) as f64).collect();
+    let mut a = nalgebra::DMatrix::<f64>::zeros(n, n);
+    let mut b = nalgebra::DMatrix::<f64>::zeros(n, 3);
+    for (_, g) in s.groups() {
+        for c in &g.constraints {
+            let mut sink = shapeup_core::constraints::RowSink::default();
+            c.rows(&mut sink);
+            let mut p = vec![DVec3::ZERO; c.num_rows()];
+            c.project(&q0, &mut p);
+            let w = g.multiplier * c.element_weight();
+            for e1 in &sink.entries {
+                for e2 in sink.entries.iter().filter(|e| e.row == e1.row) {
+                    a[(e1.vertex as usize, e2.vertex as usize)] += w * e1.coeff * e2.coeff;
+                }
+                for k in 0..3 {
+                    b[(e1.vertex as usize, k)] += w * e1.coeff * p[e1.row as usize][k];
+                }
+            }
+        }
+    }
+    let x = a.cholesky().unwrap().solve(&b);
+    let mut q = q0.clone();
+    s.step(&mut q).unwrap();
+    for i in 0..n {
+        for k in 0..3 {
+            assert!((q[i][k] - x[(i, k)]).abs() < 1e-10, "vertex {i}: {} vs {}", q[i][k], x[(i, k)]);
+        }
+    }
+}
+
+#[test]
+fn stretched_spring_chain_has_the_known_answer() {
+    // Three collinear vertices 0 - 1 - 2 with springs of rest length 1; pinning 0 at x = 0 and
+    // 2 at x = 3 (weight so large that the handles are met to 1e-8) leaves 1 at x = 1.5.
+    let p = vec![DVec3::ZERO, DVec3::X, DVec3::X * 2.0, DVec3::new(1.0, 1.0, 0.0)];
+    let mesh = Mesh::new(p, vec![[0, 1, 3], [1, 2, 3]]).unwrap();
+    let rest = RestGeometry::new(mesh.positions.clone(), mesh.triangles.clone(), vec![]);
+    let mut s = System::new(4, SolverParams::default());
+    let springs: Vec<Box<dyn shapeup_core::constraints::Constraint>> = [[0u32, 1u32], [1, 2]]
+        .iter()
+        .map(|e| Box::new(shapeup_core::constraints::EdgeSpring::new(e[0], e[1], &rest.positions).unwrap()) as _)
+        .collect();
+    s.add_group(ConstraintGroup::new("springs", 1.0, springs)).unwrap();
+    let mut h = handle("ends", &[0, 2], vec![DVec3::ZERO, DVec3::X * 3.0]);
+    h.multiplier = 1e9;
+    s.add_group(h).unwrap();
+    let mut q = mesh.positions.clone();
+    s.solve(&mut q, 50, 0.0).unwrap();
+    assert!((q[1] - DVec3::X * 1.5).length() < 1e-7, "{:?}", q[1]);
+    assert_eq!(q[3], mesh.positions[3], "a vertex no constraint touches keeps its position");
+}
+
+#[test]
+fn a_piece_without_position_constraint_is_a_singular_system() {
+    let mesh = grid(4);
+    let rest = RestGeometry::new(mesh.positions.clone(), mesh.triangles.clone(), vec![]);
+    let mut s = System::new(mesh.num_vertices(), SolverParams::default());
+    s.add_group(shape_group("edge_spring", 10.0, &rest)).unwrap();
+    let mut q = mesh.positions.clone();
+    let err = s.solve(&mut q, 3, 0.0).unwrap_err();
+    assert!(matches!(err, SolveError::Unanchored { piece_size: 16, .. }), "{err:?}");
+    assert!(err.to_string().contains("16 vertices"), "{err}");
+    assert_eq!(q, mesh.positions, "nothing was written");
+    // A handle with weight 0 anchors nothing either.
+    let mut h = handle("h", &[0], vec![DVec3::ZERO]);
+    h.multiplier = 0.0;
+    let id = s.add_group(h).unwrap();
+    assert!(s.solve(&mut q, 1, 0.0).is_err());
+    s.set_multiplier(id, 1.0).unwrap();
+    assert!(s.solve(&mut q, 1, 0.0).is_ok());
+    assert!(s.set_multiplier(id, -1.0).is_err());
+    assert!(s.set_multiplier(id, f64::NAN).is_err());
+}
+
+#[test]
+fn reweighting_and_removing_groups_match_a_fresh_build() {
+    let mesh = spot();
+    let (low, high) = ends(&mesh, 1);
+    let f = |p: DVec3| p + DVec3::new(0.2, 0.2, 0.0);
+    let mut edited = system(&mesh, &[("edge_spring", 10.0), ("bending", 10.0)], &low, &high, f);
+    let mut q = mesh.positions.clone();
+    edited.solve(&mut q, 2, 0.0).unwrap();
+    // Re-weight springs, drop bending, then compare with a system built that way.
+    let ids: Vec<_> = edited.groups().map(|(id, g)| (id, g.kind.clone())).collect();
+    edited.set_multiplier(ids[0].0, 3.0).unwrap();
+    edited.remove_group(ids[1].0).unwrap();
+    let mut fresh = system(&mesh, &[("edge_spring", 3.0)], &low, &high, f);
+    let (mut qa, mut qb) = (mesh.positions.clone(), mesh.positions.clone());
+    let ra = edited.solve(&mut qa, 10, 0.0).unwrap();
+    let rb = fresh.solve(&mut qb, 10, 0.0).unwrap();
+    let err = qa.iter().zip(&qb).map(|(a, b)| (*a - *b).length()).fold(0.0, f64::max);
+    assert!(err < 1e-10, "{err}");
+    assert!((ra.energies[9] - rb.energies[9]).abs() <= 1e-10 * rb.energies[9]);
+    // Moving a handle's targets needs no refactorization and changes the result.
+    let moved_id = edited.groups().find(|(_, g)| g.name == "moved").unwrap().0;
+    let targets: Vec<DVec3> = high.iter().map(|&v| mesh.positions[v] + DVec3::X * 0.5).collect();
+    edited.set_position_targets(moved_id, &targets).unwrap();
+    assert!(edited.set_position_targets(moved_id, &targets[1..]).is_err());
+    let mut qc = mesh.positions.clone();
+    edited.solve(&mut qc, 10, 0.0).unwrap();
+    assert!(qc.iter().zip(&qa).any(|(a, b)| (*a - *b).length() > 0.1));
+}
+
+#[test]
+fn energy_reports_each_group_and_tolerance_stops_early() {
+    let mesh = spot();
+    let (low, high) = ends(&mesh, 1);
+    let mut s = system(&mesh, &[("edge_spring", 10.0), ("bending", 10.0)], &low, &high, |p| p + DVec3::X * 0.2);
+    let rest_energy = s.energy(&mesh.positions).unwrap();
+    let groups: Vec<_> = rest_energy.per_group.iter().map(|(_, e)| *e).collect();
+    assert_eq!(groups.len(), 4);
+    assert!(groups[0] < 1e-24 && groups[1] < 1e-24 && groups[2] < 1e-24, "shape and fixed handle rest at zero");
+    assert!(groups[3] > 0.0, "the moved handle is away from its targets");
+    assert!((rest_energy.total - groups.iter().sum::<f64>()).abs() < 1e-15);
+    let mut q = mesh.positions.clone();
+    let report = s.solve(&mut q, 1000, 1e-3).unwrap();
+    assert!(report.energies.len() < 1000, "stopped after {} iterations", report.energies.len());
+}

@@ -1,0 +1,258 @@
+//! `shapeup`: the command-line tool.
+//!
+//! - `shapeup deform SCENE -o OUT` — static ShapeUp solve from the rest shape.
+//! - `shapeup energy SCENE POSITIONS` — E of given positions under a scene's constraints.
+//! - `shapeup bench` — the standard benchmark scenarios, as a table.
+//!
+//! Every error is one line on stderr and a non-zero exit; nothing is written on failure.
+
+use anyhow::{Context, Result, bail};
+use clap::{Parser, Subcommand};
+use shapeup_core::bench::{Scenario, load_scenario};
+use shapeup_core::io::{read_mesh, write_atomic, write_mesh};
+use shapeup_core::scene::Scene;
+use shapeup_core::solver::{Factorization, SolverParams};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Instant;
+
+#[derive(Parser)]
+#[command(name = "shapeup", version, about = "Constraint-based shape deformation (ShapeUp) of triangle meshes")]
+struct Cli {
+    /// Worker threads for the parallel local step (default: all cores).
+    #[arg(long, global = true, value_name = "N")]
+    threads: Option<usize>,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Static solve of a scene from its rest shape; writes the deformed mesh.
+    Deform {
+        /// Scene file (.toml or .json).
+        scene: PathBuf,
+        /// Output mesh (.obj, .ply or .stl); keeps the input's vertex count and order.
+        #[arg(short, long, value_name = "OUT")]
+        output: PathBuf,
+        /// Total local-global iterations (default: the scene's steps × iterations).
+        #[arg(long, value_name = "N")]
+        iterations: Option<usize>,
+        /// Write a JSON report (energies per iteration, timings).
+        #[arg(long, value_name = "REPORT.json")]
+        report: Option<PathBuf>,
+    },
+    /// Prints the energy of given positions under a scene's constraints (working frame), in all
+    /// and per group.
+    Energy {
+        /// Scene file (.toml or .json).
+        scene: PathBuf,
+        /// Mesh with the positions to evaluate (.obj, .ply, …), same vertex count as the scene's.
+        positions: PathBuf,
+    },
+    /// Runs the standard benchmark scenarios (springs, strain+bending, iso) and prints a table.
+    Bench {
+        /// Mesh to benchmark on (default: the bundled Stanford bunny).
+        #[arg(long, value_name = "MESH")]
+        mesh: Option<PathBuf>,
+        /// Timed iterations per scenario.
+        #[arg(long, default_value_t = 20, value_name = "N")]
+        iterations: usize,
+        /// Only these scenarios (springs, strain+bending, iso).
+        #[arg(long = "scenario", value_name = "NAME")]
+        scenarios: Vec<String>,
+        /// Sparse Cholesky layout: auto, simplicial or supernodal.
+        #[arg(long, default_value = "auto", value_parser = parse_factorization)]
+        factorization: Factorization,
+    },
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match run(cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            // One line: the chain of causes joined by ": ".
+            let message = format!("{e:#}").replace('\n', " ");
+            let _ = writeln!(std::io::stderr(), "shapeup: error: {message}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn run(cli: Cli) -> Result<()> {
+    if let Some(n) = cli.threads {
+        if n == 0 {
+            bail!("--threads must be at least 1");
+        }
+        rayon::ThreadPoolBuilder::new().num_threads(n).build_global().context("cannot start the thread pool")?;
+    }
+    match cli.command {
+        Command::Deform { scene, output, iterations, report } => deform(&scene, &output, iterations, report.as_deref()),
+        Command::Energy { scene, positions } => energy(&scene, &positions),
+        Command::Bench { mesh, iterations, scenarios, factorization } => bench(mesh, iterations, &scenarios, factorization),
+    }
+}
+
+/// Fails early (before any work) on an output extension we cannot write.
+fn check_output_extension(path: &Path, allowed: &[&str]) -> Result<()> {
+    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).unwrap_or_default();
+    if allowed.contains(&ext.as_str()) {
+        Ok(())
+    } else {
+        bail!("{}: unsupported output format \"{ext}\" (use one of: {})", path.display(), allowed.join(", "))
+    }
+}
+
+fn deform(scene_path: &Path, output: &Path, iterations: Option<usize>, report_path: Option<&Path>) -> Result<()> {
+    let start = Instant::now();
+    check_output_extension(output, &["obj", "ply", "stl"])?;
+    if let Some(r) = report_path {
+        check_output_extension(r, &["json"])?;
+    }
+    let scene = Scene::from_file(scene_path)?;
+    let mut loaded = scene.load()?;
+    let (q, solve) = loaded.solve_static(iterations)?;
+    let mesh = loaded.mesh_at(&q);
+    write_mesh(output, &mesh)?;
+    let total = start.elapsed().as_secs_f64();
+    if let Some(path) = report_path {
+        let groups: Vec<_> = loaded
+            .group_ids
+            .iter()
+            .filter_map(|&id| loaded.system.group(id))
+            .map(|g| {
+                serde_json::json!({"name": g.name, "type": g.kind, "weight": g.multiplier, "constraints": g.constraints.len()})
+            })
+            .collect();
+        let (nnz_a, nnz_l) = loaded.system.factor_sizes();
+        let report = serde_json::json!({
+            "vertices": loaded.mesh.num_vertices(),
+            "triangles": loaded.mesh.num_triangles(),
+            "solved_vertices": loaded.system.num_solved_vertices(),
+            "constraints": loaded.system.num_constraints(),
+            "groups": groups,
+            "iterations": solve.energies.len(),
+            "energy": solve.energies,
+            "factor": {"nnz_lower": nnz_a, "nnz_l": nnz_l},
+            "timings": {
+                "load_s": loaded.load_seconds,
+                "setup_s": loaded.build_seconds + solve.setup_seconds,
+                "local_s": solve.local_seconds,
+                "global_s": solve.global_seconds,
+                "total_s": total,
+            },
+        });
+        let text = serde_json::to_string_pretty(&report)?;
+        write_atomic(path, |w| w.write_all(text.as_bytes()))?;
+    }
+    let first = solve.energies.first().copied().unwrap_or(0.0);
+    let last = solve.energies.last().copied().unwrap_or(0.0);
+    let mut out = std::io::stdout().lock();
+    writeln!(
+        out,
+        "deformed {} vertices, {} constraints, {} iterations: E {first:.6e} -> {last:.6e}; wrote {} ({total:.2} s)",
+        loaded.mesh.num_vertices(),
+        loaded.system.num_constraints(),
+        solve.energies.len(),
+        output.display()
+    )?;
+    if loaded.polygon_report.faces_dropped > 0 {
+        writeln!(out, "note: {} faces that repeat a vertex were dropped on load", loaded.polygon_report.faces_dropped)?;
+    }
+    Ok(())
+}
+
+fn energy(scene_path: &Path, positions_path: &Path) -> Result<()> {
+    let scene = Scene::from_file(scene_path)?;
+    let mut loaded = scene.load()?;
+    let positions = read_mesh(positions_path)?.mesh.positions;
+    if positions.len() != loaded.mesh.num_vertices() {
+        bail!(
+            "{}: has {} vertices but the scene's mesh has {} (positions must match the mesh vertex by vertex)",
+            positions_path.display(),
+            positions.len(),
+            loaded.mesh.num_vertices()
+        );
+    }
+    let e = loaded.energy_of(&positions)?;
+    let mut out = std::io::stdout().lock();
+    writeln!(out, "E = {:.12e}", e.total)?;
+    for (id, value) in &e.per_group {
+        if let Some(g) = loaded.system.group(*id) {
+            writeln!(out, "  {:<20} {:<16} {value:.12e}", g.name, g.kind)?;
+        }
+    }
+    Ok(())
+}
+
+/// The bundled bunny, found from the working directory or from the source tree.
+fn default_bench_mesh() -> PathBuf {
+    let local = PathBuf::from("data/stanford-bunny.obj");
+    if local.exists() { local } else { PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/stanford-bunny.obj")) }
+}
+
+fn parse_factorization(s: &str) -> Result<Factorization, String> {
+    match s {
+        "auto" => Ok(Factorization::Auto),
+        "simplicial" => Ok(Factorization::Simplicial),
+        "supernodal" => Ok(Factorization::Supernodal),
+        _ => Err(format!("unknown factorization \"{s}\" (auto, simplicial, supernodal)")),
+    }
+}
+
+fn bench(mesh: Option<PathBuf>, iterations: usize, names: &[String], factorization: Factorization) -> Result<()> {
+    let scenarios: Vec<Scenario> = if names.is_empty() {
+        Scenario::ALL.to_vec()
+    } else {
+        names
+            .iter()
+            .map(|n| {
+                Scenario::ALL.into_iter().find(|s| s.name() == n).with_context(|| {
+                    format!("unknown scenario \"{n}\" (known: {})", Scenario::ALL.map(|s| s.name()).join(", "))
+                })
+            })
+            .collect::<Result<_>>()?
+    };
+    let path = mesh.unwrap_or_else(default_bench_mesh);
+    let t = Instant::now();
+    let loaded = read_mesh(&path)?;
+    let load_s = t.elapsed().as_secs_f64();
+    let mut out = std::io::stdout().lock();
+    writeln!(
+        out,
+        "{}: {} vertices, {} triangles; load {:.3} s; {} threads; {iterations} iterations",
+        path.display(),
+        loaded.mesh.num_vertices(),
+        loaded.mesh.num_triangles(),
+        load_s,
+        rayon::current_num_threads()
+    )?;
+    writeln!(out, "{:<16} {:>11} {:>9} {:>10} {:>11} {:>11} {:>9}", "scenario", "constraints", "setup s", "local ms", "global ms", "ms/iter", "E end")?;
+    for s in scenarios {
+        let t = Instant::now();
+        let mut scene = load_scenario(s, &loaded.mesh, path.clone())?;
+        let params = SolverParams { factorization, ..*scene.system.params() };
+        scene.system.set_params(params);
+        scene.system.prepare().map_err(|e| anyhow::anyhow!("{}: {e}", s.name()))?;
+        let setup_s = t.elapsed().as_secs_f64() + load_s;
+        let (_, report) = scene.solve_static(Some(iterations))?;
+        let n = report.energies.len().max(1) as f64;
+        // solve() runs one extra local step (for the last energy): count local steps as n + 1.
+        let local_ms = 1e3 * report.local_seconds / (n + 1.0);
+        let global_ms = 1e3 * report.global_seconds / n;
+        writeln!(
+            out,
+            "{:<16} {:>11} {:>9.3} {:>10.2} {:>11.2} {:>11.2} {:>9.3e}",
+            s.name(),
+            scene.system.num_constraints(),
+            setup_s,
+            local_ms,
+            global_ms,
+            local_ms + global_ms,
+            report.energies.last().copied().unwrap_or(0.0)
+        )?;
+    }
+    Ok(())
+}
