@@ -110,7 +110,8 @@ fn bench_2x2(c: &mut Criterion) {
     let mut rng = Rng(7);
     let mats: Vec<DMat2> = (0..BATCH)
         .map(|_| {
-            let g = DMat2::from_cols(DVec2::new(rng.uniform(), rng.uniform()), DVec2::new(rng.uniform(), rng.uniform()));
+            let g =
+                DMat2::from_cols(DVec2::new(rng.uniform(), rng.uniform()), DVec2::new(rng.uniform(), rng.uniform()));
             DMat2::from_angle(3.0 * rng.uniform()) * (DMat2::IDENTITY + 0.3 * g)
         })
         .collect();

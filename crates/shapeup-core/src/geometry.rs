@@ -45,8 +45,7 @@ pub fn cotangent(a: DVec3, b: DVec3, c: DVec3) -> Option<f64> {
 
 /// Cotan weight of every edge of `topology.edges`: c_ij = ½ Σ cot θ over the angles θ opposite
 /// the edge in each of its triangles (one term on a boundary edge, all of them on an edge of
-/// three or more). A zero-area triangle (`area ≤ 1e-12` relative to its squared longest edge)
-/// adds no term.
+/// three or more). A zero-area triangle ([`is_degenerate_triangle`]) adds no term.
 pub fn cotan_weights(positions: &[DVec3], triangles: &[[u32; 3]], topology: &Topology) -> Vec<f64> {
     let mut weights = vec![0.0; topology.edges.len()];
     for t in triangles {
@@ -67,11 +66,13 @@ pub fn cotan_weights(positions: &[DVec3], triangles: &[[u32; 3]], topology: &Top
     weights
 }
 
-/// Whether a triangle has (numerically) zero area: A ≤ 1e-12 · (longest edge)², or A ≤ 1e-24.
+/// Smallest rest triangle area that counts (working frame): smaller triangles add no cotan
+/// terms and no strain constraint (math reference, "Edge cases").
+pub const MIN_TRIANGLE_AREA: f64 = 1e-12;
+
+/// Whether a triangle has zero area for the solver: A ≤ 1e-12.
 pub fn is_degenerate_triangle(a: DVec3, b: DVec3, c: DVec3) -> bool {
-    let area = triangle_area(a, b, c);
-    let longest = (b - a).length_squared().max((c - b).length_squared()).max((a - c).length_squared());
-    area <= 1e-12 * longest || area <= 1e-24
+    triangle_area(a, b, c) <= MIN_TRIANGLE_AREA
 }
 
 /// Signed volume of tetrahedron (a, b, c, d): V = (b − a) · ((c − a) × (d − a)) / 6

@@ -13,6 +13,36 @@
 //!    local step (all projections, in parallel) and the global step (three triangular solves).
 //!
 //! Every formula follows the math reference (`shapeup-math.md`).
+//!
+//! # Example
+//! Pull one corner of a square of two triangles while the opposite corner stays put; edge
+//! springs keep the edge lengths.
+//! ```
+//! use glam::DVec3;
+//! use shapeup_core::prelude::*;
+//!
+//! let rest = vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y];
+//! let geometry = RestGeometry::new(rest.clone(), vec![[0, 1, 2], [0, 2, 3]], vec![]);
+//! let ctx = BuildContext { rest: &geometry, selection: &Selection::All, frame: &WorkingFrame::IDENTITY };
+//!
+//! let mut system = System::new(4, SolverParams::default());
+//! let springs = build_constraints("edge_spring", &ctx, Params::default())?;
+//! system.add_group(ConstraintGroup::new("shape", 10.0, springs))?;
+//! let fixed = Position::new(vec![0], vec![DVec3::ZERO]).unwrap();
+//! system.add_group(ConstraintGroup::new("fixed", 1.0, vec![Box::new(fixed)]))?;
+//! let pulled = Position::new(vec![2], vec![DVec3::new(2.0, 2.0, 0.0)]).unwrap();
+//! let handle = system.add_group(ConstraintGroup::new("handle", 1.0, vec![Box::new(pulled)]))?;
+//!
+//! let mut q = rest.clone();
+//! let report = system.solve(&mut q, 20, 0.0)?;
+//! assert!(report.energies.windows(2).all(|e| e[1] <= e[0]));
+//! assert!(q[2].x > 1.2, "the pulled corner moved towards its target");
+//!
+//! // Dragging a handle only changes its targets: no refactorization.
+//! system.set_position_targets(handle, &[DVec3::new(1.5, 0.5, 0.0)])?;
+//! system.solve(&mut q, 20, 0.0)?;
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 #![warn(missing_docs)]
 
 pub mod bench;
@@ -28,3 +58,15 @@ pub mod topology;
 
 pub use error::Error;
 pub use mesh::Mesh;
+
+/// The types most programs need.
+pub mod prelude {
+    pub use crate::constraints::{
+        BuildContext, Constraint, ConstraintType, Params, Position, RowSink, Selection, build_constraints,
+    };
+    pub use crate::geometry::{RestGeometry, WorkingFrame};
+    pub use crate::io::{read_mesh, write_mesh};
+    pub use crate::mesh::Mesh;
+    pub use crate::scene::{LoadedScene, Scene};
+    pub use crate::solver::{ConstraintGroup, GroupId, SolveReport, SolverParams, System};
+}

@@ -13,7 +13,9 @@ pub enum MeshError {
     #[error("the mesh is empty ({0})")]
     Empty(&'static str),
     /// An element refers to a vertex that does not exist.
-    #[error("{element} {index} refers to vertex {vertex}, but the mesh has {num_vertices} vertices (valid: 0..{num_vertices})")]
+    #[error(
+        "{element} {index} refers to vertex {vertex}, but the mesh has {num_vertices} vertices (valid: 0..{num_vertices})"
+    )]
     IndexOutOfRange {
         /// "triangle" or "tetrahedron".
         element: &'static str,
@@ -84,21 +86,13 @@ impl Mesh {
     /// # Errors
     /// As [`Mesh::new`]; indices are checked before any face is dropped, so an out-of-range
     /// index names the face as it stands in `polygons` (0-based).
-    pub fn from_polygons(
-        positions: Vec<DVec3>,
-        polygons: &[Vec<u32>],
-    ) -> Result<(Self, PolygonReport), MeshError> {
+    pub fn from_polygons(positions: Vec<DVec3>, polygons: &[Vec<u32>]) -> Result<(Self, PolygonReport), MeshError> {
         let n = positions.len();
         let mut report = PolygonReport::default();
         let mut triangles = Vec::with_capacity(polygons.len());
         for (index, poly) in polygons.iter().enumerate() {
             if let Some(&v) = poly.iter().find(|&&v| v as usize >= n) {
-                return Err(MeshError::IndexOutOfRange {
-                    element: "face",
-                    index,
-                    vertex: v as u64,
-                    num_vertices: n,
-                });
+                return Err(MeshError::IndexOutOfRange { element: "face", index, vertex: v as u64, num_vertices: n });
             }
             if poly.len() < 3 || has_repeat(poly) {
                 report.faces_dropped += 1;
@@ -148,10 +142,9 @@ impl Mesh {
 
     /// Axis-aligned bounding box (min, max) of all vertices.
     pub fn bounding_box(&self) -> (DVec3, DVec3) {
-        self.positions.iter().fold(
-            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
-            |(lo, hi), p| (lo.min(*p), hi.max(*p)),
-        )
+        self.positions.iter().fold((DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)), |(lo, hi), p| {
+            (lo.min(*p), hi.max(*p))
+        })
     }
 }
 
@@ -159,11 +152,7 @@ fn has_repeat(poly: &[u32]) -> bool {
     poly.iter().enumerate().any(|(i, v)| poly[i + 1..].contains(v))
 }
 
-fn check_indices<const K: usize>(
-    element: &'static str,
-    elements: &[[u32; K]],
-    n: usize,
-) -> Result<(), MeshError> {
+fn check_indices<const K: usize>(element: &'static str, elements: &[[u32; K]], n: usize) -> Result<(), MeshError> {
     for (index, e) in elements.iter().enumerate() {
         if let Some(&v) = e.iter().find(|&&v| v as usize >= n) {
             return Err(MeshError::IndexOutOfRange { element, index, vertex: v as u64, num_vertices: n });
@@ -198,10 +187,7 @@ mod tests {
     #[test]
     fn out_of_range_index_names_the_face() {
         let err = Mesh::from_polygons(quad_positions(), &[vec![0, 1, 2], vec![0, 9, 2]]).unwrap_err();
-        assert_eq!(
-            err,
-            MeshError::IndexOutOfRange { element: "face", index: 1, vertex: 9, num_vertices: 4 }
-        );
+        assert_eq!(err, MeshError::IndexOutOfRange { element: "face", index: 1, vertex: 9, num_vertices: 4 });
         assert!(err.to_string().contains("face 1 refers to vertex 9"));
     }
 

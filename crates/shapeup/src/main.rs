@@ -73,8 +73,9 @@ fn main() -> ExitCode {
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            // One line: the chain of causes joined by ": ".
-            let message = format!("{e:#}").replace('\n', " ");
+            // One line. shapeup-core's errors already quote their cause in their own message,
+            // so only the outermost message is printed (the `{:#}` chain would repeat it).
+            let message = e.to_string().replace('\n', " ");
             let _ = writeln!(std::io::stderr(), "shapeup: error: {message}");
             ExitCode::FAILURE
         }
@@ -86,12 +87,17 @@ fn run(cli: Cli) -> Result<()> {
         if n == 0 {
             bail!("--threads must be at least 1");
         }
-        rayon::ThreadPoolBuilder::new().num_threads(n).build_global().context("cannot start the thread pool")?;
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build_global()
+            .map_err(|e| anyhow::anyhow!("cannot start the thread pool: {e}"))?;
     }
     match cli.command {
         Command::Deform { scene, output, iterations, report } => deform(&scene, &output, iterations, report.as_deref()),
         Command::Energy { scene, positions } => energy(&scene, &positions),
-        Command::Bench { mesh, iterations, scenarios, factorization } => bench(mesh, iterations, &scenarios, factorization),
+        Command::Bench { mesh, iterations, scenarios, factorization } => {
+            bench(mesh, iterations, &scenarios, factorization)
+        }
     }
 }
 
@@ -159,7 +165,12 @@ fn deform(scene_path: &Path, output: &Path, iterations: Option<usize>, report_pa
         output.display()
     )?;
     if loaded.polygon_report.faces_dropped > 0 {
-        writeln!(out, "note: {} faces that repeat a vertex were dropped on load", loaded.polygon_report.faces_dropped)?;
+        let _ = writeln!(
+            std::io::stderr(),
+            "shapeup: warning: {}: {} faces that repeat a vertex were dropped on load",
+            loaded.scene.mesh_path().display(),
+            loaded.polygon_report.faces_dropped
+        );
     }
     Ok(())
 }
@@ -190,7 +201,11 @@ fn energy(scene_path: &Path, positions_path: &Path) -> Result<()> {
 /// The bundled bunny, found from the working directory or from the source tree.
 fn default_bench_mesh() -> PathBuf {
     let local = PathBuf::from("data/stanford-bunny.obj");
-    if local.exists() { local } else { PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/stanford-bunny.obj")) }
+    if local.exists() {
+        local
+    } else {
+        PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/stanford-bunny.obj"))
+    }
 }
 
 fn parse_factorization(s: &str) -> Result<Factorization, String> {
@@ -229,7 +244,11 @@ fn bench(mesh: Option<PathBuf>, iterations: usize, names: &[String], factorizati
         load_s,
         rayon::current_num_threads()
     )?;
-    writeln!(out, "{:<16} {:>11} {:>9} {:>10} {:>11} {:>11} {:>9}", "scenario", "constraints", "setup s", "local ms", "global ms", "ms/iter", "E end")?;
+    writeln!(
+        out,
+        "{:<16} {:>11} {:>9} {:>10} {:>11} {:>11} {:>9}",
+        "scenario", "constraints", "setup s", "local ms", "global ms", "ms/iter", "E end"
+    )?;
     for s in scenarios {
         let t = Instant::now();
         let mut scene = load_scenario(s, &loaded.mesh, path.clone())?;

@@ -16,20 +16,20 @@ use std::fmt::Debug;
 mod bending;
 mod edge_spring;
 mod floor;
-// mod iso_one_ring;
+mod iso_one_ring;
 mod position;
 mod smoothing;
-// mod tet_strain;
-// mod triangle_strain;
+mod tet_strain;
+mod triangle_strain;
 
 pub use bending::{Bending, BendingType};
 pub use edge_spring::{EdgeSpring, EdgeSpringType};
 pub use floor::{Floor, FloorType};
-// pub use iso_one_ring::{IsoOneRing, IsoOneRingType};
+pub use iso_one_ring::{IsoOneRing, IsoOneRingType};
 pub use position::{Position, PositionType};
 pub use smoothing::{Smoothing, SmoothingType};
-// pub use tet_strain::{TetStrain, TetStrainType};
-// pub use triangle_strain::{TriangleStrain, TriangleStrainType};
+pub use tet_strain::{TetStrain, TetStrainType};
+pub use triangle_strain::{TriangleStrain, TriangleStrainType};
 
 /// One entry of a constraint's selection matrix C_i: `C[row, vertex] = coeff`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -157,7 +157,7 @@ pub enum ConstraintError {
     #[error("unknown constraint type \"{0}\" (known: {known})", known = type_names().join(", "))]
     UnknownType(String),
     /// An option that this constraint type does not take.
-    #[error("unknown key \"{key}\" for a {kind} constraint{hint}", hint = hint_for(&allowed_hint(*allowed)))]
+    #[error("unknown key \"{key}\" for a {kind} constraint{hint}", hint = hint_for(&allowed_hint(allowed)))]
     UnknownOption {
         /// Constraint type.
         kind: &'static str,
@@ -277,11 +277,11 @@ pub trait ConstraintType: Sync {
 pub fn registry() -> &'static [&'static dyn ConstraintType] {
     &[
         &EdgeSpringType,
-        // &TriangleStrainType,
+        &TriangleStrainType,
         &BendingType,
-        // &IsoOneRingType,
+        &IsoOneRingType,
         &SmoothingType,
-        // &TetStrainType,
+        &TetStrainType,
         &PositionType,
         &FloorType,
     ]
@@ -297,11 +297,7 @@ pub fn type_names() -> Vec<&'static str> {
 /// # Errors
 /// [`ConstraintError::UnknownType`] listing the known names.
 pub fn constraint_type(name: &str) -> Result<&'static dyn ConstraintType, ConstraintError> {
-    registry()
-        .iter()
-        .copied()
-        .find(|t| t.name() == name)
-        .ok_or_else(|| ConstraintError::UnknownType(name.to_string()))
+    registry().iter().copied().find(|t| t.name() == name).ok_or_else(|| ConstraintError::UnknownType(name.to_string()))
 }
 
 /// Builds the constraints of a type on a selection: looks up `kind`, passes `params` and rejects

@@ -100,6 +100,7 @@ pub fn clamp_singular_values2(m: DMat2, lo: f64, hi: f64) -> DMat2 {
 
 #[cfg(test)]
 mod tests {
+    #![allow(clippy::unwrap_used, clippy::expect_used)]
     use super::*;
     use crate::linalg::test_rng::Rng;
     use nalgebra::Matrix2;

@@ -50,7 +50,8 @@ const RANK_TOL: f64 = 1e-150;
 /// Method: one-sided (Hestenes) Jacobi. Plane rotations `G` applied on the right make the
 /// columns of `B = A V` mutually orthogonal to working precision *relative to their lengths*
 /// (rotation on pair (i, j): `ζ = (‖bⱼ‖² − ‖bᵢ‖²)/(2 bᵢ·bⱼ)`, `t = sign ζ/(|ζ| + √(1 + ζ²))`,
-/// `c = 1/√(1 + t²)`, `s = c t`, `bᵢ ← c bᵢ − s bⱼ`, `bⱼ ← s bᵢ + c bⱼ`, same on V), which keeps
+/// `c = 1/√(1 + t²)`, `s = c t` (evaluated without ζ, below), `bᵢ ← c bᵢ − s bⱼ`,
+/// `bⱼ ← s bᵢ + c bⱼ`, same on V), which keeps
 /// small singular values accurate and reconstruction at ~1e-15 ‖A‖ even for rank-deficient or
 /// graded matrices. Columns are then sorted by length (a swap also negates one column so that V
 /// stays a rotation), `u₁ = b₁/σ₁`, `u₂ = b₂/σ₂` (re-orthogonalized; any unit vector ⊥ u₁ when
@@ -75,15 +76,14 @@ pub fn svd3_rotations(a: DMat3) -> Svd3 {
                 continue;
             }
             rotated = true;
-            let zeta = (n[j] - n[i]) / (2.0 * g);
-            // For huge ζ, √(1 + ζ²) ≈ |ζ| and ζ² could overflow.
-            let t = if zeta.abs() < 1e150 {
-                zeta.signum() / (zeta.abs() + (1.0 + zeta * zeta).sqrt())
-            } else {
-                0.5 / zeta
-            };
-            let c = 1.0 / (1.0 + t * t).sqrt();
-            let s = c * t;
+            // c, s without ζ: with d = ‖bⱼ‖² − ‖bᵢ‖², r = √(d² + 4g²), w = r + |d|:
+            // t = 2g sgn(d)/w, c = 1/√(1 + t²) = w/√(2rw), s = tc (one division, no overflow).
+            let d = n[j] - n[i];
+            let r = (d * d + 4.0 * g * g).sqrt();
+            let w = r + d.abs();
+            let h = 1.0 / (2.0 * r * w).sqrt();
+            let c = w * h;
+            let s = if d < 0.0 { -2.0 * g * h } else { 2.0 * g * h };
             let (bi, bj) = (b[i], b[j]);
             b[i] = c * bi - s * bj;
             b[j] = s * bi + c * bj;
@@ -153,11 +153,18 @@ pub fn nearest_rotation3_svd(a: DMat3) -> DMat3 {
     svd.u * svd.v.transpose()
 }
 
-/// Newton iterations after which [`nearest_rotation3_newton`] gives up.
-const MAX_NEWTON: usize = 16;
-/// The iteration stops when `‖X_{k+1} − X_k‖_F² <` this; the error left is then about
-/// `‖X_{k+1} − X_k‖² / 2 ≈ 5e-15` (quadratic convergence).
-const NEWTON_STEP_TOL2: f64 = 1e-14;
+/// Iterations (Newton and Newton–Schulz together) after which [`nearest_rotation3_newton`]
+/// gives up.
+const MAX_ITERATIONS: usize = 24;
+/// Newton gives way to Newton–Schulz once its step `‖X_{k+1} − X_k‖_F` is below this (the
+/// singular values are then within ~1e-4 of 1, where Newton–Schulz converges as fast and is
+/// cheaper: no inverse, no square root).
+const NEWTON_SWITCH: f64 = 1e-2;
+/// Newton steps after a step with `‖X_{k+1} − X_k‖_F²` above this are scaled (the first always).
+const NEWTON_SCALED: f64 = 1.0;
+/// The iteration stops after a Newton–Schulz step `‖X_{k+1} − X_k‖_F` below this: the error
+/// left is then about `1.5 · step² ≈ 1e-15` (quadratic convergence).
+const SCHULZ_STOP: f64 = 3e-8;
 /// Largest accepted Frobenius condition number ‖X‖‖X⁻¹‖ of the lifted matrix (an identity has
 /// 3); beyond it the SVD is more accurate.
 const NEWTON_MAX_COND: f64 = 1e6;
@@ -185,10 +192,13 @@ pub fn nearest_rotation3(a: DMat3) -> DMat3 {
 /// `U diag(1, 1, s) Vᵀ` = the rotation sought (for s = +1 all entries are positive; for s = −1
 /// the first two are, so det X₀ > 0 forces the third negative). The lift also makes rank-2
 /// inputs (flat one-rings) well conditioned: σ₃ + σ₁σ₂ > 0. Then Higham's scaled Newton
-/// iteration `X ← ½(γX + (γX)⁻ᵀ)`, `(X)⁻ᵀ = cof X / det X`, with the Frobenius-norm scaling
-/// `γ = (‖X⁻¹‖_F/‖X‖_F)^½`, converges quadratically to the polar factor (4–6 steps for
-/// κ ≤ 10). Declines when `det X₀ ≤ 1e-9 ‖X₀‖³` (inverted with σ₂ ≈ σ₃, or rank ≤ 1), when
-/// `‖X₀‖‖X₀⁻¹‖ > 1e6`, or after 16 steps.
+/// iteration `X ← ½(γX + (γX)⁻ᵀ)`, `(X)⁻ᵀ = cof X / det X`, converges quadratically to the
+/// polar factor (2–3 steps for κ ≤ 10); γ = (‖X⁻¹‖_F/‖X‖_F)^½ (Frobenius-norm scaling) on the
+/// first step and after steps longer than 1, else γ = 1 (it is ≈ 1 near convergence). Once a
+/// Newton step is below 1e-2 the cheaper Newton–Schulz iteration `X ← ½X(3I − XᵀX)` (also
+/// quadratic there) finishes, until its step is below 3e-8 (error ≈ 1e-15; 1–2 steps).
+/// Declines when `det X₀ ≤ 1e-9 ‖X₀‖³` (inverted with σ₂ ≈ σ₃, or rank ≤ 1), when
+/// `‖X₀‖‖X₀⁻¹‖ > 1e6`, or after 24 steps.
 #[inline]
 pub fn nearest_rotation3_newton(a: DMat3) -> Option<DMat3> {
     let mut a = a;
@@ -204,33 +214,54 @@ pub fn nearest_rotation3_newton(a: DMat3) -> Option<DMat3> {
     }
     let a = a * (1.0 / n2.sqrt());
     let mut x = a + cofactor(&a);
-    let cof = cofactor(&x);
-    let det = x.x_axis.dot(cof.x_axis);
-    let (xn2, cn2) = (frobenius2(&x), frobenius2(&cof));
+    let mut cof = cofactor(&x);
+    let mut det = x.x_axis.dot(cof.x_axis);
+    let mut xn2 = frobenius2(&x);
+    let mut cn2 = frobenius2(&cof);
     // det X₀ ≥ 1e-9 ‖X₀‖³ keeps det far above its rounding noise (~1e-16 ‖X₀‖³, which can
     // pass for a positive det when Â has rank 1); κ_F² = ‖X‖²‖cof X‖²/det². Rejects NaN too.
     if !(det > NEWTON_MIN_DET * xn2 * xn2.sqrt() && xn2 * cn2 < NEWTON_MAX_COND * NEWTON_MAX_COND * det * det) {
         return None;
     }
-    let (mut cof, mut det, mut xn2, mut cn2) = (cof, det, xn2, cn2);
-    for _ in 0..MAX_NEWTON {
-        let gamma = (cn2 / (det * det * xn2)).sqrt().sqrt();
-        let next = (x * gamma + cof * (1.0 / (gamma * det))) * 0.5;
+    let mut newton = true;
+    let mut scaled = true;
+    for _ in 0..MAX_ITERATIONS {
+        let next = if scaled {
+            // X ← ½(γX + cof X/(γ det X)), γ = (‖cof X‖/(det X ‖X‖))^½.
+            let gamma = (cn2 / (det * det * xn2)).sqrt().sqrt();
+            (x * gamma + cof * (1.0 / (gamma * det))) * 0.5
+        } else if newton {
+            // Near convergence γ ≈ 1: plain Newton, X ← ½(X + cof X/det X).
+            (x + cof * (1.0 / det)) * 0.5
+        } else {
+            // Newton–Schulz: X ← ½ X (3I − XᵀX).
+            x * (DMat3::from_diagonal(DVec3::splat(1.5)) - 0.5 * (x.transpose() * x))
+        };
         let step2 = frobenius2(&(next - x));
         x = next;
-        if step2 < NEWTON_STEP_TOL2 {
+        if newton {
+            if step2 < NEWTON_SWITCH * NEWTON_SWITCH {
+                newton = false;
+                scaled = false;
+            } else {
+                scaled = step2 > NEWTON_SCALED;
+                cof = cofactor(&x);
+                det = x.x_axis.dot(cof.x_axis);
+                if scaled {
+                    xn2 = frobenius2(&x);
+                    cn2 = frobenius2(&cof);
+                }
+            }
+        } else if step2 < SCHULZ_STOP * SCHULZ_STOP {
             return Some(x);
         }
-        cof = cofactor(&x);
-        det = x.x_axis.dot(cof.x_axis);
-        xn2 = frobenius2(&x);
-        cn2 = frobenius2(&cof);
     }
     None
 }
 
 #[cfg(test)]
 mod tests {
+    #![allow(clippy::unwrap_used, clippy::expect_used)]
     use super::*;
     use crate::linalg::test_rng::Rng;
     use glam::DQuat;
@@ -280,7 +311,10 @@ mod tests {
             let mut inv = DMat3::IDENTITY + 0.3 * g;
             inv.z_axis = -inv.z_axis;
             out.push(("inverted", rotation(rng) * inv));
-            out.push(("rank 1", DMat3::from_cols(rng.vec3() * rng.uniform(), DVec3::ZERO, DVec3::ZERO) * rotation(rng)));
+            out.push((
+                "rank 1",
+                DMat3::from_cols(rng.vec3() * rng.uniform(), DVec3::ZERO, DVec3::ZERO) * rotation(rng),
+            ));
             let (x, y) = (rng.vec3(), rng.vec3());
             out.push(("outer", DMat3::from_cols(x * y.x, x * y.y, x * y.z)));
             let (z, w) = (rng.vec3(), rng.vec3());
@@ -293,6 +327,8 @@ mod tests {
             let (s2, s3) = (0.3 + rng.uniform().abs(), 1e-4 * rng.uniform());
             out.push(("flat", with_sigma(rng, DVec3::new(1.0, s2, 0.0))));
             out.push(("flat-ish", with_sigma(rng, DVec3::new(1.0, 0.8, s3))));
+            let s2 = 1e-4 * (1.5 + rng.uniform());
+            out.push(("anisotropic", with_sigma(rng, DVec3::new(1.0, s2, 1e-3 * s3))));
             out.push(("tiny", g * 1e-200));
             out.push(("huge", g * 1e200));
         }
@@ -388,7 +424,9 @@ mod tests {
         }
         assert!(worst < 4e-15, "worst Newton error × gap {worst:e}");
         // The fast path takes the common cases: only degenerate or inverted inputs fall back.
-        for label in ["identity", "diag", "near rotation", "rank 2", "equal", "nearly equal", "flat", "flat-ish"] {
+        for label in
+            ["identity", "diag", "near rotation", "rank 2", "equal", "nearly equal", "flat", "flat-ish", "anisotropic"]
+        {
             assert!(!fallbacks.contains_key(label), "{label} fell back to the SVD: {fallbacks:?}");
         }
         for label in ["uniform", "tiny", "huge"] {

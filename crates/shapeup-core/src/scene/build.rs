@@ -40,7 +40,8 @@ impl Scene {
     /// [`SceneError`] naming the scene file and the entry (bad selection, option, mesh file…).
     pub fn load(&self) -> Result<LoadedScene, SceneError> {
         let t = Instant::now();
-        let loaded = read_mesh(&self.mesh_path()).map_err(|source| SceneError::Mesh { path: self.file.clone(), source })?;
+        let loaded =
+            read_mesh(&self.mesh_path()).map_err(|source| SceneError::Mesh { path: self.file.clone(), source })?;
         let load_seconds = t.elapsed().as_secs_f64();
         self.build(loaded.mesh, loaded.report, load_seconds)
     }
@@ -49,9 +50,18 @@ impl Scene {
     ///
     /// # Errors
     /// As [`Scene::load`], but for the mesh file itself.
-    pub fn build(&self, mesh: Mesh, polygon_report: PolygonReport, load_seconds: f64) -> Result<LoadedScene, SceneError> {
+    pub fn build(
+        &self,
+        mesh: Mesh,
+        polygon_report: PolygonReport,
+        load_seconds: f64,
+    ) -> Result<LoadedScene, SceneError> {
         let t = Instant::now();
-        let invalid = |entry: &str, message: String| SceneError::Invalid { path: self.file.clone(), entry: entry.into(), message };
+        let invalid = |entry: &str, message: String| SceneError::Invalid {
+            path: self.file.clone(),
+            entry: entry.into(),
+            message,
+        };
         if self.mesh.tetrahedralize {
             return Err(invalid(
                 "[mesh]",
@@ -113,7 +123,12 @@ fn select(spec: &SelectionSpec, mesh: &Mesh) -> Result<Vec<usize>, String> {
     })
 }
 
-fn build_group(spec: &GroupSpec, mesh: &Mesh, rest: &RestGeometry, frame: &WorkingFrame) -> Result<ConstraintGroup, String> {
+fn build_group(
+    spec: &GroupSpec,
+    mesh: &Mesh,
+    rest: &RestGeometry,
+    frame: &WorkingFrame,
+) -> Result<ConstraintGroup, String> {
     let picked = select(&spec.selection, mesh)?;
     let constraints = if spec.kind == "position" {
         if !spec.options.is_empty() {
@@ -152,7 +167,11 @@ fn position_targets(picked: &[usize], targets: &Targets, mesh: &Mesh) -> Result<
     }
     if let Some(explicit) = &targets.explicit {
         if explicit.len() != picked.len() {
-            return Err(format!("{} targets given for {} selected vertices (one per vertex)", explicit.len(), picked.len()));
+            return Err(format!(
+                "{} targets given for {} selected vertices (one per vertex)",
+                explicit.len(),
+                picked.len()
+            ));
         }
         return Ok(explicit.iter().map(|&t| DVec3::from(t)).collect());
     }
@@ -161,7 +180,10 @@ fn position_targets(picked: &[usize], targets: &Targets, mesh: &Mesh) -> Result<
     let rotated = match &targets.rotate {
         None => rest,
         Some(r) => {
-            let center = r.center.map(DVec3::from).unwrap_or_else(|| rest.iter().copied().sum::<DVec3>() / rest.len().max(1) as f64);
+            let center = r
+                .center
+                .map(DVec3::from)
+                .unwrap_or_else(|| rest.iter().copied().sum::<DVec3>() / rest.len().max(1) as f64);
             let q = DQuat::from_axis_angle(DVec3::from(r.axis).normalize(), r.angle_deg.to_radians());
             rest.iter().map(|&p| center + q * (p - center)).collect()
         }
@@ -200,9 +222,16 @@ impl LoadedScene {
         positions.iter().map(|&p| self.frame.to_working(p)).collect()
     }
 
-    /// The input mesh with its positions replaced by `q` (working frame) mapped back.
+    /// The input mesh with its positions replaced by `q` (working frame) mapped back; vertices
+    /// that no constraint touches keep their input positions bit for bit.
     pub fn mesh_at(&self, q: &[DVec3]) -> Mesh {
-        Mesh { positions: self.to_input(q), triangles: self.mesh.triangles.clone(), tetrahedra: self.mesh.tetrahedra.clone() }
+        let positions = q
+            .iter()
+            .zip(&self.mesh.positions)
+            .enumerate()
+            .map(|(v, (&p, &input))| if self.system.is_solved(v) { self.frame.to_input(p) } else { input })
+            .collect();
+        Mesh { positions, triangles: self.mesh.triangles.clone(), tetrahedra: self.mesh.tetrahedra.clone() }
     }
 
     /// E of input-frame positions under the scene's constraints (working frame).

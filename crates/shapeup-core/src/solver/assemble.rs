@@ -228,7 +228,9 @@ impl Assembly {
     pub fn check_anchored(&self, multipliers: &[f64]) -> Result<(), SolveError> {
         let ns = self.num_solved();
         let links: Vec<Vec<u32>> = (0..self.num_rows())
-            .map(|r| self.c_col[self.c_ptr[r]..self.c_ptr[r + 1]].iter().map(|&v| self.solved_index[v as usize]).collect())
+            .map(|r| {
+                self.c_col[self.c_ptr[r]..self.c_ptr[r + 1]].iter().map(|&v| self.solved_index[v as usize]).collect()
+            })
             .collect();
         let (piece, count) = connected_pieces(ns, links.iter().map(|l| l.as_slice()));
         let mut anchored = vec![false; count];
@@ -237,10 +239,11 @@ impl Assembly {
             let sum: f64 = vals.iter().sum();
             let scale: f64 = vals.iter().map(|v| v.abs()).sum();
             let weight = self.row_weight[r] * multipliers[self.row_group[r] as usize];
-            if weight > 0.0 && sum.abs() > 1e-9 * scale {
-                if let Some(&v) = link.first() {
-                    anchored[piece[v as usize] as usize] = true;
-                }
+            if let Some(&v) = link.first()
+                && weight > 0.0
+                && sum.abs() > 1e-9 * scale
+            {
+                anchored[piece[v as usize] as usize] = true;
             }
         }
         if let Some(p) = anchored.iter().position(|a| !a) {

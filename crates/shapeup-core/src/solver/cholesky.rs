@@ -105,7 +105,15 @@ impl SparseCholesky {
             .factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default())
             .or(symbolic.solve_in_place_scratch::<f64>(3, SOLVE_PAR));
         let mem = MemBuffer::try_new(scratch).map_err(|e| FactorError::Other(format!("{e:?}")))?;
-        Ok(SparseCholesky { n, l_values: vec![0.0; symbolic.len_val()], col_ptr, row_idx, symbolic, mem, factored: false })
+        Ok(SparseCholesky {
+            n,
+            l_values: vec![0.0; symbolic.len_val()],
+            col_ptr,
+            row_idx,
+            symbolic,
+            mem,
+            factored: false,
+        })
     }
 
     /// Number of stored values of the lower triangle of A (the pattern's nnz).

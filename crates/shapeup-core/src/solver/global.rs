@@ -10,7 +10,13 @@ const MIN_LEN: usize = 2048;
 /// b = Σ_r w_r c_rᵀ P_r (+ `extra` per solved vertex, e.g. M s / h²), written column-major
 /// into `rhs` (x column, then y, then z), one solved vertex per row; `ct_weighted` holds
 /// w_r · coeff for each entry of Cᵀ.
-pub(crate) fn right_hand_side(a: &Assembly, ct_weighted: &[f64], p: &[DVec3], extra: Option<&[DVec3]>, rhs: &mut [f64]) {
+pub(crate) fn right_hand_side(
+    a: &Assembly,
+    ct_weighted: &[f64],
+    p: &[DVec3],
+    extra: Option<&[DVec3]>,
+    rhs: &mut [f64],
+) {
     let ns = a.num_solved();
     let (xs, rest) = rhs.split_at_mut(ns);
     let (ys, zs) = rest.split_at_mut(ns);

@@ -331,7 +331,8 @@ impl System {
     fn update_weights(&mut self) {
         let g = self.multipliers();
         let a = &self.assembly;
-        self.ct_weighted = (0..a.ct_row.len()).map(|k| a.ct_base[k] * g[a.row_group[a.ct_row[k] as usize] as usize]).collect();
+        self.ct_weighted =
+            (0..a.ct_row.len()).map(|k| a.ct_base[k] * g[a.row_group[a.ct_row[k] as usize] as usize]).collect();
     }
 
     /// Brings the factorization up to date: re-assembly and symbolic analysis after the
@@ -378,7 +379,7 @@ impl System {
         self.check_length(q)?;
         self.prepare()?;
         // Local step: P_i = p_i(q) for every constraint, in parallel.
-        self.local_step(q);
+        self.project(q);
         // Global step: solve (Σ w_i C_iᵀC_i) q = Σ w_i C_iᵀ P_i for x, y and z.
         self.global_step(q)
     }
@@ -395,7 +396,7 @@ impl System {
         self.prepare()?;
         report.setup_seconds = t.elapsed().as_secs_f64();
         let mut t = Instant::now();
-        self.local_step(q);
+        self.project(q);
         report.local_seconds += t.elapsed().as_secs_f64();
         let mut previous = self.energy_of_projections(q);
         for _ in 0..iterations {
@@ -405,13 +406,14 @@ impl System {
             self.global_step(q)?;
             report.global_seconds += t.elapsed().as_secs_f64();
             t = Instant::now();
-            self.local_step(q);
+            self.project(q);
             report.local_seconds += t.elapsed().as_secs_f64();
             let energy = self.energy_of_projections(q);
             report.energies.push(energy);
-            let change = (previous - energy).abs();
+            // Relative change |E_k − E_{k−1}| / E_{k−1}.
+            let converged = tolerance > 0.0 && (previous - energy).abs() < tolerance * previous.abs();
             previous = energy;
-            if tolerance > 0.0 && change <= tolerance * energy.abs().max(f64::MIN_POSITIVE) {
+            if converged {
                 break;
             }
         }
@@ -425,7 +427,7 @@ impl System {
     pub fn energy(&mut self, q: &[DVec3]) -> Result<Energy, SolveError> {
         self.check_length(q)?;
         self.ensure_assembled()?;
-        self.local_step(q);
+        self.project(q);
         global::apply_c(&self.assembly, q, &mut self.cq);
         let per_group = self
             .order
@@ -439,8 +441,20 @@ impl System {
         Ok(Energy { total: per_group.iter().map(|(_, e)| e).sum(), per_group })
     }
 
-    /// Local step: every projection P_i = p_i(q), in parallel.
-    fn local_step(&mut self, q: &[DVec3]) {
+    /// Local step alone: every projection P_i = p_i(q), in parallel, into the system's buffer
+    /// (for benchmarks and custom loops; [`System::step`] runs both steps).
+    ///
+    /// # Errors
+    /// As [`System::prepare`], or a wrong length.
+    pub fn local_step(&mut self, q: &[DVec3]) -> Result<(), SolveError> {
+        self.check_length(q)?;
+        self.prepare()?;
+        self.project(q);
+        Ok(())
+    }
+
+    /// Every projection into the buffer (assembled, not necessarily factored).
+    fn project(&mut self, q: &[DVec3]) {
         for (&slot, rows) in self.order.iter().zip(&self.assembly.groups) {
             if let Some(group) = &self.slots[slot] {
                 local::project_all(&group.constraints, &rows.offsets, q, &mut self.projections[rows.range()]);
@@ -448,8 +462,15 @@ impl System {
         }
     }
 
-    /// Global step: q = (Σ w CᵀC)⁻¹ Σ w Cᵀ P over the solved vertices.
-    fn global_step(&mut self, q: &mut [DVec3]) -> Result<(), SolveError> {
+    /// Global step alone: q = (Σ w CᵀC)⁻¹ Σ w Cᵀ P over the solved vertices, from the last
+    /// local step's projections (call [`System::local_step`] first).
+    ///
+    /// # Errors
+    /// As [`System::prepare`]; [`SolveError::NonFinite`] if the solve produced NaN or infinity
+    /// (nothing is written).
+    pub fn global_step(&mut self, q: &mut [DVec3]) -> Result<(), SolveError> {
+        self.check_length(q)?;
+        self.prepare()?;
         global::right_hand_side(&self.assembly, &self.ct_weighted, &self.projections, None, &mut self.rhs);
         if let Some(factor) = self.factor.as_mut() {
             factor.solve_in_place(&mut self.rhs);
@@ -479,6 +500,12 @@ impl System {
         } else {
             Err(SolveError::WrongLength { expected: self.num_vertices, found: q.len() })
         }
+    }
+
+    /// Whether vertex `v` is in the linear system (some constraint touches it); `false` before
+    /// the first solve or energy evaluation.
+    pub fn is_solved(&self, v: usize) -> bool {
+        self.assembled && self.assembly.solved_index.get(v).is_some_and(|&s| s != u32::MAX)
     }
 
     /// Number of vertices in the linear system (those some constraint touches), once assembled.

@@ -1,0 +1,1049 @@
+//! End-to-end tests of the `shapeup` binary against the CLI and scene contract
+//! (`scenes-and-cli.md`): real processes, real files, outcomes read back with `shapeup_core`.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use glam::DVec3;
+use shapeup_core::Mesh;
+use shapeup_core::io::{read_mesh, write_mesh};
+use shapeup_core::scene::{Scene, SelectionSpec};
+use std::ffi::OsStr;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+const SPOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/spot.obj");
+const COW: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/cow.obj");
+const SUZANNE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/suzanne.obj");
+const EXAMPLES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples");
+
+// ---------------------------------------------------------------------------------------------
+// Helpers
+// ---------------------------------------------------------------------------------------------
+
+/// What a finished `shapeup` process left behind.
+struct Output {
+    code: Option<i32>,
+    stdout: String,
+    stderr: String,
+}
+
+impl Output {
+    fn describe(&self) -> String {
+        format!("exit {:?}\n--- stdout ---\n{}\n--- stderr ---\n{}", self.code, self.stdout, self.stderr)
+    }
+
+    /// Panics (with the process output) unless it exited 0.
+    fn success(self) -> Output {
+        assert_eq!(self.code, Some(0), "expected success\n{}", self.describe());
+        assert!(!self.stderr.contains("panicked"), "{}", self.describe());
+        self
+    }
+}
+
+fn shapeup<I, S>(args: I) -> Output
+where
+    I: IntoIterator<Item = S>,
+    S: AsRef<OsStr>,
+{
+    shapeup_in(None, args)
+}
+
+fn shapeup_in<I, S>(cwd: Option<&Path>, args: I) -> Output
+where
+    I: IntoIterator<Item = S>,
+    S: AsRef<OsStr>,
+{
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_shapeup"));
+    cmd.args(args);
+    if let Some(dir) = cwd {
+        cmd.current_dir(dir);
+    }
+    let out = cmd.output().expect("cannot run the shapeup binary");
+    Output {
+        code: out.status.code(),
+        stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
+        stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
+    }
+}
+
+fn read(path: &Path) -> Mesh {
+    read_mesh(path).unwrap_or_else(|e| panic!("cannot read back {}: {e}", path.display())).mesh
+}
+
+fn spot() -> Mesh {
+    read(Path::new(SPOT))
+}
+
+/// A TOML scene on `mesh` (an absolute path, as a TOML literal string) with `body` after `[mesh]`.
+fn toml_scene(mesh: &Path, mesh_options: &str, body: &str) -> String {
+    format!("[mesh]\npath = '{}'\n{mesh_options}\n{body}", mesh.display())
+}
+
+fn write(path: &Path, text: &str) -> PathBuf {
+    std::fs::write(path, text).unwrap();
+    path.to_path_buf()
+}
+
+/// The standard test scene on spot, with every length multiplied by `s`: edge springs on the
+/// part z ≥ −0.2 only (the vertices below are touched by no constraint), a fixed handle on the
+/// slab −0.2 ≤ z ≤ −0.1 and the head (z ≥ 0.8) moved by `s · HEAD_TRANSLATE`.
+fn handle_body(s: f64) -> String {
+    let [tx, ty, tz] = HEAD_TRANSLATE.map(|t| t * s);
+    format!(
+        r#"
+[solver]
+iterations = 20
+
+[[constraints]]
+type = "edge_spring"
+name = "shape"
+weight = 10.0
+box = {{ min = [{lo}, {lo}, {z0}], max = [{hi}, {hi}, {hi}] }}
+
+[[constraints]]
+type = "position"
+name = "fixed"
+weight = 100.0
+box = {{ min = [{lo}, {lo}, {z0}], max = [{hi}, {hi}, {z1}] }}
+
+[[constraints]]
+type = "position"
+name = "moved"
+weight = 100.0
+box = {{ min = [{lo}, {lo}, {z2}], max = [{hi}, {hi}, {hi}] }}
+translate = [{tx:?}, {ty:?}, {tz:?}]
+"#,
+        lo = -2.0 * s,
+        hi = 2.0 * s,
+        z0 = -0.2 * s,
+        z1 = -0.1 * s,
+        z2 = 0.8 * s,
+    )
+}
+
+const HEAD_TRANSLATE: [f64; 3] = [0.0, 0.2, 0.1];
+
+/// Vertex classes of the standard scene on the unscaled spot.
+fn spot_classes(mesh: &Mesh) -> (Vec<usize>, Vec<usize>, Vec<usize>) {
+    let z = |i: &usize| mesh.positions[*i].z;
+    let all = 0..mesh.num_vertices();
+    let fixed: Vec<usize> = all.clone().filter(|i| (-0.2..=-0.1).contains(&z(i))).collect();
+    let moved: Vec<usize> = all.clone().filter(|i| z(i) >= 0.8).collect();
+    let untouched: Vec<usize> = all.filter(|i| z(i) < -0.2).collect();
+    assert!(fixed.len() > 10 && moved.len() > 10 && untouched.len() > 10);
+    (fixed, moved, untouched)
+}
+
+fn diagonal(mesh: &Mesh) -> f64 {
+    let (lo, hi) = mesh.bounding_box();
+    (hi - lo).length()
+}
+
+fn max_abs_coordinate(mesh: &Mesh) -> f64 {
+    mesh.positions.iter().map(|p| p.abs().max_element()).fold(0.0, f64::max)
+}
+
+/// Largest distance between corresponding vertices.
+fn max_distance(a: &[DVec3], b: &[DVec3]) -> f64 {
+    assert_eq!(a.len(), b.len());
+    a.iter().zip(b).map(|(p, q)| (*p - *q).length()).fold(0.0, f64::max)
+}
+
+fn report(path: &Path) -> serde_json::Value {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("no report {}: {e}", path.display()));
+    serde_json::from_str(&text).unwrap_or_else(|e| panic!("report {} is not JSON ({e}):\n{text}", path.display()))
+}
+
+fn energies(report: &serde_json::Value) -> Vec<f64> {
+    report["energy"]
+        .as_array()
+        .unwrap_or_else(|| panic!("report has no \"energy\" array: {report}"))
+        .iter()
+        .map(|e| e.as_f64().unwrap_or_else(|| panic!("energy entry {e} is not a number")))
+        .collect()
+}
+
+fn assert_non_increasing(e: &[f64], what: &str) {
+    for (k, w) in e.windows(2).enumerate() {
+        assert!(
+            w[1] <= w[0] * (1.0 + 1e-12) + 1e-300,
+            "{what}: E increased at iteration {}: {} -> {}",
+            k + 2,
+            w[0],
+            w[1]
+        );
+    }
+}
+
+/// The total `E = …` printed by `shapeup energy`.
+fn printed_energy(out: &Output) -> f64 {
+    let line = out
+        .stdout
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("E = "))
+        .unwrap_or_else(|| panic!("no `E = …` line\n{}", out.describe()));
+    line.trim().parse().unwrap_or_else(|e| panic!("cannot parse E from {line:?}: {e}"))
+}
+
+fn relative_difference(a: f64, b: f64) -> f64 {
+    (a - b).abs() / a.abs().max(b.abs()).max(f64::MIN_POSITIVE)
+}
+
+/// A clear message says each thing once: anyhow's `{:#}` chain must not repeat a cause that an
+/// error's own message already includes ("X: why: why").
+fn assert_not_repeated(message: &str) {
+    let parts: Vec<&str> = message.split(": ").map(str::trim).filter(|p| p.len() > 10).collect();
+    for (i, p) in parts.iter().enumerate() {
+        assert!(!parts[i + 1..].contains(p), "the error message repeats {p:?}:\n{message}");
+    }
+}
+
+/// A temp dir with an empty `out/` subdirectory for outputs.
+struct Workspace {
+    dir: tempfile::TempDir,
+}
+
+impl Workspace {
+    fn new() -> Workspace {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::create_dir(dir.path().join("out")).unwrap();
+        Workspace { dir }
+    }
+
+    fn path(&self, name: &str) -> PathBuf {
+        self.dir.path().join(name)
+    }
+
+    fn out(&self, name: &str) -> PathBuf {
+        self.dir.path().join("out").join(name)
+    }
+
+    fn scene(&self, name: &str, text: &str) -> PathBuf {
+        write(&self.path(name), text)
+    }
+
+    fn out_entries(&self) -> Vec<String> {
+        let mut names: Vec<String> = std::fs::read_dir(self.path("out"))
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        names
+    }
+
+    /// Runs `shapeup` with `args` and checks the failure contract: a non-zero exit, exactly one
+    /// line on stderr containing every needle, no panic, and nothing left in `out/`.
+    fn expect_failure<S: AsRef<OsStr>>(&self, args: &[S], needles: &[&str]) -> String {
+        let out = shapeup(args);
+        let what = out.describe();
+        assert!(matches!(out.code, Some(c) if c != 0), "expected a non-zero exit\n{what}");
+        assert!(!out.stderr.contains("panicked"), "panic on bad input\n{what}");
+        let lines: Vec<&str> = out.stderr.lines().filter(|l| !l.trim().is_empty()).collect();
+        assert_eq!(lines.len(), 1, "expected exactly one line on stderr\n{what}");
+        for needle in needles {
+            assert!(lines[0].contains(needle), "stderr does not mention {needle:?}\n{what}");
+        }
+        assert_eq!(self.out_entries(), Vec::<String>::new(), "a failed run left files in the output directory\n{what}");
+        assert_not_repeated(lines[0]);
+        lines[0].to_owned()
+    }
+
+    /// `deform SCENE -o out/result.obj --report out/report.json`, expected to fail.
+    fn deform_fails(&self, scene: &Path, needles: &[&str]) -> String {
+        let (o, r) = (self.out("result.obj"), self.out("report.json"));
+        self.expect_failure(
+            &[
+                OsStr::new("deform"),
+                scene.as_os_str(),
+                "-o".as_ref(),
+                o.as_os_str(),
+                "--report".as_ref(),
+                r.as_os_str(),
+            ],
+            needles,
+        )
+    }
+
+    /// A scene on spot with `body`, expected to fail naming the scene file and `needles`.
+    fn spot_scene_fails(&self, body: &str, needles: &[&str]) -> String {
+        let scene = self.scene("bad.toml", &toml_scene(Path::new(SPOT), "", body));
+        let mut all = vec!["bad.toml"];
+        all.extend_from_slice(needles);
+        self.deform_fails(&scene, &all)
+    }
+}
+
+/// `deform` with `-o out/NAME` (and a report), expected to succeed; returns the output mesh
+/// and the report.
+fn deform_ok(ws: &Workspace, scene: &Path, name: &str, extra: &[&str]) -> (Mesh, serde_json::Value, Output) {
+    let (o, r) = (ws.out(name), ws.out(&format!("{name}.report.json")));
+    let mut args: Vec<&OsStr> = vec!["deform".as_ref(), scene.as_os_str(), "-o".as_ref(), o.as_os_str()];
+    args.extend(["--report".as_ref(), r.as_os_str()]);
+    args.extend(extra.iter().map(OsStr::new));
+    let out = shapeup(&args).success();
+    assert!(o.is_file(), "no output file {}\n{}", o.display(), out.describe());
+    let temps: Vec<String> = ws.out_entries().into_iter().filter(|n| n.starts_with('.')).collect();
+    assert!(temps.is_empty(), "temp files left behind: {temps:?}");
+    (read(&o), report(&r), out)
+}
+
+// ---------------------------------------------------------------------------------------------
+// deform
+// ---------------------------------------------------------------------------------------------
+
+#[test]
+fn deform_keeps_the_mesh_and_moves_the_handles() {
+    let ws = Workspace::new();
+    let rest = spot();
+    let scene = ws.scene("spot.toml", &toml_scene(Path::new(SPOT), "", &handle_body(1.0)));
+    let (out_mesh, _, out) = deform_ok(&ws, &scene, "spot.obj", &[]);
+    assert!(out.stdout.contains("deformed"), "{}", out.describe());
+
+    assert_eq!(out_mesh.num_vertices(), 2930);
+    assert_eq!(out_mesh.num_vertices(), rest.num_vertices());
+    assert_eq!(out_mesh.triangles, rest.triangles, "the triangles changed");
+    assert!(out_mesh.positions.iter().all(|p| p.is_finite()));
+
+    let d = diagonal(&rest);
+    let (fixed, moved, untouched) = spot_classes(&rest);
+    let delta = |i: usize| out_mesh.positions[i] - rest.positions[i];
+    let t = DVec3::from(HEAD_TRANSLATE);
+    let worst_fixed = fixed.iter().map(|&i| delta(i).length()).fold(0.0, f64::max);
+    assert!(worst_fixed < 0.01 * t.length(), "the fixed handle moved by up to {worst_fixed}");
+    let worst_moved = moved.iter().map(|&i| (delta(i) - t).length()).fold(0.0, f64::max);
+    assert!(worst_moved < 0.01 * t.length(), "the moved handle is off its target by up to {worst_moved}");
+    let worst_untouched = untouched.iter().map(|&i| delta(i).length()).fold(0.0, f64::max);
+    assert!(worst_untouched <= 1e-12 * d, "vertices in no constraint moved by up to {worst_untouched}");
+    // And the shape in between actually deformed.
+    let middle = (0..rest.num_vertices()).filter(|&i| (0.2..0.6).contains(&rest.positions[i].z));
+    assert!(
+        middle.map(|i| delta(i).length()).fold(0.0, f64::max) > 0.01 * t.length(),
+        "nothing between the handles moved"
+    );
+}
+
+#[test]
+fn deform_writes_obj_ply_and_stl() {
+    let ws = Workspace::new();
+    let rest = spot();
+    let scene = ws.scene("spot.toml", &toml_scene(Path::new(SPOT), "", &handle_body(1.0)));
+    let (obj, _, _) = deform_ok(&ws, &scene, "spot.obj", &[]);
+    let (ply, _, _) = deform_ok(&ws, &scene, "spot.ply", &[]);
+    let (stl, _, _) = deform_ok(&ws, &scene, "spot.stl", &[]);
+    let (upper, _, _) = deform_ok(&ws, &scene, "SPOT_UPPER.OBJ", &[]);
+    let d = diagonal(&rest);
+
+    assert_eq!(ply.num_vertices(), rest.num_vertices());
+    assert_eq!(ply.triangles, rest.triangles);
+    assert!(max_distance(&ply.positions, &obj.positions) <= 1e-12 * d, "ply and obj outputs differ");
+    assert_eq!(upper.triangles, rest.triangles);
+    assert!(max_distance(&upper.positions, &obj.positions) <= 1e-12 * d, "upper-case .OBJ output differs");
+
+    // STL stores no shared vertices (f32, renumbered on read): compare triangle corners.
+    assert_eq!(stl.num_triangles(), rest.num_triangles());
+    assert_eq!(stl.num_vertices(), rest.num_vertices(), "spot has no unreferenced or coincident vertices");
+    for (k, (a, b)) in stl.triangles.iter().zip(&obj.triangles).enumerate() {
+        for c in 0..3 {
+            let (p, q) = (stl.positions[a[c] as usize], obj.positions[b[c] as usize]);
+            assert!((p - q).length() <= 1e-6 * d, "stl triangle {k} corner {c}: {p} vs {q}");
+        }
+    }
+}
+
+#[test]
+fn report_has_the_contract_fields() {
+    let ws = Workspace::new();
+    let scene = ws.scene("spot.toml", &toml_scene(Path::new(SPOT), "", &handle_body(1.0)));
+    let (_, r, _) = deform_ok(&ws, &scene, "spot.obj", &[]);
+    assert_eq!(r["vertices"].as_u64(), Some(2930), "{r}");
+    let constraints = r["constraints"].as_u64().unwrap_or_else(|| panic!("no constraints count: {r}"));
+    assert!(constraints > 2, "{r}");
+    let e = energies(&r);
+    assert_eq!(e.len(), 20, "the scene asks for 20 iterations: {r}");
+    assert!(e.iter().all(|x| x.is_finite() && *x >= 0.0), "{e:?}");
+    assert_non_increasing(&e, "spot");
+    assert!(e[e.len() - 1] < e[0], "the energy did not decrease: {e:?}");
+    for key in ["load_s", "setup_s", "local_s", "global_s", "total_s"] {
+        let v = r["timings"][key].as_f64().unwrap_or_else(|| panic!("timings.{key} missing: {r}"));
+        assert!(v.is_finite() && v >= 0.0, "timings.{key} = {v}");
+    }
+    let t = |k: &str| r["timings"][k].as_f64().unwrap();
+    assert!(t("total_s") >= t("local_s") + t("global_s"), "total_s smaller than its parts: {r}");
+
+    for n in [1, 7] {
+        let (_, r, out) = deform_ok(&ws, &scene, &format!("spot{n}.obj"), &["--iterations", &n.to_string()]);
+        assert_eq!(energies(&r).len(), n, "--iterations {n}\n{}", out.describe());
+    }
+}
+
+#[test]
+fn normalized_frame_is_scale_invariant() {
+    let ws = Workspace::new();
+    let rest = spot();
+    let scale = 1000.0;
+    let big = Mesh {
+        positions: rest.positions.iter().map(|&p| p * scale).collect(),
+        triangles: rest.triangles.clone(),
+        tetrahedra: Vec::new(),
+    };
+    let big_path = ws.path("spot1000.obj");
+    write_mesh(&big_path, &big).unwrap();
+
+    let small_scene = ws.scene("small.toml", &toml_scene(Path::new(SPOT), "", &handle_body(1.0)));
+    let big_scene = ws.scene("big.toml", &toml_scene(&big_path, "normalize = true", &handle_body(scale)));
+    let (small_out, small_r, _) = deform_ok(&ws, &small_scene, "small.obj", &[]);
+    let (big_out, big_r, _) = deform_ok(&ws, &big_scene, "big.obj", &[]);
+
+    let expected: Vec<DVec3> = small_out.positions.iter().map(|&p| p * scale).collect();
+    let error = max_distance(&big_out.positions, &expected) / max_abs_coordinate(&big_out);
+    assert!(error < 1e-9, "output on the ×{scale} mesh is not {scale} × the output (relative error {error})");
+    // E is measured in the working frame: the same for both.
+    let (es, eb) = (energies(&small_r), energies(&big_r));
+    assert_eq!(es.len(), eb.len());
+    for (a, b) in es.iter().zip(&eb) {
+        assert!(relative_difference(*a, *b) < 1e-8, "working-frame energies differ: {a} vs {b}");
+    }
+
+    // Without normalization the scene means something else on the big mesh (edge-spring
+    // weights are rest lengths in input units).
+    let raw_scene = ws.scene("raw.toml", &toml_scene(&big_path, "normalize = false", &handle_body(scale)));
+    let (raw_out, _, _) = deform_ok(&ws, &raw_scene, "raw.obj", &[]);
+    let raw_error = max_distance(&raw_out.positions, &expected) / max_abs_coordinate(&big_out);
+    assert!(raw_error > 1e-6, "normalize = false had no effect (relative difference {raw_error})");
+}
+
+#[test]
+fn normalize_false_works_in_input_units() {
+    let ws = Workspace::new();
+    let rest = spot();
+    // One vertex pulled by t; edge springs are at rest: E(rest) = |t|² in the input frame and
+    // |t|² σ² in the working frame (σ = 0.5 / distance of the farthest vertex from the centroid).
+    let t = [0.3, 0.4, 0.0];
+    let body = format!(
+        "[[constraints]]\ntype = \"edge_spring\"\n\n[[constraints]]\ntype = \"position\"\nvertices = [7]\ntranslate = {t:?}\n"
+    );
+    let centroid = rest.positions.iter().copied().sum::<DVec3>() / rest.num_vertices() as f64;
+    let radius = rest.positions.iter().map(|p| (*p - centroid).length()).fold(0.0, f64::max);
+    let sigma = 0.5 / radius;
+    for (options, expected) in
+        [("normalize = false", 0.25), ("normalize = true", 0.25 * sigma * sigma), ("", 0.25 * sigma * sigma)]
+    {
+        let scene = ws.scene("pull.toml", &toml_scene(Path::new(SPOT), options, &body));
+        let out = shapeup(["energy".as_ref(), scene.as_os_str(), OsStr::new(SPOT)]).success();
+        let e = printed_energy(&out);
+        assert!(
+            relative_difference(e, expected) < 1e-9,
+            "[{options}] E = {e}, expected {expected}\n{}",
+            out.describe()
+        );
+    }
+
+    // A deform with normalize = false: vertices touched by no constraint keep their exact
+    // coordinates (the identity frame is exact).
+    let scene = ws.scene("raw.toml", &toml_scene(Path::new(SPOT), "normalize = false", &handle_body(1.0)));
+    let (out_mesh, _, _) = deform_ok(&ws, &scene, "raw.obj", &[]);
+    assert_eq!(out_mesh.num_vertices(), rest.num_vertices());
+    assert_eq!(out_mesh.triangles, rest.triangles);
+    let (_, moved, untouched) = spot_classes(&rest);
+    for &i in &untouched {
+        assert_eq!(out_mesh.positions[i], rest.positions[i], "untouched vertex {i} moved (normalize = false)");
+    }
+    let shift = moved.iter().map(|&i| out_mesh.positions[i] - rest.positions[i]).sum::<DVec3>() / moved.len() as f64;
+    assert!(
+        (shift - DVec3::from(HEAD_TRANSLATE)).length() < 0.05 * DVec3::from(HEAD_TRANSLATE).length(),
+        "head moved by {shift}"
+    );
+}
+
+#[test]
+fn json_scene_equals_toml_scene() {
+    let ws = Workspace::new();
+    let body = r#"
+[solver]
+iterations = 15
+
+[[constraints]]
+type = "edge_spring"
+name = "shape"
+weight = 10.0
+
+[[constraints]]
+type = "bending"
+weight = 10.0
+prevent_flips = false
+
+[[constraints]]
+type = "position"
+name = "feet"
+box = { min = [-1.0, -1.0, -1.0], max = [1.0, -0.6, 2.0] }
+weight = 10.0
+
+[[constraints]]
+type = "position"
+name = "head"
+box = { min = [-1.0, -1.0, 0.8], max = [1.0, 2.0, 2.0] }
+translate = [0.0, 0.25, 0.1]
+rotate = { axis = [1.0, 0.0, 0.0], angle_deg = 20.0 }
+weight = 10.0
+"#;
+    let toml = ws.scene("scene.toml", &toml_scene(Path::new(SPOT), "", body));
+    let json_value = serde_json::json!({
+        "mesh": {"path": SPOT},
+        "solver": {"iterations": 15},
+        "constraints": [
+            {"type": "edge_spring", "name": "shape", "weight": 10.0},
+            {"type": "bending", "weight": 10.0, "prevent_flips": false},
+            {"type": "position", "name": "feet", "box": {"min": [-1.0, -1.0, -1.0], "max": [1.0, -0.6, 2.0]}, "weight": 10.0},
+            {"type": "position", "name": "head", "box": {"min": [-1.0, -1.0, 0.8], "max": [1.0, 2.0, 2.0]},
+             "translate": [0.0, 0.25, 0.1], "rotate": {"axis": [1.0, 0.0, 0.0], "angle_deg": 20.0}, "weight": 10.0}
+        ]
+    });
+    let json = ws.scene("scene.json", &serde_json::to_string_pretty(&json_value).unwrap());
+    let (a, ra, _) = deform_ok(&ws, &toml, "toml.obj", &[]);
+    let (b, rb, _) = deform_ok(&ws, &json, "json.obj", &[]);
+    assert_eq!(a.triangles, b.triangles);
+    let error = max_distance(&a.positions, &b.positions) / diagonal(&a);
+    assert!(error <= 1e-12, "TOML and JSON scenes give different outputs (relative {error})");
+    assert_eq!(ra["constraints"], rb["constraints"]);
+    let (ea, eb) = (energies(&ra), energies(&rb));
+    assert_eq!(ea.len(), 15);
+    assert!(relative_difference(ea[14], eb[14]) < 1e-12, "{ea:?} vs {eb:?}");
+}
+
+#[test]
+fn threads_1_gives_the_same_result() {
+    let ws = Workspace::new();
+    let scene = ws.scene("spot.toml", &toml_scene(Path::new(SPOT), "", &handle_body(1.0)));
+    let (a, _, _) = deform_ok(&ws, &scene, "default.obj", &[]);
+    let (b, _, _) = deform_ok(&ws, &scene, "one.obj", &["--threads", "1"]);
+    // `--threads` is global: also accepted before the subcommand.
+    let o = ws.out("first.obj");
+    shapeup(["--threads".as_ref(), "1".as_ref(), "deform".as_ref(), scene.as_os_str(), "-o".as_ref(), o.as_os_str()])
+        .success();
+    let c = read(&o);
+    let d = diagonal(&a);
+    assert!(max_distance(&a.positions, &b.positions) <= 1e-12 * d);
+    assert!(max_distance(&a.positions, &c.positions) <= 1e-12 * d);
+}
+
+#[test]
+fn deform_resolves_mesh_paths_against_the_scene_file() {
+    // A relative mesh path, run from another working directory.
+    let ws = Workspace::new();
+    std::fs::create_dir(ws.path("scenes")).unwrap();
+    std::fs::create_dir(ws.path("meshes")).unwrap();
+    std::fs::copy(SUZANNE, ws.path("meshes/suzanne.obj")).unwrap();
+    // Suzanne's eyes are separate pieces: a weak position group on every vertex anchors them.
+    let body = "[[constraints]]\ntype = \"edge_spring\"\n\n[[constraints]]\ntype = \"position\"\nname = \"anchor\"\nweight = 0.01\n\n\
+                [[constraints]]\ntype = \"position\"\nvertices = [0, 1, 2]\ntranslate = [0.0, 0.1, 0.0]\n";
+    write(&ws.path("scenes/s.toml"), &format!("[mesh]\npath = \"../meshes/suzanne.obj\"\n{body}"));
+    let out = shapeup_in(Some(&ws.path("out")), ["deform", "../scenes/s.toml", "-o", "suzanne.ply"]).success();
+    let mesh = read(&ws.out("suzanne.ply"));
+    let rest = read(Path::new(SUZANNE));
+    assert_eq!(mesh.num_vertices(), 507, "{}", out.describe());
+    assert_eq!(mesh.triangles, rest.triangles, "quads must be split the same way");
+    assert!(rest.num_triangles() > 500, "suzanne's quads were not split into triangles");
+    let moved = (0..3).map(|i| mesh.positions[i] - rest.positions[i]).sum::<DVec3>() / 3.0;
+    assert!((moved - DVec3::new(0.0, 0.1, 0.0)).length() < 0.05, "the handle moved by {moved}");
+}
+
+// ---------------------------------------------------------------------------------------------
+// energy
+// ---------------------------------------------------------------------------------------------
+
+#[test]
+fn energy_of_the_rest_shape_is_zero() {
+    let ws = Workspace::new();
+    let body = r#"
+[[constraints]]
+type = "edge_spring"
+name = "springs"
+weight = 10.0
+
+[[constraints]]
+type = "bending"
+weight = 10.0
+
+[[constraints]]
+type = "position"
+name = "fixed"
+box = { min = [-1.0, -1.0, -1.0], max = [1.0, -0.6, 2.0] }
+"#;
+    for mesh in [SPOT, COW] {
+        let scene = ws.scene("rest.toml", &toml_scene(Path::new(mesh), "", body));
+        let out = shapeup(["energy".as_ref(), scene.as_os_str(), OsStr::new(mesh)]).success();
+        let e = printed_energy(&out);
+        assert!(e.abs() < 1e-20, "{mesh}: E(rest) = {e}\n{}", out.describe());
+        for name in ["springs", "bending", "fixed"] {
+            assert!(out.stdout.contains(name), "no per-group line for {name}\n{}", out.describe());
+        }
+    }
+}
+
+#[test]
+fn energy_of_the_rest_shape_is_zero_for_every_shape_type() {
+    let ws = Workspace::new();
+    let body = r#"
+[[constraints]]
+type = "triangle_strain"
+weight = 10.0
+strain_freedom = 0.0
+
+[[constraints]]
+type = "iso_one_ring"
+weight = 100.0
+
+[[constraints]]
+type = "edge_spring"
+
+[[constraints]]
+type = "bending"
+prevent_flips = true
+
+[[constraints]]
+type = "position"
+name = "fixed"
+vertices = [0, 1, 2]
+"#;
+    let scene = ws.scene("rest.toml", &toml_scene(Path::new(SPOT), "", body));
+    let out = shapeup(["energy".as_ref(), scene.as_os_str(), OsStr::new(SPOT)]).success();
+    let e = printed_energy(&out);
+    assert!(e.abs() < 1e-20, "E(rest) = {e}\n{}", out.describe());
+}
+
+#[test]
+fn energy_of_the_deform_output_matches_the_report() {
+    let ws = Workspace::new();
+    let scene = ws.scene("spot.toml", &toml_scene(Path::new(SPOT), "", &handle_body(1.0)));
+    for name in ["spot.obj", "spot.ply"] {
+        let (_, r, _) = deform_ok(&ws, &scene, name, &[]);
+        let last = *energies(&r).last().unwrap();
+        let out = shapeup(["energy".as_ref(), scene.as_os_str(), ws.out(name).as_os_str()]).success();
+        let e = printed_energy(&out);
+        assert!(relative_difference(e, last) < 1e-9, "{name}: energy prints {e}, the report's last entry is {last}");
+        assert!(out.stdout.contains("shape") && out.stdout.contains("moved"), "no per-group lines\n{}", out.describe());
+    }
+}
+
+#[test]
+fn energy_rejects_positions_with_another_vertex_count() {
+    let ws = Workspace::new();
+    let scene = ws.scene("spot.toml", &toml_scene(Path::new(SPOT), "", &handle_body(1.0)));
+    ws.expect_failure(&[OsStr::new("energy"), scene.as_os_str(), OsStr::new(COW)], &["cow.obj", "2903", "2930"]);
+    ws.expect_failure(&[OsStr::new("energy"), scene.as_os_str(), ws.path("missing.obj").as_os_str()], &["missing.obj"]);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Bad input: one line on stderr naming the problem, non-zero exit, nothing written
+// ---------------------------------------------------------------------------------------------
+
+const SHAPE_AND_HANDLE: &str =
+    "[[constraints]]\ntype = \"edge_spring\"\n\n[[constraints]]\ntype = \"position\"\nvertices = [0]\n";
+
+#[test]
+fn unknown_top_level_key() {
+    let ws = Workspace::new();
+    // Before `[mesh]`, so that the key is at the top level (not in the `[mesh]` table).
+    let scene = ws.scene("bad.toml", &format!("extra_key = 1\n{}", toml_scene(Path::new(SPOT), "", SHAPE_AND_HANDLE)));
+    ws.deform_fails(&scene, &["bad.toml", "extra_key"]);
+    let scene =
+        ws.scene("bad.toml", &format!("{}\n[extra_table]\nx = 1\n", toml_scene(Path::new(SPOT), "", SHAPE_AND_HANDLE)));
+    ws.deform_fails(&scene, &["bad.toml", "extra_table"]);
+}
+
+#[test]
+fn unknown_mesh_key() {
+    let ws = Workspace::new();
+    let scene = ws.scene("bad.toml", &toml_scene(Path::new(SPOT), "normalise = true", SHAPE_AND_HANDLE));
+    ws.deform_fails(&scene, &["bad.toml", "normalise"]);
+}
+
+#[test]
+fn unknown_solver_key() {
+    let ws = Workspace::new();
+    ws.spot_scene_fails(&format!("[solver]\niteratons = 3\n\n{SHAPE_AND_HANDLE}"), &["iteratons"]);
+}
+
+#[test]
+fn unknown_constraint_key() {
+    let ws = Workspace::new();
+    ws.spot_scene_fails(
+        "[[constraints]]\ntype = \"edge_spring\"\nstrain_freedom = 0.1\n\n[[constraints]]\ntype = \"position\"\nvertices = [0]\n",
+        &["strain_freedom", "constraints[0]"],
+    );
+    ws.spot_scene_fails(
+        "[[constraints]]\ntype = \"edge_spring\"\n\n[[constraints]]\ntype = \"position\"\nvertices = [0]\ntranslation = [1.0, 0.0, 0.0]\n",
+        &["translation", "constraints[1]"],
+    );
+}
+
+#[test]
+fn unknown_constraint_type() {
+    let ws = Workspace::new();
+    ws.spot_scene_fails("[[constraints]]\ntype = \"edge_sprin\"\n", &["edge_sprin", "constraints[0]"]);
+}
+
+#[test]
+fn vertex_index_out_of_range() {
+    let ws = Workspace::new();
+    ws.spot_scene_fails(
+        "[[constraints]]\ntype = \"edge_spring\"\n\n[[constraints]]\ntype = \"position\"\nname = \"handle\"\nvertices = [0, 5000]\n",
+        &["5000", "constraints[1]", "2930"],
+    );
+}
+
+#[test]
+fn negative_weight() {
+    let ws = Workspace::new();
+    ws.spot_scene_fails(
+        "[[constraints]]\ntype = \"edge_spring\"\nweight = -1.0\n\n[[constraints]]\ntype = \"position\"\nvertices = [0]\n",
+        &["weight", "constraints[0]"],
+    );
+}
+
+#[test]
+fn duplicate_vertex_in_a_position_group() {
+    let ws = Workspace::new();
+    ws.spot_scene_fails(
+        "[[constraints]]\ntype = \"edge_spring\"\n\n[[constraints]]\ntype = \"position\"\nvertices = [3, 8, 3]\n",
+        &["3", "twice", "constraints[1]"],
+    );
+}
+
+#[test]
+fn box_selecting_nothing() {
+    let ws = Workspace::new();
+    ws.spot_scene_fails(
+        "[[constraints]]\ntype = \"edge_spring\"\n\n[[constraints]]\ntype = \"position\"\nname = \"nowhere\"\nbox = { min = [10.0, 10.0, 10.0], max = [11.0, 11.0, 11.0] }\n",
+        &["constraints[1]", "nowhere", "no vertices"],
+    );
+}
+
+#[test]
+fn malformed_toml_names_the_line() {
+    let ws = Workspace::new();
+    // The body starts on line 4 of the file (after `[mesh]`, `path` and an empty line).
+    ws.spot_scene_fails("[solver\niterations = 3\n", &["line 4"]);
+    ws.spot_scene_fails("\n[solver]\niterations = \"ten\"\n", &["line 6"]);
+}
+
+#[test]
+fn malformed_json_is_rejected() {
+    let ws = Workspace::new();
+    let scene = ws.scene("bad.json", &format!("{{\"mesh\": {{\"path\": {:?}}},\n \"constraints\": [ }}", SPOT));
+    ws.deform_fails(&scene, &["bad.json", "line 2"]);
+    let scene = ws.scene("bad.json", &format!("{{\"mesh\": {{\"path\": {:?}}}, \"extra_key\": 1}}", SPOT));
+    ws.deform_fails(&scene, &["bad.json", "extra_key"]);
+}
+
+#[test]
+fn missing_mesh_file() {
+    let ws = Workspace::new();
+    let scene = ws.scene("bad.toml", &toml_scene(&ws.path("no-such-mesh.obj"), "", SHAPE_AND_HANDLE));
+    ws.deform_fails(&scene, &["no-such-mesh.obj"]);
+}
+
+#[test]
+fn malformed_mesh_names_the_file_and_line() {
+    let ws = Workspace::new();
+    let mesh = write(&ws.path("broken.obj"), "v 0 0 0\nv 1 2 x\nv 0 1 0\nf 1 2 3\n");
+    let scene = ws.scene("bad.toml", &toml_scene(&mesh, "", SHAPE_AND_HANDLE));
+    ws.deform_fails(&scene, &["broken.obj", "line 2"]);
+}
+
+#[test]
+fn obj_face_index_out_of_range() {
+    let ws = Workspace::new();
+    let mesh = write(&ws.path("faces.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 9\n");
+    let scene = ws.scene("bad.toml", &toml_scene(&mesh, "", SHAPE_AND_HANDLE));
+    ws.deform_fails(&scene, &["faces.obj", "9"]);
+}
+
+#[test]
+fn empty_mesh() {
+    let ws = Workspace::new();
+    let mesh = write(&ws.path("empty.obj"), "");
+    let scene = ws.scene("bad.toml", &toml_scene(&mesh, "", SHAPE_AND_HANDLE));
+    ws.deform_fails(&scene, &["empty.obj"]);
+    // Vertices but no faces.
+    let mesh = write(&ws.path("points.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\n");
+    let scene = ws.scene("bad.toml", &toml_scene(&mesh, "", SHAPE_AND_HANDLE));
+    ws.deform_fails(&scene, &["points.obj"]);
+}
+
+#[test]
+fn unsupported_output_extension() {
+    let ws = Workspace::new();
+    let scene = ws.scene("spot.toml", &toml_scene(Path::new(SPOT), "", SHAPE_AND_HANDLE));
+    let o = ws.out("result.xyz");
+    ws.expect_failure(&[OsStr::new("deform"), scene.as_os_str(), "-o".as_ref(), o.as_os_str()], &["result.xyz", "xyz"]);
+    let (o, r) = (ws.out("result.obj"), ws.out("report.txt"));
+    ws.expect_failure(
+        &[OsStr::new("deform"), scene.as_os_str(), "-o".as_ref(), o.as_os_str(), "--report".as_ref(), r.as_os_str()],
+        &["report.txt"],
+    );
+}
+
+#[test]
+fn output_directory_that_does_not_exist() {
+    let ws = Workspace::new();
+    let scene = ws.scene("spot.toml", &toml_scene(Path::new(SPOT), "", SHAPE_AND_HANDLE));
+    let o = ws.out("no-such-dir/result.obj");
+    ws.expect_failure(&[OsStr::new("deform"), scene.as_os_str(), "-o".as_ref(), o.as_os_str()], &["result.obj"]);
+}
+
+#[test]
+fn scene_without_position_constraints_is_singular() {
+    let ws = Workspace::new();
+    ws.spot_scene_fails("[[constraints]]\ntype = \"edge_spring\"\nweight = 10.0\n", &["singular"]);
+}
+
+#[test]
+fn failure_leaves_an_existing_output_untouched() {
+    let ws = Workspace::new();
+    let scene = ws.scene("bad.toml", &toml_scene(Path::new(SPOT), "", "[[constraints]]\ntype = \"edge_spring\"\n"));
+    let (o, r) = (ws.out("result.obj"), ws.out("report.json"));
+    write(&o, "old output\n");
+    write(&r, "old report\n");
+    let out = shapeup([
+        OsStr::new("deform"),
+        scene.as_os_str(),
+        "-o".as_ref(),
+        o.as_os_str(),
+        "--report".as_ref(),
+        r.as_os_str(),
+    ]);
+    assert!(matches!(out.code, Some(c) if c != 0), "{}", out.describe());
+    assert_eq!(std::fs::read_to_string(&o).unwrap(), "old output\n", "the output was overwritten by a failed run");
+    assert_eq!(std::fs::read_to_string(&r).unwrap(), "old report\n", "the report was overwritten by a failed run");
+    assert_eq!(ws.out_entries(), ["report.json", "result.obj"], "temp files left behind");
+}
+
+#[test]
+fn missing_scene_file() {
+    let ws = Workspace::new();
+    ws.deform_fails(&ws.path("no-such-scene.toml"), &["no-such-scene.toml"]);
+}
+
+#[test]
+fn scene_with_an_unknown_extension() {
+    let ws = Workspace::new();
+    let scene = ws.scene("scene.yaml", &toml_scene(Path::new(SPOT), "", SHAPE_AND_HANDLE));
+    ws.deform_fails(&scene, &["scene.yaml"]);
+}
+
+#[test]
+fn threads_0_is_rejected() {
+    let ws = Workspace::new();
+    let scene = ws.scene("spot.toml", &toml_scene(Path::new(SPOT), "", SHAPE_AND_HANDLE));
+    let o = ws.out("result.obj");
+    ws.expect_failure(
+        &[OsStr::new("deform"), scene.as_os_str(), "-o".as_ref(), o.as_os_str(), "--threads".as_ref(), "0".as_ref()],
+        &["threads"],
+    );
+}
+
+#[test]
+fn iterations_must_be_a_number() {
+    let ws = Workspace::new();
+    let scene = ws.scene("spot.toml", &toml_scene(Path::new(SPOT), "", SHAPE_AND_HANDLE));
+    let o = ws.out("result.obj");
+    let out = shapeup([
+        "deform".as_ref(),
+        scene.as_os_str(),
+        "-o".as_ref(),
+        o.as_os_str(),
+        "--iterations".as_ref(),
+        "ten".as_ref(),
+    ]);
+    assert_eq!(out.code, Some(2), "clap usage error expected\n{}", out.describe());
+    assert!(out.stderr.contains("--iterations") && out.stderr.contains("ten"), "{}", out.describe());
+    assert!(!out.stderr.contains("panicked"), "{}", out.describe());
+    assert_eq!(ws.out_entries(), Vec::<String>::new());
+}
+
+#[test]
+fn missing_subcommand_or_arguments_are_usage_errors() {
+    for args in [&[][..], &["deform"][..], &["frobnicate"][..]] {
+        let out = shapeup(args);
+        assert_eq!(out.code, Some(2), "{args:?}\n{}", out.describe());
+        assert!(!out.stderr.contains("panicked"), "{}", out.describe());
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// help, version, bench
+// ---------------------------------------------------------------------------------------------
+
+#[test]
+fn help_for_every_subcommand() {
+    for args in [
+        &["--help"][..],
+        &["-h"],
+        &["help"],
+        &["deform", "--help"],
+        &["energy", "--help"],
+        &["bench", "--help"],
+        &["help", "deform"],
+    ] {
+        let out = shapeup(args).success();
+        assert!(out.stdout.contains("Usage"), "{args:?}\n{}", out.describe());
+    }
+    let top = shapeup(["--help"]).success().stdout;
+    for sub in ["deform", "energy", "bench", "--threads", "--version"] {
+        assert!(top.contains(sub), "top-level help does not mention {sub}:\n{top}");
+    }
+    let deform = shapeup(["deform", "--help"]).success().stdout;
+    for option in ["--output", "--iterations", "--report", "--threads"] {
+        assert!(deform.contains(option), "deform help does not mention {option}:\n{deform}");
+    }
+}
+
+#[test]
+fn version_is_printed() {
+    let out = shapeup(["--version"]).success();
+    assert!(out.stdout.contains(env!("CARGO_PKG_VERSION")), "{}", out.describe());
+    assert!(out.stdout.starts_with("shapeup"), "{}", out.describe());
+}
+
+#[test]
+fn bench_prints_the_three_scenarios() {
+    let out = shapeup(["bench", "--mesh", SPOT, "--iterations", "3", "--threads", "1"]).success();
+    let lines: Vec<&str> = out.stdout.lines().collect();
+    assert!(lines.iter().any(|l| l.contains("scenario")), "no table header\n{}", out.describe());
+    for scenario in ["springs", "strain+bending", "iso"] {
+        let row = lines
+            .iter()
+            .find(|l| l.split_whitespace().next() == Some(scenario))
+            .unwrap_or_else(|| panic!("no row for {scenario}\n{}", out.describe()));
+        let numbers: Vec<f64> = row.split_whitespace().skip(1).map(|x| x.parse().unwrap()).collect();
+        assert!(numbers.len() >= 5 && numbers.iter().all(|x| x.is_finite() && *x >= 0.0), "bad row {row:?}");
+    }
+    let one = shapeup(["bench", "--mesh", SPOT, "--iterations", "2", "--scenario", "springs"]).success();
+    assert!(
+        one.stdout.lines().any(|l| l.starts_with("springs")) && !one.stdout.contains("strain+bending"),
+        "{}",
+        one.describe()
+    );
+    let ws = Workspace::new();
+    ws.expect_failure(&["bench", "--mesh", SPOT, "--scenario", "nope"], &["nope"]);
+    ws.expect_failure(&[OsStr::new("bench"), "--mesh".as_ref(), ws.path("none.obj").as_os_str()], &["none.obj"]);
+}
+
+// ---------------------------------------------------------------------------------------------
+// The shipped examples, as they are
+// ---------------------------------------------------------------------------------------------
+
+/// Which vertices a scene selection picks (as in the scene contract: bounds included).
+fn selected(selection: &SelectionSpec, mesh: &Mesh) -> Vec<bool> {
+    let n = mesh.num_vertices();
+    match selection {
+        SelectionSpec::All => vec![true; n],
+        SelectionSpec::Vertices(list) => {
+            let mut s = vec![false; n];
+            list.iter().for_each(|&v| s[v] = true);
+            s
+        }
+        SelectionSpec::Box { min, max } => {
+            let (lo, hi) = (DVec3::from(*min), DVec3::from(*max));
+            mesh.positions.iter().map(|p| p.cmpge(lo).all() && p.cmple(hi).all()).collect()
+        }
+        SelectionSpec::Sphere { center, radius } => {
+            mesh.positions.iter().map(|p| (*p - DVec3::from(*center)).length() <= *radius).collect()
+        }
+    }
+}
+
+fn check_example(ws: &Workspace, scene_path: &Path) -> Result<(), String> {
+    let name = scene_path.file_stem().unwrap().to_string_lossy().into_owned();
+    let scene = Scene::from_file(scene_path).map_err(|e| format!("{name}: the scene does not parse: {e}"))?;
+    let rest = read(&scene.mesh_path());
+    let (o, r) = (ws.out(&format!("{name}.obj")), ws.out(&format!("{name}.json")));
+    // Run from an unrelated working directory: the mesh path is relative to the scene file.
+    let out = shapeup_in(
+        Some(ws.dir.path()),
+        [
+            OsStr::new("deform"),
+            scene_path.as_os_str(),
+            "-o".as_ref(),
+            o.as_os_str(),
+            "--report".as_ref(),
+            r.as_os_str(),
+        ],
+    );
+    if out.code != Some(0) {
+        return Err(format!("{name}: deform failed\n{}", out.describe()));
+    }
+    let mesh = read(&o);
+    let report = report(&r);
+    let mut problems = Vec::new();
+    if mesh.num_vertices() != rest.num_vertices() {
+        problems.push(format!("{} vertices written, the input has {}", mesh.num_vertices(), rest.num_vertices()));
+    }
+    if mesh.triangles != rest.triangles {
+        problems.push("the triangles changed".into());
+    }
+    if report["vertices"].as_u64() != Some(rest.num_vertices() as u64) {
+        problems.push(format!("report vertices = {}", report["vertices"]));
+    }
+    let e = energies(&report);
+    let expected_iterations = scene.solver.iterations * scene.solver.steps;
+    if scene.solver.tolerance == 0.0 && e.len() != expected_iterations {
+        problems.push(format!("{} energies, expected {expected_iterations}", e.len()));
+    }
+    if let Some(k) = e.windows(2).position(|w| w[1] > w[0] * (1.0 + 1e-12)) {
+        problems.push(format!("E increased at iteration {}: {} -> {}", k + 2, e[k], e[k + 1]));
+    }
+    if problems.is_empty() {
+        let d = diagonal(&rest);
+        // Vertices in no triangle and in no position group are touched by no constraint.
+        let largest_translate = scene
+            .groups
+            .iter()
+            .filter(|g| g.kind == "position")
+            .map(|g| DVec3::from(g.targets.translate).length())
+            .fold(0.0, f64::max);
+        let mut touched = vec![false; rest.num_vertices()];
+        rest.triangles.iter().flatten().for_each(|&v| touched[v as usize] = true);
+        for g in scene.groups.iter().filter(|g| g.kind == "position") {
+            let s = selected(&g.selection, &rest);
+            touched.iter_mut().zip(&s).for_each(|(t, s)| *t |= *s);
+            let picked: Vec<usize> = (0..rest.num_vertices()).filter(|&i| s[i]).collect();
+            if g.targets.rotate.is_some() || g.targets.explicit.is_some() || picked.is_empty() {
+                continue;
+            }
+            let t = DVec3::from(g.targets.translate);
+            let shift =
+                picked.iter().map(|&i| mesh.positions[i] - rest.positions[i]).sum::<DVec3>() / picked.len() as f64;
+            // Handles have finite weights: they follow their targets only roughly.
+            if (shift - t).length() > 0.25 * largest_translate.max(1e-3 * d) {
+                problems.push(format!("handle \"{}\" moved on average by {shift}, its translate is {t}", g.name));
+            }
+        }
+        let untouched: Vec<usize> = (0..rest.num_vertices()).filter(|&i| !touched[i]).collect();
+        let worst = untouched.iter().map(|&i| (mesh.positions[i] - rest.positions[i]).length()).fold(0.0, f64::max);
+        if worst > 1e-12 * d {
+            problems.push(format!("{} vertices touched by no constraint moved by up to {worst}", untouched.len()));
+        }
+        if name.starts_with("bunny") && untouched.is_empty() {
+            problems.push("the bunny's unreferenced vertices should be untouched".into());
+        }
+    }
+    if problems.is_empty() { Ok(()) } else { Err(format!("{name}: {}", problems.join("; "))) }
+}
+
+#[test]
+fn shipped_examples_deform() {
+    let ws = Workspace::new();
+    let mut scenes: Vec<PathBuf> = std::fs::read_dir(EXAMPLES)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| matches!(p.extension().and_then(OsStr::to_str), Some("toml" | "json")))
+        .collect();
+    scenes.sort();
+    assert!(scenes.len() >= 4, "expected the shipped examples in {EXAMPLES}");
+    let failures: Vec<String> = scenes.iter().filter_map(|s| check_example(&ws, s).err()).collect();
+    assert!(failures.is_empty(), "{} of {} examples failed:\n{}", failures.len(), scenes.len(), failures.join("\n\n"));
+    // The bunny example keeps all 35,947 vertices, including those in no triangle.
+    let bunny = read(&ws.out("bunny-springs.obj"));
+    assert_eq!(bunny.num_vertices(), 35_947);
+}
