@@ -16,6 +16,8 @@ pub struct Topology {
     pub boundary: Vec<bool>,
     /// `true` for a vertex that belongs to at least one triangle.
     pub in_triangle: Vec<bool>,
+    /// Indices of the triangles around each vertex.
+    pub vertex_triangles: Vec<Vec<u32>>,
 }
 
 impl Topology {
@@ -23,13 +25,16 @@ impl Topology {
     pub fn new(n: usize, triangles: &[[u32; 3]]) -> Self {
         let (edges, edge_triangle_count) = unique_edges(triangles);
         let boundary = boundary_vertices(n, &edges, &edge_triangle_count);
-        let mut in_triangle = vec![false; n];
-        for t in triangles {
-            for &v in t {
-                in_triangle[v as usize] = true;
-            }
+        let vertex_triangles = vertex_triangles(n, triangles);
+        let in_triangle = vertex_triangles.iter().map(|t| !t.is_empty()).collect();
+        Topology {
+            one_rings: one_rings(n, triangles),
+            edges,
+            edge_triangle_count,
+            boundary,
+            in_triangle,
+            vertex_triangles,
         }
-        Topology { one_rings: one_rings(n, triangles), edges, edge_triangle_count, boundary, in_triangle }
     }
 
     /// Whether vertex `i` is interior: in a triangle and on no boundary edge.
@@ -66,6 +71,17 @@ pub fn unique_edges(triangles: &[[u32; 3]]) -> (Vec<[u32; 2]>, Vec<u32>) {
         }
     }
     (edges, counts)
+}
+
+/// The triangles around each vertex: index t is in list i when triangle t has corner i.
+pub fn vertex_triangles(n: usize, triangles: &[[u32; 3]]) -> Vec<Vec<u32>> {
+    let mut around = vec![Vec::new(); n];
+    for (t, tri) in triangles.iter().enumerate() {
+        for &v in tri {
+            around[v as usize].push(t as u32);
+        }
+    }
+    around
 }
 
 /// Boundary flags: vertex i is on the boundary when one of its edges has exactly one triangle.

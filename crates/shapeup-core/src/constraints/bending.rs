@@ -64,7 +64,8 @@ impl Bending {
     /// Bending of interior vertex `i` of the rest geometry.
     pub fn new(rest: &RestGeometry, i: usize, prevent_flips: bool) -> Self {
         let row = LaplacianRow::new(rest, i);
-        let triangles: Vec<[u32; 3]> = rest.triangles.iter().filter(|t| t.contains(&(i as u32))).copied().collect();
+        let triangles: Vec<[u32; 3]> =
+            rest.topology.vertex_triangles[i].iter().map(|&t| rest.triangles[t as usize]).collect();
         let h0 = row.apply(&rest.positions);
         let n0 = mean_normal(&triangles, &rest.positions);
         Bending {

@@ -163,37 +163,38 @@ impl Assembly {
     }
 
     /// The entries (solved row ≥ solved column) of Σ CᵀC's lower triangle, then per group
-    /// Σ ω C_iᵀC_i on that pattern.
+    /// Σ ω C_iᵀC_i on that pattern. Column b holds every a ≥ b sharing a row of C with b,
+    /// found through Cᵀ (one small sort per column instead of one global sort).
     fn build_lhs_pattern(&mut self) {
         let ns = self.num_solved();
-        let rows: Vec<usize> = (0..self.num_rows()).collect();
-        let mut pairs: Vec<u64> = rows
-            .par_iter()
-            .flat_map_iter(|&r| {
-                let cols = &self.c_col[self.c_ptr[r]..self.c_ptr[r + 1]];
-                let idx = &self.solved_index;
-                cols.iter().flat_map(move |&a| {
-                    cols.iter().filter_map(move |&b| {
-                        let (sa, sb) = (idx[a as usize] as u64, idx[b as usize] as u64);
-                        (sa >= sb).then_some((sb << 32) | sa)
-                    })
-                })
+        let columns: Vec<Vec<usize>> = (0..ns)
+            .into_par_iter()
+            .map(|b| {
+                let mut rows: Vec<usize> = Vec::new();
+                for k in self.ct_ptr[b]..self.ct_ptr[b + 1] {
+                    let r = self.ct_row[k] as usize;
+                    for &v in &self.c_col[self.c_ptr[r]..self.c_ptr[r + 1]] {
+                        let a = self.solved_index[v as usize] as usize;
+                        if a >= b {
+                            rows.push(a);
+                        }
+                    }
+                }
+                rows.sort_unstable();
+                rows.dedup();
+                rows
             })
             .collect();
-        pairs.par_sort_unstable();
-        pairs.dedup();
-        let mut col_ptr = vec![0usize; ns + 1];
-        let mut row_idx = Vec::with_capacity(pairs.len());
-        for &p in &pairs {
-            col_ptr[(p >> 32) as usize + 1] += 1;
-            row_idx.push((p & 0xffff_ffff) as usize);
-        }
-        for j in 0..ns {
-            col_ptr[j + 1] += col_ptr[j];
+        let mut col_ptr = Vec::with_capacity(ns + 1);
+        col_ptr.push(0);
+        let mut row_idx = Vec::with_capacity(columns.iter().map(Vec::len).sum());
+        for column in columns {
+            row_idx.extend(column);
+            col_ptr.push(row_idx.len());
         }
         self.lhs_col_ptr = col_ptr;
         self.lhs_row_idx = row_idx;
-        self.group_lhs = (0..self.groups.len()).map(|g| self.group_values(g)).collect();
+        self.group_lhs = (0..self.groups.len()).into_par_iter().map(|g| self.group_values(g)).collect();
     }
 
     /// Σ_{rows r of group g} ω_r c_r c_rᵀ on the lower-triangle pattern.

@@ -76,28 +76,32 @@ impl SparseCholesky {
         row_idx: Vec<usize>,
         layout: Factorization,
     ) -> Result<Self, FactorError> {
-        let analyze_with = |threshold: SupernodalThreshold| {
+        let analyze_with = |threshold: SupernodalThreshold, ordering: SymmetricOrdering<'_, usize>| {
             let pattern = SymbolicSparseColMatRef::new_checked(n, n, &col_ptr, None, &row_idx);
             factorize_symbolic_cholesky(
                 pattern,
                 Side::Lower,
-                SymmetricOrdering::Amd,
+                ordering,
                 CholeskySymbolicParams { supernodal_flop_ratio_threshold: threshold, ..Default::default() },
             )
             .map_err(|e| FactorError::Other(format!("{e:?}")))
         };
         let symbolic = match layout {
-            Factorization::Simplicial => analyze_with(SupernodalThreshold::FORCE_SIMPLICIAL)?,
-            Factorization::Supernodal => analyze_with(SupernodalThreshold::FORCE_SUPERNODAL)?,
+            Factorization::Simplicial => analyze_with(SupernodalThreshold::FORCE_SIMPLICIAL, SymmetricOrdering::Amd)?,
+            Factorization::Supernodal => analyze_with(SupernodalThreshold::FORCE_SUPERNODAL, SymmetricOrdering::Amd)?,
             Factorization::Auto => {
                 // A sparse factor (springs, strain, iso: 1-ring patterns) solves faster in the
                 // simplicial layout; a denser one (2-ring patterns from bending/smoothing)
                 // factors 10× faster supernodally. Measured on the bunny: see the README.
-                let simplicial = analyze_with(SupernodalThreshold::FORCE_SIMPLICIAL)?;
-                if simplicial.len_val() <= SIMPLICIAL_MAX_FILL * n.max(1) {
-                    simplicial
-                } else {
-                    analyze_with(SupernodalThreshold::FORCE_SUPERNODAL)?
+                let simplicial = analyze_with(SupernodalThreshold::FORCE_SIMPLICIAL, SymmetricOrdering::Amd)?;
+                match simplicial.perm() {
+                    Some(perm) if simplicial.len_val() > SIMPLICIAL_MAX_FILL * n.max(1) => {
+                        // Reuse the AMD ordering: it is the costliest part of the analysis.
+                        let (fwd, inv) = perm.arrays();
+                        let perm = faer::perm::PermRef::new_checked(fwd, inv, n);
+                        analyze_with(SupernodalThreshold::FORCE_SUPERNODAL, SymmetricOrdering::Custom(perm))?
+                    }
+                    _ => simplicial,
                 }
             }
         };
