@@ -51,9 +51,9 @@ pub(crate) struct Assembly {
     /// ω·coeff of each entry of Cᵀ (the group multiplier is applied in `ct_weighted`).
     pub ct_base: Vec<f64>,
     /// Lower triangle of the global matrix, CSC over solved vertices: column pointers.
-    pub lhs_col_ptr: Vec<usize>,
+    pub lhs_col_ptr: Vec<u32>,
     /// Row index of each stored entry (sorted within a column, diagonal first).
-    pub lhs_row_idx: Vec<usize>,
+    pub lhs_row_idx: Vec<u32>,
     /// Per group: Σ_{i in group} ω_i C_iᵀC_i on the pattern (without the multiplier).
     pub group_lhs: Vec<Vec<f64>>,
 }
@@ -167,15 +167,15 @@ impl Assembly {
     /// found through Cᵀ (one small sort per column instead of one global sort).
     fn build_lhs_pattern(&mut self) {
         let ns = self.num_solved();
-        let columns: Vec<Vec<usize>> = (0..ns)
+        let columns: Vec<Vec<u32>> = (0..ns)
             .into_par_iter()
             .map(|b| {
-                let mut rows: Vec<usize> = Vec::new();
+                let mut rows: Vec<u32> = Vec::new();
                 for k in self.ct_ptr[b]..self.ct_ptr[b + 1] {
                     let r = self.ct_row[k] as usize;
                     for &v in &self.c_col[self.c_ptr[r]..self.c_ptr[r + 1]] {
-                        let a = self.solved_index[v as usize] as usize;
-                        if a >= b {
+                        let a = self.solved_index[v as usize];
+                        if a as usize >= b {
                             rows.push(a);
                         }
                     }
@@ -190,7 +190,7 @@ impl Assembly {
         let mut row_idx = Vec::with_capacity(columns.iter().map(Vec::len).sum());
         for column in columns {
             row_idx.extend(column);
-            col_ptr.push(row_idx.len());
+            col_ptr.push(row_idx.len() as u32);
         }
         self.lhs_col_ptr = col_ptr;
         self.lhs_row_idx = row_idx;
@@ -218,9 +218,9 @@ impl Assembly {
 
     /// Index of entry (row, col), row ≥ col, in the lower-triangle storage.
     fn slot(&self, row: usize, col: usize) -> usize {
-        let (lo, hi) = (self.lhs_col_ptr[col], self.lhs_col_ptr[col + 1]);
+        let (lo, hi) = (self.lhs_col_ptr[col] as usize, self.lhs_col_ptr[col + 1] as usize);
         // The pattern holds every pair of every row, so the entry exists.
-        lo + self.lhs_row_idx[lo..hi].partition_point(|&r| r < row)
+        lo + self.lhs_row_idx[lo..hi].partition_point(|&r| (r as usize) < row)
     }
 
     /// Checks that every connected piece of the solved vertices is anchored: some row in it is

@@ -41,9 +41,10 @@ pub enum FactorError {
 /// A symmetric positive definite sparse matrix's Cholesky factor L Lᵀ = P A Pᵀ.
 pub(crate) struct SparseCholesky {
     n: usize,
-    col_ptr: Vec<usize>,
-    row_idx: Vec<usize>,
-    symbolic: SymbolicCholesky<usize>,
+    // u32 indices: the solve is memory-bound, and 4-byte indices cut its traffic by a quarter.
+    col_ptr: Vec<u32>,
+    row_idx: Vec<u32>,
+    symbolic: SymbolicCholesky<u32>,
     l_values: Vec<f64>,
     mem: MemBuffer,
     factored: bool,
@@ -70,13 +71,8 @@ const SOLVE_PAR: Par = Par::Seq;
 impl SparseCholesky {
     /// Symbolic analysis of an n×n matrix given by its lower triangle in CSC form (sorted row
     /// indices per column, diagonal included).
-    pub fn analyze(
-        n: usize,
-        col_ptr: Vec<usize>,
-        row_idx: Vec<usize>,
-        layout: Factorization,
-    ) -> Result<Self, FactorError> {
-        let analyze_with = |threshold: SupernodalThreshold, ordering: SymmetricOrdering<'_, usize>| {
+    pub fn analyze(n: usize, col_ptr: Vec<u32>, row_idx: Vec<u32>, layout: Factorization) -> Result<Self, FactorError> {
+        let analyze_with = |threshold: SupernodalThreshold, ordering: SymmetricOrdering<'_, u32>| {
             let pattern = SymbolicSparseColMatRef::new_checked(n, n, &col_ptr, None, &row_idx);
             factorize_symbolic_cholesky(
                 pattern,
@@ -140,7 +136,7 @@ impl SparseCholesky {
     pub fn factorize(&mut self, values: &[f64]) -> Result<(), FactorError> {
         self.factored = false;
         let pattern = SymbolicSparseColMatRef::new_checked(self.n, self.n, &self.col_ptr, None, &self.row_idx);
-        let a = SparseColMatRef::<usize, f64>::new(pattern, values);
+        let a = SparseColMatRef::<u32, f64>::new(pattern, values);
         self.symbolic
             .factorize_numeric_llt::<f64>(
                 &mut self.l_values,
@@ -163,7 +159,7 @@ impl SparseCholesky {
         debug_assert!(self.factored);
         let k = rhs.len() / self.n.max(1);
         let b = MatMut::from_column_major_slice_mut(rhs, self.n, k);
-        LltRef::<usize, f64>::new(&self.symbolic, &self.l_values).solve_in_place_with_conj(
+        LltRef::<u32, f64>::new(&self.symbolic, &self.l_values).solve_in_place_with_conj(
             Conj::No,
             b,
             SOLVE_PAR,
@@ -177,16 +173,16 @@ mod tests {
     use super::*;
 
     /// Tridiagonal [2 -1; -1 2 -1; …] plus a diagonal shift.
-    fn tridiagonal(n: usize, shift: f64) -> (Vec<usize>, Vec<usize>, Vec<f64>) {
+    fn tridiagonal(n: usize, shift: f64) -> (Vec<u32>, Vec<u32>, Vec<f64>) {
         let (mut cp, mut ri, mut v) = (vec![0], vec![], vec![]);
-        for j in 0..n {
+        for j in 0..n as u32 {
             ri.push(j);
             v.push(2.0 + shift);
-            if j + 1 < n {
+            if j + 1 < n as u32 {
                 ri.push(j + 1);
                 v.push(-1.0);
             }
-            cp.push(ri.len());
+            cp.push(ri.len() as u32);
         }
         (cp, ri, v)
     }
