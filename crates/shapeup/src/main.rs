@@ -17,6 +17,9 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
 
+#[cfg(feature = "gui")]
+mod view;
+
 #[derive(Parser)]
 #[command(name = "shapeup", version, about = "Constraint-based shape deformation (ShapeUp) of triangle meshes")]
 struct Cli {
@@ -50,6 +53,18 @@ enum Command {
         scene: PathBuf,
         /// Mesh with the positions to evaluate (.obj, .ply, …), same vertex count as the scene's.
         positions: PathBuf,
+    },
+    /// Opens the interactive editor on a mesh or a scene (default: the bundled bunny).
+    #[cfg(feature = "gui")]
+    View {
+        /// Mesh (.obj .ply .stl .off) or scene (.toml .json).
+        input: Option<PathBuf>,
+        /// Render one frame to this PNG and exit (no window; a scene is solved first).
+        #[arg(long, value_name = "OUT.png")]
+        screenshot: Option<PathBuf>,
+        /// Screenshot size in pixels, WIDTHxHEIGHT.
+        #[arg(long, default_value = "1200x800", value_parser = parse_size)]
+        size: (u32, u32),
     },
     /// Runs the standard benchmark scenarios (springs, strain+bending, iso) and prints a table.
     Bench {
@@ -95,6 +110,8 @@ fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Deform { scene, output, iterations, report } => deform(&scene, &output, iterations, report.as_deref()),
         Command::Energy { scene, positions } => energy(&scene, &positions),
+        #[cfg(feature = "gui")]
+        Command::View { input, screenshot, size } => view::run(input, screenshot, size),
         Command::Bench { mesh, iterations, scenarios, factorization } => {
             bench(mesh, iterations, &scenarios, factorization)
         }
@@ -206,6 +223,13 @@ fn default_bench_mesh() -> PathBuf {
     } else {
         PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/stanford-bunny.obj"))
     }
+}
+
+fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let bad = || format!("expected WIDTHxHEIGHT (e.g. 1200x800), found \"{s}\"");
+    let (w, h) = s.split_once('x').ok_or_else(bad)?;
+    let (w, h) = (w.parse::<u32>().map_err(|_| bad())?, h.parse::<u32>().map_err(|_| bad())?);
+    if (1..=8192).contains(&w) && (1..=8192).contains(&h) { Ok((w, h)) } else { Err(bad()) }
 }
 
 fn parse_factorization(s: &str) -> Result<Factorization, String> {

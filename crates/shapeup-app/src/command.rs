@@ -1,0 +1,109 @@
+//! What the user asks the editor to do. Panels and viewport gestures return [`Command`]s; the
+//! app applies them after the UI pass with [`Document::apply`](crate::document::Document::apply),
+//! which also records undo steps.
+
+use crate::document::{GroupKey, ShapeModel};
+use glam::DVec3;
+
+/// How a selection combines with the current one.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SelectMode {
+    /// The new vertices become the selection.
+    #[default]
+    Replace,
+    /// The new vertices are added to it.
+    Add,
+    /// The new vertices are removed from it.
+    Remove,
+}
+
+/// One editor action.
+///
+/// Commands that change the constraints (handles, groups, weights, shape model, rest shape,
+/// iterations) are undoable; selection changes, [`Command::ResetShape`], [`Command::Undo`] and
+/// [`Command::Redo`] are not ([`Command::is_undoable`]).
+#[derive(Debug, Clone, PartialEq)]
+#[must_use]
+pub enum Command {
+    /// Combines `vertices` with the selection (e.g. from a box selection or a click).
+    Select {
+        /// Vertex indices.
+        vertices: Vec<u32>,
+        /// How they combine with the current selection.
+        mode: SelectMode,
+    },
+    /// Empties the selection.
+    ClearSelection,
+    /// Combines the mesh's boundary vertices with the selection.
+    SelectBoundary(SelectMode),
+    /// A new handle (position group, g = 1) on the selected vertices, at their current
+    /// positions.
+    FixSelection,
+    /// Translates a handle's targets by `delta` (input frame).
+    MoveHandle {
+        /// The handle.
+        handle: GroupKey,
+        /// Translation, input frame.
+        delta: DVec3,
+    },
+    /// Rotates a handle's targets about their centroid.
+    RotateHandle {
+        /// The handle.
+        handle: GroupKey,
+        /// Rotation axis (input frame, any non-zero length).
+        axis: DVec3,
+        /// Angle in radians, right-handed about the axis.
+        angle: f64,
+    },
+    /// Renames a group (any group, not only handles).
+    RenameHandle {
+        /// The group.
+        handle: GroupKey,
+        /// Its new name.
+        name: String,
+    },
+    /// Removes a handle.
+    DeleteHandle(GroupKey),
+    /// Removes every handle.
+    ClearHandles,
+    /// Replaces the shape groups by those of another model, with its default weights; handles
+    /// and smoothing groups stay.
+    SetShapeModel(ShapeModel),
+    /// A smoothing group (g = 1) on the selected vertices.
+    AddSmoothing,
+    /// Sets a group's weight (multiplier g), clamped to [`WEIGHT_RANGE`](crate::document::WEIGHT_RANGE).
+    SetWeight {
+        /// The group.
+        group: GroupKey,
+        /// The weight; NaN is rejected.
+        weight: f64,
+    },
+    /// Removes a handle, smoothing or other group (not a shape-model group: pick another model
+    /// instead).
+    RemoveGroup(GroupKey),
+    /// The current shape goes back to the rest shape.
+    ResetShape,
+    /// The current shape becomes the rest shape: every group is rebuilt on it.
+    MakeRest,
+    /// Local-global iterations per solve request (≥ 1).
+    SetIterations(usize),
+    /// Undoes the last undoable command (or drag).
+    Undo,
+    /// Redoes the last undone step.
+    Redo,
+}
+
+impl Command {
+    /// Whether applying it records an undo step.
+    pub fn is_undoable(&self) -> bool {
+        !matches!(
+            self,
+            Command::Select { .. }
+                | Command::ClearSelection
+                | Command::SelectBoundary(_)
+                | Command::ResetShape
+                | Command::Undo
+                | Command::Redo
+        )
+    }
+}

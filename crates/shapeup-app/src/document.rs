@@ -1,0 +1,1099 @@
+//! The editor's model: a mesh, its constraint groups, the selection, the current shape and the
+//! undo history, with no GUI.
+//!
+//! - [`EditState`] is what undo snapshots: the rest shape (shared, cheap to clone), the groups
+//!   (shape model, handles with their targets, smoothing, others from a scene) and the
+//!   iteration count. It is also what the [`worker`](crate::worker) receives to solve.
+//! - [`Solver`] turns an `EditState` into a `shapeup-core` [`System`] and keeps the working
+//!   positions: a structural change rebuilds the system, a handle move only sets targets
+//!   ([`System::set_position_targets`], no refactorization), a weight change only refactors.
+//! - [`Document`] ties them together with the selection and the current positions, and applies
+//!   [`Command`]s.
+//!
+//! Handle targets and positions are in the mesh's input frame; the solver works in the
+//! normalized working frame, as `shapeup deform` does, so a saved scene reproduces the
+//! editor's solve.
+
+use crate::command::{Command, SelectMode};
+use glam::{DQuat, DVec3};
+use shapeup_core::constraints::{BuildContext, Constraint, Params, Position, Selection, build_constraints};
+use shapeup_core::geometry::{RestGeometry, WorkingFrame};
+use shapeup_core::io::read_mesh;
+use shapeup_core::mesh::Mesh;
+use shapeup_core::scene::{GroupSpec, MeshSettings, Scene, SelectionSpec, SolverSettings, Targets};
+use shapeup_core::solver::{ConstraintGroup, GroupId, SolveError, SolveReport, SolverParams, System};
+use std::fmt;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// The range of group weights (the weight sliders are logarithmic over it).
+pub const WEIGHT_RANGE: (f64, f64) = (1e-4, 1e4);
+
+/// Undo steps kept; older ones are dropped.
+pub const UNDO_LIMIT: usize = 200;
+
+/// A group's identity in a [`Document`]: stable while the group exists, never reused.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct GroupKey(pub u32);
+
+impl fmt::Display for GroupKey {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "#{}", self.0)
+    }
+}
+
+/// The constraints that keep the shape, over the whole mesh (math reference, "Notes": the
+/// editor's default multipliers).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, serde::Serialize, serde::Deserialize)]
+pub enum ShapeModel {
+    /// Edge springs, g = 10.
+    EdgeSprings,
+    /// Triangle strain (g = 10) and bending (g = 10).
+    #[default]
+    StrainBending,
+    /// Isometric one-rings, g = 100.
+    IsoOneRing,
+}
+
+impl ShapeModel {
+    /// Every model, in menu order.
+    pub const ALL: [ShapeModel; 3] = [ShapeModel::EdgeSprings, ShapeModel::StrainBending, ShapeModel::IsoOneRing];
+
+    /// Its groups: (constraint type, default multiplier g).
+    pub fn groups(self) -> &'static [(&'static str, f64)] {
+        match self {
+            ShapeModel::EdgeSprings => &[("edge_spring", 10.0)],
+            ShapeModel::StrainBending => &[("triangle_strain", 10.0), ("bending", 10.0)],
+            ShapeModel::IsoOneRing => &[("iso_one_ring", 100.0)],
+        }
+    }
+
+    /// Name for menus.
+    pub fn label(self) -> &'static str {
+        match self {
+            ShapeModel::EdgeSprings => "Edge springs",
+            ShapeModel::StrainBending => "Strain + bending",
+            ShapeModel::IsoOneRing => "Iso 1-ring",
+        }
+    }
+
+    /// The model whose groups have exactly these types (in any order), if any.
+    fn from_kinds(kinds: &[&str]) -> Option<ShapeModel> {
+        let mut kinds = kinds.to_vec();
+        kinds.sort_unstable();
+        ShapeModel::ALL.into_iter().find(|m| {
+            let mut own: Vec<&str> = m.groups().iter().map(|(k, _)| *k).collect();
+            own.sort_unstable();
+            own == kinds
+        })
+    }
+}
+
+/// What a group is for in the editor.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum GroupRole {
+    /// Part of the shape model (over all vertices).
+    Shape,
+    /// A handle: a position group with targets the user drags.
+    Handle,
+    /// Smoothing on a selection.
+    Smoothing,
+    /// Any other group read from a scene (floor, strain on a part, options…), kept as is.
+    Other,
+}
+
+/// A constraint group as the editor lists it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Group {
+    /// Stable identity.
+    pub key: GroupKey,
+    /// Display name.
+    pub name: String,
+    /// What it is for.
+    pub role: GroupRole,
+    /// Constraint type name (`"position"`, `"bending"`, …).
+    pub kind: String,
+    /// Multiplier g.
+    pub weight: f64,
+    /// The vertices it applies to (ascending for groups the editor makes); `None` = all.
+    pub vertices: Option<Vec<u32>>,
+    /// Handles: one target per vertex (input frame); empty otherwise.
+    pub targets: Vec<DVec3>,
+    /// Type options of a group read from a scene (kept to rebuild and save it).
+    source: Option<Arc<GroupSpec>>,
+}
+
+impl Group {
+    /// Whether it applies to vertex `v` (for hover highlighting).
+    pub fn covers(&self, v: u32) -> bool {
+        self.vertices.as_ref().is_none_or(|list| list.contains(&v))
+    }
+
+    /// Its vertices, `None` meaning every vertex.
+    pub fn vertices(&self) -> Option<&[u32]> {
+        self.vertices.as_deref()
+    }
+
+    /// Centroid of a handle's targets (input frame); `None` for other groups.
+    pub fn target_centroid(&self) -> Option<DVec3> {
+        (!self.targets.is_empty()).then(|| self.targets.iter().copied().sum::<DVec3>() / self.targets.len() as f64)
+    }
+
+    /// What the system needs to rebuild when this changes (everything but name, weight and
+    /// targets).
+    fn structure(&self) -> (GroupKey, &str, Option<&[u32]>) {
+        (self.key, &self.kind, self.vertices.as_deref())
+    }
+}
+
+/// The rest shape: the mesh in its input frame and its rest geometry in the working frame.
+#[derive(Debug)]
+pub struct Rest {
+    /// Rest mesh, input frame.
+    pub mesh: Mesh,
+    /// Input ↔ working frame.
+    pub frame: WorkingFrame,
+    /// Whether the frame was fitted (`[mesh] normalize`).
+    pub normalize: bool,
+    /// Rest geometry (working frame).
+    pub geometry: RestGeometry,
+}
+
+impl Rest {
+    /// The rest state of a mesh, in the normalized frame when `normalize` (as a scene loads it).
+    pub fn new(mesh: Mesh, normalize: bool) -> Self {
+        let frame = if normalize { WorkingFrame::fit(&mesh.positions) } else { WorkingFrame::IDENTITY };
+        let working = mesh.positions.iter().map(|&p| frame.to_working(p)).collect();
+        let geometry = RestGeometry::new(working, mesh.triangles.clone(), mesh.tetrahedra.clone());
+        Rest { mesh, frame, normalize, geometry }
+    }
+}
+
+/// The editable state that undo snapshots and the worker solves: cheap to clone (the rest shape
+/// is shared).
+#[derive(Debug, Clone)]
+pub struct EditState {
+    /// The rest shape.
+    pub rest: Arc<Rest>,
+    /// The shape model, `None` when the shape groups came from a scene that matches no model.
+    pub shape_model: Option<ShapeModel>,
+    /// Every group, in system (and scene) order.
+    pub groups: Vec<Group>,
+    /// Local-global iterations per solve request.
+    pub iterations: usize,
+}
+
+impl PartialEq for EditState {
+    fn eq(&self, other: &Self) -> bool {
+        Arc::ptr_eq(&self.rest, &other.rest)
+            && self.shape_model == other.shape_model
+            && self.groups == other.groups
+            && self.iterations == other.iterations
+    }
+}
+
+impl EditState {
+    /// The group with this key.
+    pub fn group(&self, key: GroupKey) -> Option<&Group> {
+        self.groups.iter().find(|g| g.key == key)
+    }
+
+    fn group_mut(&mut self, key: GroupKey) -> Result<&mut Group, EditorError> {
+        self.groups.iter_mut().find(|g| g.key == key).ok_or(EditorError::UnknownGroup(key))
+    }
+
+    fn handle_mut(&mut self, key: GroupKey) -> Result<&mut Group, EditorError> {
+        let group = self.group_mut(key)?;
+        if group.role == GroupRole::Handle { Ok(group) } else { Err(EditorError::NotAHandle(key)) }
+    }
+
+    /// Whether some handle exists (without one a solve has nothing to do).
+    pub fn has_handles(&self) -> bool {
+        self.groups.iter().any(|g| g.role == GroupRole::Handle)
+    }
+}
+
+/// An editor error: one line, meant for the status bar.
+#[derive(Debug, Clone, PartialEq)]
+pub enum EditorError {
+    /// Solving needs at least one handle.
+    NoHandles,
+    /// The command works on the selection, which is empty.
+    EmptySelection,
+    /// No group has this key.
+    UnknownGroup(GroupKey),
+    /// The group is not a handle.
+    NotAHandle(GroupKey),
+    /// Shape-model groups are replaced with [`Command::SetShapeModel`], not removed.
+    ShapeGroup(GroupKey),
+    /// A NaN weight.
+    BadWeight(f64),
+    /// A non-finite or degenerate value (translation, axis, angle, iteration count).
+    BadValue(String),
+    /// A mesh or scene that cannot be read or used.
+    Load(String),
+    /// A file that cannot be written.
+    Save(String),
+    /// A group cannot be built (e.g. smoothing on a selection with no interior vertex).
+    Constraint(String),
+    /// The solver failed.
+    Solve(SolveError),
+}
+
+impl fmt::Display for EditorError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            EditorError::NoHandles => write!(f, "nothing to solve: select vertices and fix them as a handle first"),
+            EditorError::EmptySelection => write!(f, "the selection is empty: select vertices first"),
+            EditorError::UnknownGroup(k) => write!(f, "no group {k} (it was removed)"),
+            EditorError::NotAHandle(k) => write!(f, "group {k} is not a handle"),
+            EditorError::ShapeGroup(k) => {
+                write!(f, "group {k} belongs to the shape model; choose another model instead of removing it")
+            }
+            EditorError::BadWeight(w) => write!(f, "weight must be a number, found {w}"),
+            EditorError::BadValue(m) | EditorError::Load(m) | EditorError::Save(m) | EditorError::Constraint(m) => {
+                write!(f, "{m}")
+            }
+            EditorError::Solve(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+impl std::error::Error for EditorError {}
+
+impl From<SolveError> for EditorError {
+    fn from(e: SolveError) -> Self {
+        EditorError::Solve(e)
+    }
+}
+
+/// Builds a group's constraints on the rest shape.
+fn build_group(rest: &Rest, group: &Group) -> Result<ConstraintGroup, EditorError> {
+    let n = rest.mesh.num_vertices();
+    let constraint_error = |m: String| EditorError::Constraint(format!("group \"{}\": {m}", group.name));
+    let constraints: Vec<Box<dyn Constraint>> = if group.role == GroupRole::Handle {
+        let vertices = group.vertices.clone().unwrap_or_else(|| (0..n as u32).collect());
+        let working = group.targets.iter().map(|&t| rest.frame.to_working(t)).collect();
+        let position = Position::new(vertices, working)
+            .ok_or_else(|| constraint_error("a handle needs one target per vertex, at least one".into()))?;
+        vec![Box::new(position)]
+    } else {
+        let selection = match &group.vertices {
+            None => Selection::All,
+            Some(list) => Selection::from_indices(n, &list.iter().map(|&v| v as usize).collect::<Vec<_>>()),
+        };
+        let ctx = BuildContext { rest: &rest.geometry, selection: &selection, frame: &rest.frame };
+        let params = group.source.as_ref().map(|s| Params::new(s.options.clone())).unwrap_or_default();
+        build_constraints(&group.kind, &ctx, params).map_err(|e| constraint_error(e.to_string()))?
+    };
+    Ok(ConstraintGroup::new(group.name.clone(), group.weight, constraints))
+}
+
+/// The solve state of an [`EditState`]: its [`System`] and the working positions.
+#[derive(Debug, Default)]
+pub struct Solver {
+    rest: Option<Arc<Rest>>,
+    /// (key, kind, vertices) of each group the system was built from.
+    structure: Vec<(GroupKey, String, Option<Vec<u32>>)>,
+    system: Option<System>,
+    ids: Vec<GroupId>,
+    /// Current positions, working frame.
+    q: Vec<DVec3>,
+}
+
+impl Solver {
+    /// A solver with nothing built; the first [`Solver::sync`] builds the system and starts
+    /// from the rest shape.
+    pub fn new() -> Self {
+        Solver::default()
+    }
+
+    /// Brings the system up to date with `state`: rebuilds it when the rest shape or the set of
+    /// groups changed (the positions are carried over through the frames), else only sets the
+    /// handles' targets and the weights. On error nothing changes.
+    ///
+    /// # Errors
+    /// [`EditorError::Constraint`] when a group cannot be built.
+    pub fn sync(&mut self, state: &EditState) -> Result<(), EditorError> {
+        let same_rest = self.rest.as_ref().is_some_and(|r| Arc::ptr_eq(r, &state.rest));
+        let same_groups = self.structure.len() == state.groups.len()
+            && self
+                .structure
+                .iter()
+                .zip(&state.groups)
+                .all(|((k, kind, v), g)| (*k, kind.as_str(), v.as_deref()) == g.structure());
+        match self.system.as_mut() {
+            Some(system) if same_rest && same_groups => {
+                for (group, &id) in state.groups.iter().zip(&self.ids) {
+                    if group.role == GroupRole::Handle {
+                        let working: Vec<DVec3> =
+                            group.targets.iter().map(|&t| state.rest.frame.to_working(t)).collect();
+                        system.set_position_targets(id, &working)?;
+                    }
+                    system.set_multiplier(id, group.weight)?;
+                }
+            }
+            _ => {
+                let rest = &state.rest;
+                let params = SolverParams { iterations: state.iterations, ..SolverParams::default() };
+                let mut system = System::new(rest.mesh.num_vertices(), params);
+                let mut ids = Vec::with_capacity(state.groups.len());
+                for group in &state.groups {
+                    ids.push(system.add_group(build_group(rest, group)?)?);
+                }
+                self.q = match &self.rest {
+                    // Same positions in the input frame, seen in the new working frame.
+                    Some(old) if !same_rest && self.q.len() == rest.mesh.num_vertices() => {
+                        self.q.iter().map(|&p| rest.frame.to_working(old.frame.to_input(p))).collect()
+                    }
+                    Some(_) if same_rest => std::mem::take(&mut self.q),
+                    _ => rest.geometry.positions.clone(),
+                };
+                self.structure = state.groups.iter().map(|g| (g.key, g.kind.clone(), g.vertices.clone())).collect();
+                self.system = Some(system);
+                self.ids = ids;
+                self.rest = Some(Arc::clone(rest));
+            }
+        }
+        Ok(())
+    }
+
+    /// Sets the current positions (input frame), e.g. back to the rest shape. Ignored before
+    /// the first [`Solver::sync`] or with the wrong length.
+    pub fn set_positions(&mut self, positions: &[DVec3]) {
+        if let Some(rest) = &self.rest
+            && positions.len() == rest.mesh.num_vertices()
+        {
+            self.q = positions.iter().map(|&p| rest.frame.to_working(p)).collect();
+        }
+    }
+
+    /// Runs `iterations` local-global iterations from the current positions.
+    ///
+    /// # Errors
+    /// [`EditorError::NoHandles`] before any sync, [`EditorError::Solve`] for a singular system.
+    pub fn solve(&mut self, iterations: usize) -> Result<SolveReport, EditorError> {
+        let system = self.system.as_mut().ok_or(EditorError::NoHandles)?;
+        Ok(system.solve(&mut self.q, iterations, 0.0)?)
+    }
+
+    /// The current positions in the input frame; vertices no constraint touches keep their rest
+    /// positions bit for bit (as `shapeup deform` writes them).
+    pub fn positions(&self) -> Vec<DVec3> {
+        let (Some(rest), Some(system)) = (&self.rest, &self.system) else { return Vec::new() };
+        self.q
+            .iter()
+            .zip(&rest.mesh.positions)
+            .enumerate()
+            .map(|(v, (&p, &input))| if system.is_solved(v) { rest.frame.to_input(p) } else { input })
+            .collect()
+    }
+
+    /// E of the current positions, per group (in the order of the synced state's groups).
+    ///
+    /// # Errors
+    /// [`EditorError::Solve`] (e.g. no constraints).
+    pub fn energy(&mut self) -> Result<Vec<f64>, EditorError> {
+        let system = self.system.as_mut().ok_or(EditorError::NoHandles)?;
+        let energy = system.energy(&self.q)?;
+        Ok(self.ids.iter().map(|id| energy.per_group.iter().find(|(g, _)| g == id).map_or(0.0, |(_, e)| *e)).collect())
+    }
+}
+
+/// The editor's document: the constraint state with its undo history, the selection and the
+/// current shape.
+#[derive(Debug)]
+pub struct Document {
+    state: EditState,
+    solver: Solver,
+    /// Current positions, input frame.
+    positions: Vec<DVec3>,
+    /// Bumped whenever the shape is set rather than solved (reset, make rest).
+    epoch: u64,
+    /// Where the current epoch started (input frame), for the worker.
+    epoch_start: Arc<Vec<DVec3>>,
+    selection: Vec<bool>,
+    undo: Vec<EditState>,
+    redo: Vec<EditState>,
+    /// `Some(recorded)` during a drag: whether its undo step was recorded yet.
+    drag: Option<bool>,
+    next_key: u32,
+    /// The `[solver]` table to save (iterations come from the state).
+    solver_settings: SolverSettings,
+}
+
+impl Document {
+    /// A document on a mesh (input frame, normalized working frame) with a shape model and no
+    /// handles.
+    ///
+    /// # Errors
+    /// [`EditorError::Load`] for a mesh without triangles, [`EditorError::Constraint`] if the
+    /// model cannot be built on it.
+    pub fn new(mesh: Mesh, model: ShapeModel) -> Result<Document, EditorError> {
+        if mesh.triangles.is_empty() {
+            return Err(EditorError::Load("the mesh has no triangles to deform".into()));
+        }
+        let rest = Arc::new(Rest::new(mesh, true));
+        let mut document = Document::empty(rest, SolverSettings::default());
+        document.state.shape_model = Some(model);
+        document.state.groups = document.model_groups(model);
+        document.solver.sync(&document.state)?;
+        Ok(document)
+    }
+
+    /// Reads a mesh file and makes a document on it ([`Document::new`]).
+    ///
+    /// # Errors
+    /// [`EditorError::Load`] naming the file, or as [`Document::new`].
+    pub fn open(path: &Path, model: ShapeModel) -> Result<Document, EditorError> {
+        let loaded = read_mesh(path).map_err(|e| EditorError::Load(e.to_string()))?;
+        Document::new(loaded.mesh, model)
+    }
+
+    fn empty(rest: Arc<Rest>, solver_settings: SolverSettings) -> Document {
+        let n = rest.mesh.num_vertices();
+        let positions = rest.mesh.positions.clone();
+        Document {
+            state: EditState {
+                rest,
+                shape_model: None,
+                groups: Vec::new(),
+                iterations: solver_settings.iterations.max(1),
+            },
+            solver: Solver::new(),
+            epoch_start: Arc::new(positions.clone()),
+            positions,
+            epoch: 0,
+            selection: vec![false; n],
+            undo: Vec::new(),
+            redo: Vec::new(),
+            drag: None,
+            next_key: 0,
+            solver_settings,
+        }
+    }
+
+    fn new_key(&mut self) -> GroupKey {
+        self.next_key += 1;
+        GroupKey(self.next_key - 1)
+    }
+
+    fn model_groups(&mut self, model: ShapeModel) -> Vec<Group> {
+        model
+            .groups()
+            .iter()
+            .map(|&(kind, weight)| Group {
+                key: self.new_key(),
+                name: kind.to_string(),
+                role: GroupRole::Shape,
+                kind: kind.to_string(),
+                weight,
+                vertices: None,
+                targets: Vec::new(),
+                source: None,
+            })
+            .collect()
+    }
+
+    /// A document from a scene: reads its mesh and takes its groups. Shape types over all
+    /// vertices without options become the shape model (when they match one), position groups
+    /// become handles (box and sphere selections resolved to vertices, targets made explicit),
+    /// smoothing groups stay smoothing, anything else is kept as an "other" group.
+    ///
+    /// # Errors
+    /// [`EditorError::Load`] for an unreadable mesh, a bad selection or target, or a
+    /// tetrahedralized scene; [`EditorError::Constraint`] for a group that cannot be built.
+    pub fn from_scene(scene: &Scene) -> Result<Document, EditorError> {
+        let loaded = read_mesh(&scene.mesh_path()).map_err(|e| EditorError::Load(e.to_string()))?;
+        Document::from_scene_with_mesh(scene, loaded.mesh)
+    }
+
+    /// [`Document::from_scene`] on an already loaded mesh.
+    ///
+    /// # Errors
+    /// As [`Document::from_scene`].
+    pub fn from_scene_with_mesh(scene: &Scene, mesh: Mesh) -> Result<Document, EditorError> {
+        if scene.mesh.tetrahedralize {
+            return Err(EditorError::Load("the editor does not support tetrahedralize = true".into()));
+        }
+        if mesh.triangles.is_empty() {
+            return Err(EditorError::Load("the mesh has no triangles to deform".into()));
+        }
+        let rest = Arc::new(Rest::new(mesh, scene.mesh.normalize));
+        let mut document = Document::empty(Arc::clone(&rest), scene.solver);
+        let mut groups = Vec::with_capacity(scene.groups.len());
+        for (i, spec) in scene.groups.iter().enumerate() {
+            let entry = |m: String| EditorError::Load(format!("constraints[{i}] (\"{}\"): {m}", spec.name));
+            let picked = resolve_selection(&spec.selection, &rest.mesh).map_err(entry)?;
+            let shape_kind = ShapeModel::ALL.iter().any(|m| m.groups().iter().any(|(k, _)| *k == spec.kind));
+            let plain = spec.options.is_empty();
+            let (role, targets) = if spec.kind == "position" {
+                let vertices = picked.clone().unwrap_or_else(|| (0..rest.mesh.num_vertices() as u32).collect());
+                (GroupRole::Handle, position_targets(&vertices, &spec.targets, &rest.mesh).map_err(entry)?)
+            } else if shape_kind && plain && picked.is_none() {
+                (GroupRole::Shape, Vec::new())
+            } else if spec.kind == "smoothing" && plain {
+                (GroupRole::Smoothing, Vec::new())
+            } else {
+                (GroupRole::Other, Vec::new())
+            };
+            let vertices = if role == GroupRole::Handle {
+                Some(picked.unwrap_or_else(|| (0..rest.mesh.num_vertices() as u32).collect()))
+            } else {
+                picked
+            };
+            groups.push(Group {
+                key: document.new_key(),
+                name: spec.name.clone(),
+                role,
+                kind: spec.kind.clone(),
+                weight: spec.weight,
+                vertices,
+                targets,
+                source: (role == GroupRole::Other).then(|| Arc::new(spec.clone())),
+            });
+        }
+        let kinds: Vec<&str> = groups.iter().filter(|g| g.role == GroupRole::Shape).map(|g| g.kind.as_str()).collect();
+        document.state.shape_model = ShapeModel::from_kinds(&kinds);
+        document.state.groups = groups;
+        document.solver.sync(&document.state)?;
+        Ok(document)
+    }
+
+    /// The document as a scene whose `[mesh] path` is `mesh_path` (as it should appear in the
+    /// file: relative to the scene's directory, or absolute). Handles are written with explicit
+    /// targets, editor groups with explicit vertex lists. After [`Command::MakeRest`], save
+    /// [`Document::rest_mesh`] to that path too.
+    pub fn to_scene(&self, mesh_path: impl Into<PathBuf>) -> Scene {
+        let groups = self
+            .state
+            .groups
+            .iter()
+            .map(|g| GroupSpec {
+                kind: g.kind.clone(),
+                name: g.name.clone(),
+                weight: g.weight,
+                selection: match &g.vertices {
+                    None => SelectionSpec::All,
+                    Some(list) => SelectionSpec::Vertices(list.iter().map(|&v| v as usize).collect()),
+                },
+                targets: if g.role == GroupRole::Handle {
+                    Targets { explicit: Some(g.targets.iter().map(|t| t.to_array()).collect()), ..Targets::default() }
+                } else {
+                    Targets::default()
+                },
+                options: g.source.as_ref().map(|s| s.options.clone()).unwrap_or_default(),
+            })
+            .collect();
+        Scene {
+            mesh: MeshSettings { path: mesh_path.into(), normalize: self.state.rest.normalize, tetrahedralize: false },
+            solver: SolverSettings { iterations: self.state.iterations, ..self.solver_settings },
+            groups,
+            base_dir: PathBuf::new(),
+            file: PathBuf::new(),
+        }
+    }
+
+    /// Writes [`Document::to_scene`] as TOML to `scene_path` (atomically).
+    ///
+    /// # Errors
+    /// [`EditorError::Save`] naming the file.
+    pub fn save_scene(&self, scene_path: &Path, mesh_path: impl Into<PathBuf>) -> Result<(), EditorError> {
+        let text = self.to_scene(mesh_path).to_toml_string();
+        shapeup_core::io::write_atomic(scene_path, |w| w.write_all(text.as_bytes()))
+            .map_err(|e| EditorError::Save(e.to_string()))
+    }
+
+    // ---- Reading the document ----
+
+    /// The editable state (groups, shape model, rest shape, iterations).
+    pub fn state(&self) -> &EditState {
+        &self.state
+    }
+
+    /// Every group, in system order, for the constraints panel.
+    pub fn groups(&self) -> &[Group] {
+        &self.state.groups
+    }
+
+    /// The group with this key.
+    pub fn group(&self, key: GroupKey) -> Option<&Group> {
+        self.state.group(key)
+    }
+
+    /// The handles, in order.
+    pub fn handles(&self) -> impl Iterator<Item = &Group> {
+        self.state.groups.iter().filter(|g| g.role == GroupRole::Handle)
+    }
+
+    /// The shape model (`None`: custom shape groups from a scene).
+    pub fn shape_model(&self) -> Option<ShapeModel> {
+        self.state.shape_model
+    }
+
+    /// Iterations per solve request.
+    pub fn iterations(&self) -> usize {
+        self.state.iterations
+    }
+
+    /// Number of vertices.
+    pub fn num_vertices(&self) -> usize {
+        self.positions.len()
+    }
+
+    /// Triangles of the mesh.
+    pub fn triangles(&self) -> &[[u32; 3]] {
+        &self.state.rest.mesh.triangles
+    }
+
+    /// Current positions, input frame (n of them).
+    pub fn positions(&self) -> &[DVec3] {
+        &self.positions
+    }
+
+    /// The rest positions, input frame.
+    pub fn rest_positions(&self) -> &[DVec3] {
+        &self.state.rest.mesh.positions
+    }
+
+    /// The rest mesh (input frame), e.g. to save after [`Command::MakeRest`].
+    pub fn rest_mesh(&self) -> &Mesh {
+        &self.state.rest.mesh
+    }
+
+    /// The current shape as a mesh (input frame), e.g. to export.
+    pub fn current_mesh(&self) -> Mesh {
+        Mesh {
+            positions: self.positions.clone(),
+            triangles: self.state.rest.mesh.triangles.clone(),
+            tetrahedra: self.state.rest.mesh.tetrahedra.clone(),
+        }
+    }
+
+    /// Boundary flags of the vertices (an edge with one triangle).
+    pub fn boundary(&self) -> &[bool] {
+        &self.state.rest.geometry.topology.boundary
+    }
+
+    /// Per-vertex selection flags.
+    pub fn selection(&self) -> &[bool] {
+        &self.selection
+    }
+
+    /// The selected vertices, ascending.
+    pub fn selected_vertices(&self) -> Vec<u32> {
+        self.selection.iter().enumerate().filter(|(_, s)| **s).map(|(v, _)| v as u32).collect()
+    }
+
+    /// Number of selected vertices.
+    pub fn num_selected(&self) -> usize {
+        self.selection.iter().filter(|s| **s).count()
+    }
+
+    /// Increases whenever the shape is set rather than solved ([`Command::ResetShape`],
+    /// [`Command::MakeRest`]); worker results of an older epoch are stale.
+    pub fn epoch(&self) -> u64 {
+        self.epoch
+    }
+
+    /// The positions the current epoch started from (input frame).
+    pub fn epoch_start(&self) -> &Arc<Vec<DVec3>> {
+        &self.epoch_start
+    }
+
+    // ---- Selection ----
+
+    /// Combines vertices with the selection; indices out of range are ignored.
+    pub fn select(&mut self, vertices: &[u32], mode: SelectMode) {
+        if mode == SelectMode::Replace {
+            self.clear_selection();
+        }
+        for &v in vertices {
+            if let Some(s) = self.selection.get_mut(v as usize) {
+                *s = mode != SelectMode::Remove;
+            }
+        }
+    }
+
+    /// Empties the selection.
+    pub fn clear_selection(&mut self) {
+        self.selection.iter_mut().for_each(|s| *s = false);
+    }
+
+    /// Combines the boundary vertices (of edges with one triangle) with the selection.
+    pub fn select_boundary(&mut self, mode: SelectMode) {
+        let rim: Vec<u32> = self.boundary().iter().enumerate().filter(|(_, b)| **b).map(|(v, _)| v as u32).collect();
+        self.select(&rim, mode);
+    }
+
+    // ---- Commands and undo ----
+
+    /// Applies a command. Undoable ones record one undo step (one per drag between
+    /// [`Document::begin_drag`] and [`Document::end_drag`]) and clear the redo history; a
+    /// command that fails changes nothing.
+    ///
+    /// # Errors
+    /// [`EditorError`] saying why the command cannot apply (unknown group, empty selection,
+    /// NaN weight, a group that cannot be built…).
+    pub fn apply(&mut self, command: Command) -> Result<(), EditorError> {
+        match command {
+            Command::Select { vertices, mode } => self.select(&vertices, mode),
+            Command::ClearSelection => self.clear_selection(),
+            Command::SelectBoundary(mode) => self.select_boundary(mode),
+            Command::ResetShape => {
+                let rest = self.state.rest.mesh.positions.clone();
+                self.set_shape(rest);
+            }
+            Command::Undo => {
+                self.undo();
+            }
+            Command::Redo => {
+                self.redo();
+            }
+            command => {
+                let mut next = self.state.clone();
+                let make_rest = command == Command::MakeRest;
+                self.edit(&mut next, command)?;
+                if next == self.state {
+                    return Ok(());
+                }
+                self.solver.sync(&next)?;
+                let previous = std::mem::replace(&mut self.state, next);
+                self.record(previous);
+                if make_rest {
+                    let positions = self.state.rest.mesh.positions.clone();
+                    self.set_shape(positions);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Sets the current shape (input frame) and starts a new epoch.
+    fn set_shape(&mut self, positions: Vec<DVec3>) {
+        self.solver.set_positions(&positions);
+        self.epoch += 1;
+        self.epoch_start = Arc::new(positions.clone());
+        self.positions = positions;
+    }
+
+    /// Records the state before an undoable change.
+    fn record(&mut self, previous: EditState) {
+        self.redo.clear();
+        match self.drag {
+            Some(true) => return,
+            Some(false) => self.drag = Some(true),
+            None => {}
+        }
+        self.undo.push(previous);
+        if self.undo.len() > UNDO_LIMIT {
+            self.undo.remove(0);
+        }
+    }
+
+    /// The edit a command makes to the state (no side effects on the document).
+    fn edit(&mut self, state: &mut EditState, command: Command) -> Result<(), EditorError> {
+        match command {
+            Command::FixSelection => {
+                let vertices = self.selected_vertices();
+                if vertices.is_empty() {
+                    return Err(EditorError::EmptySelection);
+                }
+                let name = unique_name(state, "handle");
+                let targets = vertices.iter().map(|&v| self.positions[v as usize]).collect();
+                state.groups.push(Group {
+                    key: self.new_key(),
+                    name,
+                    role: GroupRole::Handle,
+                    kind: "position".into(),
+                    weight: 1.0,
+                    vertices: Some(vertices),
+                    targets,
+                    source: None,
+                });
+            }
+            Command::MoveHandle { handle, delta } => {
+                if !delta.is_finite() {
+                    return Err(EditorError::BadValue(format!("translation must be finite, found {delta}")));
+                }
+                state.handle_mut(handle)?.targets.iter_mut().for_each(|t| *t += delta);
+            }
+            Command::RotateHandle { handle, axis, angle } => {
+                let axis = axis.try_normalize().filter(|_| angle.is_finite()).ok_or_else(|| {
+                    EditorError::BadValue(format!(
+                        "rotation needs a non-zero axis and a finite angle ({axis}, {angle})"
+                    ))
+                })?;
+                let group = state.handle_mut(handle)?;
+                let center = group.target_centroid().unwrap_or_default();
+                let rotation = DQuat::from_axis_angle(axis, angle);
+                group.targets.iter_mut().for_each(|t| *t = center + rotation * (*t - center));
+            }
+            Command::RenameHandle { handle, name } => state.group_mut(handle)?.name = name,
+            Command::DeleteHandle(handle) => {
+                state.handle_mut(handle)?;
+                state.groups.retain(|g| g.key != handle);
+            }
+            Command::ClearHandles => state.groups.retain(|g| g.role != GroupRole::Handle),
+            Command::SetShapeModel(model) => {
+                // The model's groups take the place of the first shape group (first if none).
+                let at = state.groups.iter().position(|g| g.role == GroupRole::Shape).unwrap_or(0);
+                state.groups.retain(|g| g.role != GroupRole::Shape);
+                let groups = self.model_groups(model);
+                state.groups.splice(at.min(state.groups.len())..at.min(state.groups.len()), groups);
+                state.shape_model = Some(model);
+            }
+            Command::AddSmoothing => {
+                let vertices = self.selected_vertices();
+                if vertices.is_empty() {
+                    return Err(EditorError::EmptySelection);
+                }
+                let name = unique_name(state, "smoothing");
+                state.groups.push(Group {
+                    key: self.new_key(),
+                    name,
+                    role: GroupRole::Smoothing,
+                    kind: "smoothing".into(),
+                    weight: 1.0,
+                    vertices: Some(vertices),
+                    targets: Vec::new(),
+                    source: None,
+                });
+            }
+            Command::SetWeight { group, weight } => {
+                if weight.is_nan() {
+                    return Err(EditorError::BadWeight(weight));
+                }
+                state.group_mut(group)?.weight = weight.clamp(WEIGHT_RANGE.0, WEIGHT_RANGE.1);
+            }
+            Command::RemoveGroup(key) => {
+                if state.group_mut(key)?.role == GroupRole::Shape {
+                    return Err(EditorError::ShapeGroup(key));
+                }
+                state.groups.retain(|g| g.key != key);
+            }
+            Command::MakeRest => {
+                let old = &state.rest;
+                let mesh = Mesh {
+                    positions: self.positions.clone(),
+                    triangles: old.mesh.triangles.clone(),
+                    tetrahedra: old.mesh.tetrahedra.clone(),
+                };
+                state.rest = Arc::new(Rest::new(mesh, old.normalize));
+            }
+            Command::SetIterations(n) => {
+                if n == 0 {
+                    return Err(EditorError::BadValue("iterations must be at least 1".into()));
+                }
+                state.iterations = n;
+            }
+            Command::Select { .. }
+            | Command::ClearSelection
+            | Command::SelectBoundary(_)
+            | Command::ResetShape
+            | Command::Undo
+            | Command::Redo => {}
+        }
+        Ok(())
+    }
+
+    /// Starts a drag: every undoable command until [`Document::end_drag`] forms one undo step.
+    pub fn begin_drag(&mut self) {
+        self.drag = Some(false);
+    }
+
+    /// Ends a drag (see [`Document::begin_drag`]).
+    pub fn end_drag(&mut self) {
+        self.drag = None;
+    }
+
+    /// Whether there is a step to undo.
+    pub fn can_undo(&self) -> bool {
+        !self.undo.is_empty()
+    }
+
+    /// Whether there is a step to redo.
+    pub fn can_redo(&self) -> bool {
+        !self.redo.is_empty()
+    }
+
+    /// Undoes the last step; `false` if there was none. The shape keeps its current positions
+    /// (the next solve follows the restored handles).
+    pub fn undo(&mut self) -> bool {
+        self.end_drag();
+        self.step_history(true)
+    }
+
+    /// Redoes the last undone step; `false` if there was none.
+    pub fn redo(&mut self) -> bool {
+        self.end_drag();
+        self.step_history(false)
+    }
+
+    fn step_history(&mut self, back: bool) -> bool {
+        let (from, to) = if back { (&mut self.undo, &mut self.redo) } else { (&mut self.redo, &mut self.undo) };
+        let Some(state) = from.pop() else { return false };
+        if self.solver.sync(&state).is_err() {
+            // Every recorded state was built once, so this does not happen; keep the history.
+            from.push(state);
+            return false;
+        }
+        to.push(std::mem::replace(&mut self.state, state));
+        true
+    }
+
+    // ---- Solving ----
+
+    /// Runs `iterations` local-global iterations synchronously from the current positions
+    /// (tests and simple front ends; the app uses the [`worker`](crate::worker)).
+    ///
+    /// # Errors
+    /// [`EditorError::NoHandles`] without a handle (nothing changes), [`EditorError::Solve`]
+    /// for a singular system.
+    pub fn solve(&mut self, iterations: usize) -> Result<SolveReport, EditorError> {
+        if !self.state.has_handles() {
+            return Err(EditorError::NoHandles);
+        }
+        self.solver.sync(&self.state)?;
+        let report = self.solver.solve(iterations)?;
+        self.positions = self.solver.positions();
+        Ok(report)
+    }
+
+    /// E of the current shape per group, in the order of [`Document::groups`].
+    ///
+    /// # Errors
+    /// [`EditorError::Solve`].
+    pub fn group_energies(&mut self) -> Result<Vec<(GroupKey, f64)>, EditorError> {
+        let energies = self.solver.energy()?;
+        Ok(self.state.groups.iter().map(|g| g.key).zip(energies).collect())
+    }
+
+    /// Takes the positions of a worker's result when they belong to the current epoch;
+    /// returns whether they were taken.
+    pub fn accept_positions(&mut self, epoch: u64, positions: &[DVec3]) -> bool {
+        if epoch != self.epoch || positions.len() != self.positions.len() {
+            return false;
+        }
+        self.positions.copy_from_slice(positions);
+        self.solver.set_positions(positions);
+        true
+    }
+}
+
+/// "prefix N" with the smallest N ≥ 1 no group uses.
+fn unique_name(state: &EditState, prefix: &str) -> String {
+    (1..).map(|k| format!("{prefix} {k}")).find(|name| state.groups.iter().all(|g| &g.name != name)).unwrap_or_default()
+}
+
+/// The vertices a scene selection picks (input frame): `None` for all, else in listed order or
+/// ascending (as the scene loader does).
+fn resolve_selection(spec: &SelectionSpec, mesh: &Mesh) -> Result<Option<Vec<u32>>, String> {
+    let n = mesh.num_vertices();
+    let inside = |f: &dyn Fn(DVec3) -> bool| (0..n).filter(|&i| f(mesh.positions[i])).map(|i| i as u32).collect();
+    Ok(Some(match spec {
+        SelectionSpec::All => return Ok(None),
+        SelectionSpec::Vertices(list) => {
+            if let Some(&v) = list.iter().find(|&&v| v >= n) {
+                return Err(format!("vertex {v} is out of range (the mesh has {n} vertices)"));
+            }
+            list.iter().map(|&v| v as u32).collect()
+        }
+        SelectionSpec::Box { min, max } => {
+            let (lo, hi) = (DVec3::from(*min), DVec3::from(*max));
+            inside(&|p| p.cmpge(lo).all() && p.cmple(hi).all())
+        }
+        SelectionSpec::Sphere { center, radius } => {
+            let c = DVec3::from(*center);
+            inside(&|p| (p - c).length() <= *radius)
+        }
+    }))
+}
+
+/// A position group's targets (input frame), as the scene loader computes them: explicit, or
+/// rest rotated about its centre (default the centroid), then translated.
+fn position_targets(vertices: &[u32], targets: &Targets, mesh: &Mesh) -> Result<Vec<DVec3>, String> {
+    if let Some(explicit) = &targets.explicit {
+        if explicit.len() != vertices.len() {
+            return Err(format!("{} targets given for {} selected vertices", explicit.len(), vertices.len()));
+        }
+        return Ok(explicit.iter().map(|&t| DVec3::from(t)).collect());
+    }
+    let rest: Vec<DVec3> = vertices.iter().map(|&v| mesh.positions[v as usize]).collect();
+    let rotated = match &targets.rotate {
+        None => rest,
+        Some(r) => {
+            let center = r
+                .center
+                .map(DVec3::from)
+                .unwrap_or_else(|| rest.iter().copied().sum::<DVec3>() / rest.len().max(1) as f64);
+            let axis = DVec3::from(r.axis).try_normalize().ok_or("rotation axis must be non-zero")?;
+            let q = DQuat::from_axis_angle(axis, r.angle_deg.to_radians());
+            rest.iter().map(|&p| center + q * (p - center)).collect()
+        }
+    };
+    let translate = DVec3::from(targets.translate);
+    Ok(rotated.into_iter().map(|p| p + translate).collect())
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used, clippy::expect_used)]
+    use super::*;
+
+    /// A flat (n+1)×(n+1) grid in the XY plane: an open mesh whose rim is its border.
+    pub(crate) fn grid(n: u32) -> Mesh {
+        let mut positions = Vec::new();
+        for y in 0..=n {
+            for x in 0..=n {
+                positions.push(DVec3::new(x as f64 / n as f64, y as f64 / n as f64, 0.0));
+            }
+        }
+        let mut triangles = Vec::new();
+        for y in 0..n {
+            for x in 0..n {
+                let v = y * (n + 1) + x;
+                triangles.push([v, v + 1, v + n + 2]);
+                triangles.push([v, v + n + 2, v + n + 1]);
+            }
+        }
+        Mesh::new(positions, triangles).unwrap()
+    }
+
+    #[test]
+    fn boundary_of_a_grid_is_its_rim() {
+        let n = 6;
+        let mut doc = Document::new(grid(n), ShapeModel::EdgeSprings).unwrap();
+        doc.apply(Command::SelectBoundary(SelectMode::Replace)).unwrap();
+        let expected: Vec<u32> = (0..(n + 1) * (n + 1))
+            .filter(|&v| {
+                let (x, y) = (v % (n + 1), v / (n + 1));
+                x == 0 || y == 0 || x == n || y == n
+            })
+            .collect();
+        assert_eq!(doc.selected_vertices(), expected);
+        assert_eq!(doc.num_selected(), 4 * n as usize);
+    }
+
+    #[test]
+    fn selection_modes() {
+        let mut doc = Document::new(grid(3), ShapeModel::EdgeSprings).unwrap();
+        doc.select(&[1, 2, 3], SelectMode::Replace);
+        doc.select(&[5, 999], SelectMode::Add);
+        doc.select(&[2], SelectMode::Remove);
+        assert_eq!(doc.selected_vertices(), [1, 3, 5]);
+        doc.select(&[7], SelectMode::Replace);
+        assert_eq!(doc.selected_vertices(), [7]);
+        doc.apply(Command::ClearSelection).unwrap();
+        assert_eq!(doc.num_selected(), 0);
+    }
+
+    #[test]
+    fn no_handles_is_an_error_not_a_panic() {
+        let mut doc = Document::new(grid(3), ShapeModel::StrainBending).unwrap();
+        assert_eq!(doc.solve(5).unwrap_err(), EditorError::NoHandles);
+        assert_eq!(doc.apply(Command::FixSelection).unwrap_err(), EditorError::EmptySelection);
+        assert_eq!(doc.positions(), doc.rest_positions());
+        assert!(!doc.can_undo());
+    }
+}

@@ -1,0 +1,10 @@
+//! The windowed editor and headless rendering (feature `gui`).
+
+pub mod app;
+pub mod headless;
+pub mod renderer;
+
+/// The first view of a mesh: a three-quarter view from the +z side, slightly from above.
+pub const INITIAL_YAW: f32 = 0.5;
+/// See [`INITIAL_YAW`].
+pub const INITIAL_PITCH: f32 = 0.25;

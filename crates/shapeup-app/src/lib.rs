@@ -1,0 +1,28 @@
+//! The shapeup editor: open a mesh, select vertices, fix them as handles, drag them and watch
+//! the shape follow. It talks to the solver only through `shapeup-core`'s public API.
+//!
+//! This crate is the editor's model, with no GUI dependency, so that all of it is tested
+//! without a window:
+//! - [`camera`]: the orbit camera (view, projection, pixel ↔ ray, drags in the view plane);
+//! - [`picking`]: occlusion-aware vertex picking and box selection on a CPU depth buffer;
+//! - [`document`]: the mesh, its constraint groups (shape model, handles, smoothing), the
+//!   selection, the current shape, undo/redo and scene round trips;
+//! - [`command`]: the [`command::Command`]s a panel or a drag emits, applied by
+//!   [`document::Document::apply`];
+//! - [`worker`]: a background solver thread, so the UI never waits for a solve.
+#![warn(missing_docs)]
+
+pub mod camera;
+pub mod command;
+pub mod document;
+pub mod picking;
+pub mod worker;
+
+pub use camera::OrbitCamera;
+pub use command::{Command, SelectMode};
+pub use document::{Document, EditorError, GroupKey, ShapeModel};
+pub use worker::{SolveResult, SolverWorker};
+
+/// The windowed editor and headless rendering.
+#[cfg(feature = "gui")]
+pub mod gui;

@@ -1,0 +1,197 @@
+//! Writing a [`Scene`] back to TOML (what the editor saves), in the schema [`Scene::parse`]
+//! reads: the text parses back to an equal scene (except `base_dir` and `file`, which come from
+//! where it is read).
+
+use super::{Mode, Scene, SelectionSpec};
+use crate::solver::Factorization;
+use serde_json::Value as Json;
+use std::fmt::Write as _;
+use toml::Value;
+
+impl Scene {
+    /// The scene as TOML text: `[mesh]` (path, normalize, and tetrahedralize when set), every
+    /// field of `[solver]`, then one `[[constraints]]` entry per group with its type, name,
+    /// weight, selection (`vertices`, `box` or `sphere`; none for all vertices), targets
+    /// (`targets = [[x, y, z], …]` when explicit, else `translate` / `rotate`) and options.
+    ///
+    /// Floats are written in Rust's shortest round-trip form, so [`Scene::parse`] of the text
+    /// gives back the same numbers bit for bit. JSON `null` options (which no constraint type
+    /// takes) are left out.
+    pub fn to_toml_string(&self) -> String {
+        let mut out = String::new();
+        out.push_str("[mesh]\n");
+        line(&mut out, "path", Value::String(self.mesh.path.to_string_lossy().into_owned()));
+        line(&mut out, "normalize", Value::Boolean(self.mesh.normalize));
+        if self.mesh.tetrahedralize {
+            line(&mut out, "tetrahedralize", Value::Boolean(true));
+        }
+
+        let s = &self.solver;
+        out.push_str("\n[solver]\n");
+        let mode = match s.mode {
+            Mode::Static => "static",
+            Mode::Dynamic => "dynamic",
+        };
+        line(&mut out, "mode", Value::String(mode.into()));
+        line(&mut out, "iterations", integer(s.iterations as u64));
+        line(&mut out, "steps", integer(s.steps as u64));
+        line(&mut out, "tolerance", Value::Float(s.tolerance));
+        line(&mut out, "time_step", Value::Float(s.time_step));
+        line(&mut out, "gravity", vec3(s.gravity));
+        line(&mut out, "stiffness", Value::Float(s.stiffness));
+        line(&mut out, "damping", Value::Float(s.damping));
+        line(&mut out, "density", Value::Float(s.density));
+        let factorization = match s.factorization {
+            Factorization::Auto => "auto",
+            Factorization::Simplicial => "simplicial",
+            Factorization::Supernodal => "supernodal",
+        };
+        line(&mut out, "factorization", Value::String(factorization.into()));
+
+        for group in &self.groups {
+            out.push_str("\n[[constraints]]\n");
+            line(&mut out, "type", Value::String(group.kind.clone()));
+            line(&mut out, "name", Value::String(group.name.clone()));
+            line(&mut out, "weight", Value::Float(group.weight));
+            match &group.selection {
+                SelectionSpec::All => {}
+                SelectionSpec::Vertices(list) => {
+                    let list = list.iter().map(|&v| integer(v as u64)).collect();
+                    line(&mut out, "vertices", Value::Array(list));
+                }
+                SelectionSpec::Box { min, max } => {
+                    let mut table = toml::Table::new();
+                    table.insert("min".into(), vec3(*min));
+                    table.insert("max".into(), vec3(*max));
+                    line(&mut out, "box", Value::Table(table));
+                }
+                SelectionSpec::Sphere { center, radius } => {
+                    let mut table = toml::Table::new();
+                    table.insert("center".into(), vec3(*center));
+                    table.insert("radius".into(), Value::Float(*radius));
+                    line(&mut out, "sphere", Value::Table(table));
+                }
+            }
+            let t = &group.targets;
+            if let Some(explicit) = &t.explicit {
+                line(&mut out, "targets", Value::Array(explicit.iter().map(|&p| vec3(p)).collect()));
+            } else {
+                // The parser only reads targets on position groups; other kinds never set them.
+                if t.translate != [0.0; 3] {
+                    line(&mut out, "translate", vec3(t.translate));
+                }
+                if let Some(r) = &t.rotate {
+                    let mut table = toml::Table::new();
+                    table.insert("axis".into(), vec3(r.axis));
+                    table.insert("angle_deg".into(), Value::Float(r.angle_deg));
+                    if let Some(c) = r.center {
+                        table.insert("center".into(), vec3(c));
+                    }
+                    line(&mut out, "rotate", Value::Table(table));
+                }
+            }
+            for (key, value) in &group.options {
+                if let Some(value) = from_json(value) {
+                    line(&mut out, key, value);
+                }
+            }
+        }
+        out
+    }
+}
+
+/// Appends `key = value` (the value inline).
+fn line(out: &mut String, key: &str, value: Value) {
+    // Writing to a String cannot fail.
+    let _ = writeln!(out, "{} = {value}", toml_key(key));
+}
+
+/// A key as written: bare when it can be, else a quoted string.
+fn toml_key(key: &str) -> String {
+    let bare = !key.is_empty() && key.chars().all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-');
+    if bare { key.to_string() } else { Value::String(key.to_string()).to_string() }
+}
+
+/// A TOML integer (they are i64; larger counts saturate, and never occur).
+fn integer(v: u64) -> Value {
+    Value::Integer(i64::try_from(v).unwrap_or(i64::MAX))
+}
+
+fn vec3(v: [f64; 3]) -> Value {
+    Value::Array(v.iter().map(|&x| Value::Float(x)).collect())
+}
+
+/// A JSON option value as TOML; `None` for `null`, which TOML cannot represent.
+fn from_json(value: &Json) -> Option<Value> {
+    Some(match value {
+        Json::Null => return None,
+        Json::Bool(b) => Value::Boolean(*b),
+        Json::Number(n) => match n.as_i64() {
+            Some(i) => Value::Integer(i),
+            None => Value::Float(n.as_f64().unwrap_or(f64::NAN)),
+        },
+        Json::String(s) => Value::String(s.clone()),
+        Json::Array(items) => Value::Array(items.iter().filter_map(from_json).collect()),
+        Json::Object(map) => {
+            Value::Table(map.iter().filter_map(|(k, v)| from_json(v).map(|v| (k.clone(), v))).collect())
+        }
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::{GroupSpec, MeshSettings, Rotate, SceneFormat, SolverSettings, Targets};
+    use super::*;
+    use std::path::{Path, PathBuf};
+
+    fn parse(text: &str) -> Scene {
+        Scene::parse(text, SceneFormat::Toml, Path::new("s.toml"), PathBuf::from("dir")).unwrap()
+    }
+
+    fn group(kind: &str, name: &str, weight: f64, selection: SelectionSpec) -> GroupSpec {
+        GroupSpec {
+            kind: kind.into(),
+            name: name.into(),
+            weight,
+            selection,
+            targets: Targets::default(),
+            options: Default::default(),
+        }
+    }
+
+    #[test]
+    fn written_scene_parses_back_equal() {
+        let mut handle = group("position", "handle \"1\"", 1.0, SelectionSpec::Vertices(vec![3, 1, 4]));
+        handle.targets.explicit = Some(vec![[0.1, -0.2, 1e-300], [1.0 / 3.0, 2.0, -0.0], [1e20, 5.0, 0.7]]);
+        let mut rotated =
+            group("position", "rot", 2.5, SelectionSpec::Sphere { center: [0.0, 1.0, 2.0], radius: 0.25 });
+        rotated.targets.translate = [0.1, 0.0, 0.3];
+        rotated.targets.rotate = Some(Rotate { axis: [0.0, 1.0, 0.0], angle_deg: 30.0, center: Some([1.0, 2.0, 3.0]) });
+        let mut strain = group("triangle_strain", "shape", 10.0, SelectionSpec::All);
+        strain.options.insert("strain_freedom".into(), serde_json::json!(0.1));
+        let mut floor = group("floor", "floor", 1.0, SelectionSpec::Box { min: [-1.0; 3], max: [1.0, 2.0, 3.0] });
+        floor.options.insert("height".into(), serde_json::json!(-1));
+        floor.options.insert("push".into(), serde_json::json!(0.5));
+        let scene = Scene {
+            mesh: MeshSettings { path: PathBuf::from("meshes/my mesh.obj"), normalize: false, tetrahedralize: true },
+            solver: SolverSettings {
+                mode: Mode::Dynamic,
+                iterations: 7,
+                factorization: Factorization::Supernodal,
+                gravity: [0.0, -1.5, 0.1],
+                ..SolverSettings::default()
+            },
+            groups: vec![strain, group("bending", "bend", 1e-4, SelectionSpec::All), handle, rotated, floor],
+            base_dir: PathBuf::from("dir"),
+            file: PathBuf::from("s.toml"),
+        };
+        let text = scene.to_toml_string();
+        assert_eq!(parse(&text), scene, "{text}");
+    }
+
+    #[test]
+    fn defaults_round_trip() {
+        let scene = parse("[mesh]\npath = \"m.obj\"\n[[constraints]]\ntype = \"edge_spring\"\n");
+        assert_eq!(parse(&scene.to_toml_string()), scene);
+    }
+}

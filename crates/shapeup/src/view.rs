@@ -1,0 +1,57 @@
+//! `shapeup view`: the interactive editor, or one headless frame with `--screenshot`.
+
+use anyhow::{Result, anyhow};
+use shapeup_app::document::{Document, ShapeModel};
+use shapeup_app::gui::app::{HANDLE_COLOR, run_window, sample_path};
+use shapeup_app::gui::headless::{render_rgba, write_png};
+use shapeup_app::gui::renderer::BASE_COLOR;
+use shapeup_core::scene::Scene;
+use std::path::PathBuf;
+
+fn is_scene(path: &std::path::Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("toml") || e.eq_ignore_ascii_case("json"))
+}
+
+/// Opens `input` (default: the bundled bunny) as a document; a scene is solved once so the
+/// first frame shows its deformation.
+fn open(input: Option<PathBuf>) -> Result<(Document, PathBuf)> {
+    let path = input.unwrap_or_else(|| sample_path("data/stanford-bunny.obj"));
+    if is_scene(&path) {
+        let scene = Scene::from_file(&path)?;
+        let mut document = Document::from_scene(&scene).map_err(|e| anyhow!("{}: {e}", path.display()))?;
+        if document.state().has_handles() {
+            let iterations = scene.solver.iterations * scene.solver.steps;
+            document.solve(iterations).map_err(|e| anyhow!("{}: {e}", path.display()))?;
+        }
+        Ok((document, scene.mesh_path()))
+    } else {
+        let document = Document::open(&path, ShapeModel::EdgeSprings).map_err(|e| anyhow!("{e}"))?;
+        Ok((document, path))
+    }
+}
+
+/// Runs the editor, or writes one frame to `screenshot`.
+pub fn run(input: Option<PathBuf>, screenshot: Option<PathBuf>, size: (u32, u32)) -> Result<()> {
+    if let Some(out) = &screenshot
+        && !out.extension().and_then(|e| e.to_str()).is_some_and(|e| e.eq_ignore_ascii_case("png"))
+    {
+        return Err(anyhow!("{}: the screenshot must be a .png file", out.display()));
+    }
+    let (document, mesh_path) = open(input)?;
+    if let Some(out) = screenshot {
+        let mesh = document.current_mesh();
+        // Handles in green, as in the editor.
+        let mut colors = vec![BASE_COLOR; mesh.num_vertices()];
+        for handle in document.handles() {
+            for &v in handle.vertices().unwrap_or(&[]) {
+                colors[v as usize] = HANDLE_COLOR;
+            }
+        }
+        let (w, h, pixels) = render_rgba(&mesh, &mesh.positions, &colors, size, false).map_err(|e| anyhow!("{e}"))?;
+        write_png(&out, w, h, &pixels).map_err(|e| anyhow!("{e}"))?;
+        return Ok(());
+    }
+    run_window(document, mesh_path).map_err(|e| anyhow!("cannot open the editor window: {e}"))
+}
