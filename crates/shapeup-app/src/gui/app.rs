@@ -42,6 +42,7 @@ enum Gesture {
     Pan,
     BoxSelect { start: Pos2, mode: SelectMode },
     DragHandle { handle: GroupKey, anchor: Vec3 },
+    RotateHandle { handle: GroupKey },
 }
 
 /// UI-only state (nothing here changes the solve).
@@ -50,6 +51,7 @@ struct View {
     wireframe: bool,
     gesture: Option<Gesture>,
     hovered_group: Option<GroupKey>,
+    renaming: Option<(GroupKey, String)>,
     status: String,
     path_input: String,
     export_input: String,
@@ -84,6 +86,7 @@ impl EditorApp {
                 wireframe: false,
                 gesture: None,
                 hovered_group: None,
+                renaming: None,
                 status: if renderer.is_some() {
                     format!("opened {}", mesh_path.display())
                 } else {
@@ -233,6 +236,14 @@ impl EditorApp {
                 });
             });
             ui.separator();
+            ui.collapsing("Mouse", |ui| {
+                ui.label(
+                    "left drag: orbit · right or shift+left drag: pan · wheel: zoom\n\
+                     ctrl+left drag: select visible vertices in a box (ctrl+alt adds, ctrl+shift removes)\n\
+                     alt+left drag on a handle: move it · alt+right drag: rotate it\n\
+                     ctrl+z / ctrl+shift+z: undo / redo",
+                );
+            });
             ui.label(format!("{} vertices selected", self.document.num_selected()));
             ui.horizontal_wrapped(|ui| {
                 if ui.button("Fix selection").clicked() {
@@ -268,12 +279,28 @@ impl EditorApp {
                     if ui.add(slider).changed() {
                         commands.push(Command::SetWeight { group: group.key, weight });
                     }
+                    if group.role == GroupRole::Handle && ui.small_button("rename").clicked() {
+                        self.view.renaming = Some((group.key, group.name.clone()));
+                    }
                     if group.role != GroupRole::Shape && ui.small_button("remove").clicked() {
                         commands.push(Command::RemoveGroup(group.key));
                     }
                 });
                 if row.response.hovered() {
                     self.view.hovered_group = Some(group.key);
+                }
+            }
+            if let Some((key, name)) = &mut self.view.renaming {
+                let key = *key;
+                let done = ui
+                    .horizontal(|ui| {
+                        let edit = ui.text_edit_singleline(name);
+                        edit.lost_focus() || ui.button("OK").clicked()
+                    })
+                    .inner;
+                if done {
+                    commands.push(Command::RenameHandle { handle: key, name: name.clone() });
+                    self.view.renaming = None;
                 }
             }
             if ui.button("Clear handles").clicked() {
@@ -382,9 +409,11 @@ impl EditorApp {
             let start = response.interact_pointer_pos().unwrap_or(rect.center());
             let primary = response.drag_started_by(egui::PointerButton::Primary);
             self.view.gesture = if primary && modifiers.command {
-                let mode = if modifiers.shift && modifiers.alt {
+                // Ctrl+Shift removes (as the editor issue asks); Shift+Left alone already pans,
+                // so adding to the selection is Ctrl+Alt.
+                let mode = if modifiers.shift {
                     SelectMode::Remove
-                } else if modifiers.shift {
+                } else if modifiers.alt {
                     SelectMode::Add
                 } else {
                     SelectMode::Replace
@@ -406,6 +435,21 @@ impl EditorApp {
                     self.document.begin_drag();
                     Gesture::DragHandle { handle: key, anchor: positions[v as usize] }
                 })
+            } else if response.drag_started_by(egui::PointerButton::Secondary) && modifiers.alt {
+                let visible =
+                    visible_vertices(self.document.positions(), self.document.triangles(), &self.view.camera, viewport);
+                let picked = pick_vertex(
+                    self.document.positions(),
+                    &visible,
+                    &self.view.camera,
+                    viewport,
+                    to_local(start),
+                    12.0,
+                );
+                picked.and_then(|v| self.document.handles().find(|h| h.covers(v)).map(|h| h.key)).map(|handle| {
+                    self.document.begin_drag();
+                    Gesture::RotateHandle { handle }
+                })
             } else if response.drag_started_by(egui::PointerButton::Secondary) || (primary && modifiers.shift) {
                 Some(Gesture::Pan)
             } else if primary {
@@ -424,6 +468,16 @@ impl EditorApp {
                 self.view.gesture = Some(Gesture::DragHandle { handle, anchor: anchor + moved });
                 commands.push(Command::MoveHandle { handle, delta: moved.as_dvec3() });
             }
+            Some(Gesture::RotateHandle { handle }) if delta.x != 0.0 => {
+                // Turn about the view direction through the handle's centroid: horizontal mouse
+                // motion, 0.01 rad per pixel.
+                let (_, _, forward) = self.view.camera.basis();
+                commands.push(Command::RotateHandle {
+                    handle,
+                    axis: forward.as_dvec3(),
+                    angle: f64::from(delta.x) * 0.01,
+                });
+            }
             _ => {}
         }
         if response.drag_stopped() {
@@ -440,7 +494,7 @@ impl EditorApp {
                 );
                 commands.push(Command::Select { vertices, mode });
             }
-            if matches!(self.view.gesture, Some(Gesture::DragHandle { .. })) {
+            if matches!(self.view.gesture, Some(Gesture::DragHandle { .. } | Gesture::RotateHandle { .. })) {
                 self.document.end_drag();
             }
             self.view.gesture = None;
