@@ -989,25 +989,10 @@ fn unique_name(state: &EditState, prefix: &str) -> String {
 /// The vertices a scene selection picks (input frame): `None` for all, else in listed order or
 /// ascending (as the scene loader does).
 fn resolve_selection(spec: &SelectionSpec, mesh: &Mesh) -> Result<Option<Vec<u32>>, String> {
-    let n = mesh.num_vertices();
-    let inside = |f: &dyn Fn(DVec3) -> bool| (0..n).filter(|&i| f(mesh.positions[i])).map(|i| i as u32).collect();
-    Ok(Some(match spec {
-        SelectionSpec::All => return Ok(None),
-        SelectionSpec::Vertices(list) => {
-            if let Some(&v) = list.iter().find(|&&v| v >= n) {
-                return Err(format!("vertex {v} is out of range (the mesh has {n} vertices)"));
-            }
-            list.iter().map(|&v| v as u32).collect()
-        }
-        SelectionSpec::Box { min, max } => {
-            let (lo, hi) = (DVec3::from(*min), DVec3::from(*max));
-            inside(&|p| p.cmpge(lo).all() && p.cmple(hi).all())
-        }
-        SelectionSpec::Sphere { center, radius } => {
-            let c = DVec3::from(*center);
-            inside(&|p| (p - c).length() <= *radius)
-        }
-    }))
+    match spec {
+        SelectionSpec::All => Ok(None),
+        _ => Ok(Some(spec.resolve(&mesh.positions)?.into_iter().map(|v| v as u32).collect())),
+    }
 }
 
 /// A position group's targets (input frame), as the scene loader computes them: explicit, or

@@ -420,33 +420,12 @@ impl EditorApp {
                 };
                 Some(Gesture::BoxSelect { start, mode })
             } else if primary && modifiers.alt {
-                let visible =
-                    visible_vertices(self.document.positions(), self.document.triangles(), &self.view.camera, viewport);
-                let picked = pick_vertex(
-                    self.document.positions(),
-                    &visible,
-                    &self.view.camera,
-                    viewport,
-                    to_local(start),
-                    12.0,
-                );
-                let handle = picked.and_then(|v| self.document.handles().find(|h| h.covers(v)).map(|h| (h.key, v)));
-                handle.map(|(key, v)| {
+                self.handle_under(to_local(start), viewport).map(|(handle, v)| {
                     self.document.begin_drag();
-                    Gesture::DragHandle { handle: key, anchor: positions[v as usize] }
+                    Gesture::DragHandle { handle, anchor: positions[v as usize] }
                 })
             } else if response.drag_started_by(egui::PointerButton::Secondary) && modifiers.alt {
-                let visible =
-                    visible_vertices(self.document.positions(), self.document.triangles(), &self.view.camera, viewport);
-                let picked = pick_vertex(
-                    self.document.positions(),
-                    &visible,
-                    &self.view.camera,
-                    viewport,
-                    to_local(start),
-                    12.0,
-                );
-                picked.and_then(|v| self.document.handles().find(|h| h.covers(v)).map(|h| h.key)).map(|handle| {
+                self.handle_under(to_local(start), viewport).map(|(handle, _)| {
                     self.document.begin_drag();
                     Gesture::RotateHandle { handle }
                 })
@@ -518,6 +497,14 @@ impl EditorApp {
             );
         }
         commands
+    }
+
+    /// The handle owning the visible vertex nearest to `pixel` (within 12 px), and that vertex.
+    fn handle_under(&self, pixel: Vec2, viewport: Vec2) -> Option<(GroupKey, u32)> {
+        let positions = self.document.positions();
+        let visible = visible_vertices(positions, self.document.triangles(), &self.view.camera, viewport);
+        let v = pick_vertex(positions, &visible, &self.view.camera, viewport, pixel, 12.0)?;
+        self.document.handles().find(|h| h.covers(v)).map(|h| (h.key, v))
     }
 
     fn paint(&mut self, ui: &mut egui::Ui, frame: &eframe::Frame, rect: Rect, positions: &[Vec3], viewport: Vec2) {

@@ -100,36 +100,13 @@ impl Scene {
     }
 }
 
-/// The vertex indices a selection picks, in order (listed order, or ascending).
-fn select(spec: &SelectionSpec, mesh: &Mesh) -> Result<Vec<usize>, String> {
-    let n = mesh.num_vertices();
-    let inside = |f: &dyn Fn(DVec3) -> bool| (0..n).filter(|&i| f(mesh.positions[i])).collect();
-    Ok(match spec {
-        SelectionSpec::All => (0..n).collect(),
-        SelectionSpec::Vertices(list) => {
-            if let Some(&v) = list.iter().find(|&&v| v >= n) {
-                return Err(format!("vertex {v} is out of range (the mesh has {n} vertices: 0..{})", n - 1));
-            }
-            list.clone()
-        }
-        SelectionSpec::Box { min, max } => {
-            let (lo, hi) = (DVec3::from(*min), DVec3::from(*max));
-            inside(&|p| p.cmpge(lo).all() && p.cmple(hi).all())
-        }
-        SelectionSpec::Sphere { center, radius } => {
-            let c = DVec3::from(*center);
-            inside(&|p| (p - c).length() <= *radius)
-        }
-    })
-}
-
 fn build_group(
     spec: &GroupSpec,
     mesh: &Mesh,
     rest: &RestGeometry,
     frame: &WorkingFrame,
 ) -> Result<ConstraintGroup, String> {
-    let picked = select(&spec.selection, mesh)?;
+    let picked = spec.selection.resolve(&mesh.positions)?;
     let constraints = if spec.kind == "position" {
         if !spec.options.is_empty() {
             let keys: Vec<&str> = spec.options.keys().map(String::as_str).collect();

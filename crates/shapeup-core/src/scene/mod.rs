@@ -110,6 +110,38 @@ pub enum SelectionSpec {
     },
 }
 
+impl SelectionSpec {
+    /// The vertex indices it picks among `positions` (input frame): every vertex for
+    /// [`SelectionSpec::All`], the listed order for a list, ascending for a box or sphere.
+    ///
+    /// # Errors
+    /// A listed index out of range, as a one-line message naming it.
+    pub fn resolve(&self, positions: &[glam::DVec3]) -> Result<Vec<usize>, String> {
+        let n = positions.len();
+        let inside = |f: &dyn Fn(glam::DVec3) -> bool| (0..n).filter(|&i| f(positions[i])).collect();
+        Ok(match self {
+            SelectionSpec::All => (0..n).collect(),
+            SelectionSpec::Vertices(list) => {
+                if let Some(&v) = list.iter().find(|&&v| v >= n) {
+                    return Err(format!(
+                        "vertex {v} is out of range (the mesh has {n} vertices: 0..{})",
+                        n.saturating_sub(1)
+                    ));
+                }
+                list.clone()
+            }
+            SelectionSpec::Box { min, max } => {
+                let (lo, hi) = (glam::DVec3::from(*min), glam::DVec3::from(*max));
+                inside(&|p| p.cmpge(lo).all() && p.cmple(hi).all())
+            }
+            SelectionSpec::Sphere { center, radius } => {
+                let c = glam::DVec3::from(*center);
+                inside(&|p| (p - c).length() <= *radius)
+            }
+        })
+    }
+}
+
 /// A rotation of a handle's targets about an axis, applied before its translation.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
