@@ -72,6 +72,9 @@ pub struct EditorApp {
     renderer: Option<MeshRenderer>,
     texture: Option<egui::TextureId>,
     uploaded_epoch: Option<(usize, usize)>,
+    /// Positions or colours changed since the last upload (uploads cost a normal recomputation
+    /// and a buffer write: skip them on frames that only move the camera).
+    geometry_dirty: bool,
 }
 
 impl EditorApp {
@@ -107,6 +110,7 @@ impl EditorApp {
             renderer,
             texture: None,
             uploaded_epoch: None,
+            geometry_dirty: true,
         }
     }
 
@@ -116,6 +120,7 @@ impl EditorApp {
     }
 
     fn apply(&mut self, commands: Vec<Command>) {
+        self.geometry_dirty |= !commands.is_empty();
         let mut changed = false;
         for command in commands {
             let solve = !matches!(
@@ -158,6 +163,7 @@ impl EditorApp {
                 self.view.status = e.to_string();
             }
             if result.apply_to(&mut self.document) {
+                self.geometry_dirty = true;
                 self.view.last_local_ms = result.local_ms;
                 self.view.last_global_ms = result.global_ms;
                 self.view.energy_history.extend(result.energy.iter().copied());
@@ -183,6 +189,7 @@ impl EditorApp {
                 self.document = document;
                 self.mesh_path = path.clone();
                 self.uploaded_epoch = None;
+                self.geometry_dirty = true;
                 frame_camera(&mut self.view.camera, &self.document);
                 self.view.energy_history.clear();
                 self.view.status = format!("opened {}", path.display());
@@ -269,7 +276,7 @@ impl EditorApp {
             }
             ui.separator();
             ui.label("Groups (hover to highlight)");
-            self.view.hovered_group = None;
+            let previously_hovered = self.view.hovered_group.take();
             let groups: Vec<_> = self.document.groups().to_vec();
             for group in &groups {
                 let row = ui.horizontal(|ui| {
@@ -302,6 +309,9 @@ impl EditorApp {
                     commands.push(Command::RenameHandle { handle: key, name: name.clone() });
                     self.view.renaming = None;
                 }
+            }
+            if self.view.hovered_group != previously_hovered {
+                self.geometry_dirty = true;
             }
             if ui.button("Clear handles").clicked() {
                 commands.push(Command::ClearHandles);
@@ -508,7 +518,9 @@ impl EditorApp {
     }
 
     fn paint(&mut self, ui: &mut egui::Ui, frame: &eframe::Frame, rect: Rect, positions: &[Vec3], viewport: Vec2) {
-        let colors = self.colors();
+        let key = (self.document.num_vertices(), self.document.triangles().len());
+        let upload = self.geometry_dirty || self.uploaded_epoch != Some(key);
+        let colors = if upload { self.colors() } else { Vec::new() };
         let (Some(render_state), Some(renderer)) = (frame.wgpu_render_state(), self.renderer.as_mut()) else {
             ui.painter().text(
                 rect.center(),
@@ -521,13 +533,13 @@ impl EditorApp {
         };
         let pixels_per_point = ui.ctx().pixels_per_point();
         let size = ((viewport.x * pixels_per_point) as u32, (viewport.y * pixels_per_point) as u32);
-        let key = (self.document.num_vertices(), self.document.triangles().len());
         if self.uploaded_epoch != Some(key) {
             renderer.set_mesh(&render_state.device, positions, self.document.triangles(), &colors);
             self.uploaded_epoch = Some(key);
-        } else {
+        } else if upload {
             renderer.update(&render_state.queue, positions, &colors);
         }
+        self.geometry_dirty = false;
         let camera = &self.view.camera;
         let params = FrameParams {
             view_proj: camera.view_projection(viewport),
