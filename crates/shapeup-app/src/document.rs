@@ -998,27 +998,8 @@ fn resolve_selection(spec: &SelectionSpec, mesh: &Mesh) -> Result<Option<Vec<u32
 /// A position group's targets (input frame), as the scene loader computes them: explicit, or
 /// rest rotated about its centre (default the centroid), then translated.
 fn position_targets(vertices: &[u32], targets: &Targets, mesh: &Mesh) -> Result<Vec<DVec3>, String> {
-    if let Some(explicit) = &targets.explicit {
-        if explicit.len() != vertices.len() {
-            return Err(format!("{} targets given for {} selected vertices", explicit.len(), vertices.len()));
-        }
-        return Ok(explicit.iter().map(|&t| DVec3::from(t)).collect());
-    }
     let rest: Vec<DVec3> = vertices.iter().map(|&v| mesh.positions[v as usize]).collect();
-    let rotated = match &targets.rotate {
-        None => rest,
-        Some(r) => {
-            let center = r
-                .center
-                .map(DVec3::from)
-                .unwrap_or_else(|| rest.iter().copied().sum::<DVec3>() / rest.len().max(1) as f64);
-            let axis = DVec3::from(r.axis).try_normalize().ok_or("rotation axis must be non-zero")?;
-            let q = DQuat::from_axis_angle(axis, r.angle_deg.to_radians());
-            rest.iter().map(|&p| center + q * (p - center)).collect()
-        }
-    };
-    let translate = DVec3::from(targets.translate);
-    Ok(rotated.into_iter().map(|p| p + translate).collect())
+    targets.resolve(&rest)
 }
 
 #[cfg(test)]

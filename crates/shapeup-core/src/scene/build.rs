@@ -7,7 +7,7 @@ use crate::geometry::{RestGeometry, WorkingFrame};
 use crate::io::read_mesh;
 use crate::mesh::{Mesh, PolygonReport};
 use crate::solver::{ConstraintGroup, GroupId, SolveError, SolveReport, SolverParams, System};
-use glam::{DQuat, DVec3};
+use glam::DVec3;
 use std::time::Instant;
 
 /// A scene with its mesh loaded and its constraints built: ready to solve.
@@ -142,30 +142,8 @@ fn position_targets(picked: &[usize], targets: &Targets, mesh: &Mesh) -> Result<
             return Err(format!("vertex {v} is listed twice"));
         }
     }
-    if let Some(explicit) = &targets.explicit {
-        if explicit.len() != picked.len() {
-            return Err(format!(
-                "{} targets given for {} selected vertices (one per vertex)",
-                explicit.len(),
-                picked.len()
-            ));
-        }
-        return Ok(explicit.iter().map(|&t| DVec3::from(t)).collect());
-    }
     let rest: Vec<DVec3> = picked.iter().map(|&v| mesh.positions[v]).collect();
-    let translate = DVec3::from(targets.translate);
-    let rotated = match &targets.rotate {
-        None => rest,
-        Some(r) => {
-            let center = r
-                .center
-                .map(DVec3::from)
-                .unwrap_or_else(|| rest.iter().copied().sum::<DVec3>() / rest.len().max(1) as f64);
-            let q = DQuat::from_axis_angle(DVec3::from(r.axis).normalize(), r.angle_deg.to_radians());
-            rest.iter().map(|&p| center + q * (p - center)).collect()
-        }
-    };
-    Ok(rotated.into_iter().map(|p| p + translate).collect())
+    targets.resolve(&rest)
 }
 
 impl LoadedScene {

@@ -166,6 +166,46 @@ pub struct Targets {
     pub explicit: Option<Vec<[f64; 3]>>,
 }
 
+impl Targets {
+    /// The targets (input frame) of vertices at `rest` (input frame): the explicit ones, or
+    /// `rest` rotated about the centre (default: their centroid) and then translated.
+    ///
+    /// # Errors
+    /// An explicit list of the wrong length, or a zero rotation axis.
+    pub fn resolve(&self, rest: &[glam::DVec3]) -> Result<Vec<glam::DVec3>, String> {
+        use glam::{DQuat, DVec3};
+        if let Some(explicit) = &self.explicit {
+            if explicit.len() != rest.len() {
+                return Err(format!(
+                    "{} targets given for {} selected vertices (one per vertex)",
+                    explicit.len(),
+                    rest.len()
+                ));
+            }
+            return Ok(explicit.iter().map(|&t| DVec3::from(t)).collect());
+        }
+        let translate = DVec3::from(self.translate);
+        let rotation = match &self.rotate {
+            None => None,
+            Some(r) => {
+                let center = r
+                    .center
+                    .map(DVec3::from)
+                    .unwrap_or_else(|| rest.iter().copied().sum::<DVec3>() / rest.len().max(1) as f64);
+                let axis = DVec3::from(r.axis).try_normalize().ok_or("rotation axis must be non-zero")?;
+                Some((center, DQuat::from_axis_angle(axis, r.angle_deg.to_radians())))
+            }
+        };
+        Ok(rest
+            .iter()
+            .map(|&p| match rotation {
+                Some((center, q)) => center + q * (p - center) + translate,
+                None => p + translate,
+            })
+            .collect())
+    }
+}
+
 /// One `[[constraints]]` entry: a group.
 #[derive(Debug, Clone, PartialEq)]
 pub struct GroupSpec {
