@@ -225,6 +225,7 @@ fn default_bench_mesh() -> PathBuf {
     }
 }
 
+#[cfg(feature = "gui")]
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
     let bad = || format!("expected WIDTHxHEIGHT (e.g. 1200x800), found \"{s}\"");
     let (w, h) = s.split_once('x').ok_or_else(bad)?;
