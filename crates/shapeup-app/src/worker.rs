@@ -103,11 +103,21 @@ impl SolverWorker {
     /// # Errors
     /// The OS refused to start a thread.
     pub fn spawn() -> std::io::Result<SolverWorker> {
+        Self::spawn_with_notify(|| {})
+    }
+
+    /// Starts the thread; `notify` is called (on the solver thread) after each result is sent,
+    /// e.g. to wake the UI so that it polls without redrawing continuously.
+    ///
+    /// # Errors
+    /// The OS refused to start a thread.
+    pub fn spawn_with_notify(notify: impl Fn() + Send + 'static) -> std::io::Result<SolverWorker> {
         let shared = Arc::new(Shared::default());
         let (sender, results) = channel();
         let thread_shared = Arc::clone(&shared);
-        let thread =
-            std::thread::Builder::new().name("shapeup-solver".into()).spawn(move || run(&thread_shared, &sender))?;
+        let thread = std::thread::Builder::new()
+            .name("shapeup-solver".into())
+            .spawn(move || run(&thread_shared, &sender, &notify))?;
         Ok(SolverWorker { shared, results, thread: Some(thread), next_seq: 0 })
     }
 
@@ -160,7 +170,7 @@ impl Drop for SolverWorker {
 }
 
 /// The thread: waits for the newest request, solves it, sends the result.
-fn run(shared: &Shared, results: &Sender<SolveResult>) {
+fn run(shared: &Shared, results: &Sender<SolveResult>, notify: &dyn Fn()) {
     let mut solver = Solver::new();
     let mut epoch = None;
     loop {
@@ -180,6 +190,7 @@ fn run(shared: &Shared, results: &Sender<SolveResult>) {
         if results.send(result).is_err() {
             return;
         }
+        notify();
     }
 }
 

@@ -106,3 +106,27 @@ fn dropping_the_worker_joins_its_thread() {
     worker.shutdown();
     assert!(!worker.is_pending());
 }
+
+#[test]
+fn notify_is_called_once_a_result_can_be_polled() {
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    let (doc, _) = document_with_handles();
+    let calls = Arc::new(AtomicUsize::new(0));
+    let counter = Arc::clone(&calls);
+    let mut worker = SolverWorker::spawn_with_notify(move || {
+        counter.fetch_add(1, Ordering::SeqCst);
+    })
+    .unwrap();
+    assert_eq!(calls.load(Ordering::SeqCst), 0, "no result, no wake-up");
+    worker.request(SolveRequest::from_document(&doc));
+    let deadline = Instant::now() + Duration::from_secs(60);
+    while calls.load(Ordering::SeqCst) == 0 {
+        assert!(Instant::now() < deadline, "notify never called");
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    // The UI is woken after the send, so its poll finds the result without waiting.
+    let result = worker.poll().expect("the result is there when notify runs");
+    assert!(result.error.is_none(), "{:?}", result.error);
+    assert_eq!(calls.load(Ordering::SeqCst), 1);
+}

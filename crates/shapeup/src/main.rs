@@ -65,6 +65,9 @@ enum Command {
         /// Screenshot size in pixels, WIDTHxHEIGHT.
         #[arg(long, default_value = "1200x800", value_parser = parse_size)]
         size: (u32, u32),
+        /// Print frames/s, solves/s and solve times to stderr once per second.
+        #[arg(long)]
+        stats: bool,
     },
     /// Runs the standard benchmark scenarios (springs, strain+bending, iso) and prints a table.
     Bench {
@@ -111,7 +114,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Deform { scene, output, iterations, report } => deform(&scene, &output, iterations, report.as_deref()),
         Command::Energy { scene, positions } => energy(&scene, &positions),
         #[cfg(feature = "gui")]
-        Command::View { input, screenshot, size } => view::run(input, screenshot, size),
+        Command::View { input, screenshot, size, stats } => view::run(input, screenshot, size, stats),
         Command::Bench { mesh, iterations, scenarios, factorization } => {
             bench(mesh, iterations, &scenarios, factorization)
         }

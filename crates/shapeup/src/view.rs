@@ -2,7 +2,7 @@
 
 use anyhow::{Result, anyhow};
 use shapeup_app::document::{Document, ShapeModel};
-use shapeup_app::gui::app::{HANDLE_COLOR, run_window, sample_path};
+use shapeup_app::gui::app::{HANDLE_COLOR, WindowOptions, run_window, sample_path};
 use shapeup_app::gui::headless::{render_rgba, write_png};
 use shapeup_app::gui::renderer::BASE_COLOR;
 use shapeup_core::scene::Scene;
@@ -33,7 +33,7 @@ fn open(input: Option<PathBuf>) -> Result<(Document, PathBuf)> {
 }
 
 /// Runs the editor, or writes one frame to `screenshot`.
-pub fn run(input: Option<PathBuf>, screenshot: Option<PathBuf>, size: (u32, u32)) -> Result<()> {
+pub fn run(input: Option<PathBuf>, screenshot: Option<PathBuf>, size: (u32, u32), stats: bool) -> Result<()> {
     if let Some(out) = &screenshot
         && !out.extension().and_then(|e| e.to_str()).is_some_and(|e| e.eq_ignore_ascii_case("png"))
     {
@@ -53,5 +53,6 @@ pub fn run(input: Option<PathBuf>, screenshot: Option<PathBuf>, size: (u32, u32)
         write_png(&out, w, h, &pixels).map_err(|e| anyhow!("{e}"))?;
         return Ok(());
     }
-    run_window(document, mesh_path).map_err(|e| anyhow!("cannot open the editor window: {e}"))
+    run_window(document, mesh_path, WindowOptions { print_stats: stats })
+        .map_err(|e| anyhow!("cannot open the editor window: {e}"))
 }

@@ -63,6 +63,24 @@ struct View {
     frames: VecDeque<Instant>,
 }
 
+/// Options of the editor window.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct WindowOptions {
+    /// Print frames/s, solves/s and solve times to stderr once per second (for measuring).
+    pub print_stats: bool,
+}
+
+/// What the last 3D frame was rendered with: when nothing of it changed, the previous frame is
+/// shown again instead of rasterizing the mesh (software renderers share the CPU with the
+/// solver).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct RenderKey {
+    size: (u32, u32),
+    view_proj: [f32; 16],
+    light: [f32; 3],
+    wireframe: bool,
+}
+
 /// The editor window.
 pub struct EditorApp {
     document: Document,
@@ -75,11 +93,24 @@ pub struct EditorApp {
     /// Positions or colours changed since the last upload (uploads cost a normal recomputation
     /// and a buffer write: skip them on frames that only move the camera).
     geometry_dirty: bool,
+    last_render: Option<RenderKey>,
+    options: WindowOptions,
+    last_stats_print: Instant,
 }
 
 impl EditorApp {
     /// The editor on a document (e.g. from `Document::open`), for eframe.
     pub fn new(cc: &eframe::CreationContext<'_>, document: Document, mesh_path: PathBuf) -> Self {
+        Self::with_options(cc, document, mesh_path, WindowOptions::default())
+    }
+
+    /// The editor with options.
+    pub fn with_options(
+        cc: &eframe::CreationContext<'_>,
+        document: Document,
+        mesh_path: PathBuf,
+        options: WindowOptions,
+    ) -> Self {
         let renderer = cc.wgpu_render_state.as_ref().map(|rs| MeshRenderer::new(&rs.device));
         let mut camera = OrbitCamera::with_angles(super::INITIAL_YAW, super::INITIAL_PITCH);
         frame_camera(&mut camera, &document);
@@ -106,11 +137,18 @@ impl EditorApp {
             },
             document,
             mesh_path,
-            worker: SolverWorker::spawn().ok(),
+            // Each result wakes the UI, so nothing needs to redraw continuously while waiting.
+            worker: {
+                let ctx = cc.egui_ctx.clone();
+                SolverWorker::spawn_with_notify(move || ctx.request_repaint()).ok()
+            },
             renderer,
             texture: None,
             uploaded_epoch: None,
             geometry_dirty: true,
+            last_render: None,
+            options,
+            last_stats_print: Instant::now(),
         }
     }
 
@@ -120,9 +158,17 @@ impl EditorApp {
     }
 
     fn apply(&mut self, commands: Vec<Command>) {
-        self.geometry_dirty |= !commands.is_empty();
         let mut changed = false;
         for command in commands {
+            // Moving targets or changing weights changes nothing drawn until the solve returns.
+            self.geometry_dirty |= !matches!(
+                command,
+                Command::MoveHandle { .. }
+                    | Command::RotateHandle { .. }
+                    | Command::SetWeight { .. }
+                    | Command::SetIterations(_)
+                    | Command::RenameHandle { .. }
+            );
             let solve = !matches!(
                 command,
                 Command::Select { .. }
@@ -547,7 +593,21 @@ impl EditorApp {
             wireframe: self.view.wireframe,
             background: [0.97, 0.97, 0.98],
         };
+        let key = RenderKey {
+            size,
+            view_proj: params.view_proj.to_cols_array(),
+            light: params.light_dir.to_array(),
+            wireframe: params.wireframe,
+        };
+        if let Some(id) = self.texture
+            && !upload
+            && self.last_render == Some(key)
+        {
+            ui.painter().image(id, rect, Rect::from_min_max(Pos2::ZERO, Pos2::new(1.0, 1.0)), Color32::WHITE);
+            return;
+        }
         let Some(view) = renderer.render(&render_state.device, &render_state.queue, size, &params) else { return };
+        self.last_render = Some(key);
         let mut egui_renderer = render_state.renderer.write();
         let id = match self.texture {
             Some(id) => {
@@ -602,9 +662,33 @@ impl eframe::App for EditorApp {
         let viewport = egui::CentralPanel::no_frame().show(ui, |ui| self.viewport(ui, frame));
         commands.extend(viewport.inner);
         self.apply(commands);
-        if self.worker.as_ref().is_some_and(|w| w.is_pending()) || self.view.gesture.is_some() {
-            ui.ctx().request_repaint();
+        if self.options.print_stats {
+            self.print_stats(ui.ctx());
         }
+    }
+}
+
+impl EditorApp {
+    /// One line per second on stderr: frames/s, solves/s, last solve times.
+    fn print_stats(&mut self, ctx: &egui::Context) {
+        use std::io::Write as _;
+        let now = Instant::now();
+        if now.duration_since(self.last_stats_print).as_secs_f64() >= 1.0 {
+            self.last_stats_print = now;
+            let count =
+                |q: &VecDeque<Instant>| q.iter().filter(|t| now.duration_since(**t).as_secs_f64() <= 1.0).count();
+            // Best effort: a closed stderr must not stop the editor.
+            let _ = writeln!(
+                std::io::stderr().lock(),
+                "stats: {} frames/s, {} solves/s, local {:.1} ms, global {:.1} ms",
+                count(&self.view.frames),
+                count(&self.view.solves),
+                self.view.last_local_ms,
+                self.view.last_global_ms,
+            );
+        }
+        // Keep printing when idle.
+        ctx.request_repaint_after(std::time::Duration::from_millis(250));
     }
 }
 
@@ -612,7 +696,7 @@ impl eframe::App for EditorApp {
 ///
 /// # Errors
 /// The windowing or graphics error, as text (no display, no adapter…).
-pub fn run_window(document: Document, mesh_path: PathBuf) -> Result<(), String> {
+pub fn run_window(document: Document, mesh_path: PathBuf, window: WindowOptions) -> Result<(), String> {
     let options = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default().with_title("shapeup").with_inner_size([1280.0, 800.0]),
         ..Default::default()
@@ -620,7 +704,9 @@ pub fn run_window(document: Document, mesh_path: PathBuf) -> Result<(), String> 
     eframe::run_native(
         "shapeup",
         options,
-        Box::new(move |cc| Ok(Box::new(EditorApp::new(cc, document, mesh_path)) as Box<dyn eframe::App>)),
+        Box::new(move |cc| {
+            Ok(Box::new(EditorApp::with_options(cc, document, mesh_path, window)) as Box<dyn eframe::App>)
+        }),
     )
     .map_err(|e| e.to_string())
 }
