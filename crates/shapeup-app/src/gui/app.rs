@@ -2,6 +2,7 @@
 //! gestures produce [`Command`]s that are applied to the [`Document`] after the UI pass; solves
 //! run on a [`SolverWorker`] thread, so the window keeps redrawing while the solver works.
 
+use super::dialogs::{DialogPurpose, FileDialogs};
 use super::renderer::{BASE_COLOR, FrameParams, MeshRenderer};
 use crate::camera::OrbitCamera;
 use crate::command::{Command, SelectMode};
@@ -96,6 +97,7 @@ pub struct EditorApp {
     last_render: Option<RenderKey>,
     options: WindowOptions,
     last_stats_print: Instant,
+    dialogs: FileDialogs,
 }
 
 impl EditorApp {
@@ -149,6 +151,7 @@ impl EditorApp {
             last_render: None,
             options,
             last_stats_print: Instant::now(),
+            dialogs: FileDialogs::default(),
         }
     }
 
@@ -244,6 +247,47 @@ impl EditorApp {
         }
     }
 
+    fn export_mesh(&mut self, path: PathBuf) {
+        self.view.status = match shapeup_core::io::write_mesh(&path, &self.document.current_mesh()) {
+            Ok(()) => format!("wrote {}", path.display()),
+            Err(e) => e.to_string(),
+        };
+        self.view.export_input = path.display().to_string();
+    }
+
+    fn save_scene(&mut self, path: PathBuf) {
+        let mesh = std::fs::canonicalize(&self.mesh_path).unwrap_or_else(|_| self.mesh_path.clone());
+        self.view.status = match self.document.save_scene(&path, mesh) {
+            Ok(()) => format!("saved {}", path.display()),
+            Err(e) => e.to_string(),
+        };
+        self.view.scene_input = path.display().to_string();
+    }
+
+    /// Opens a native dialog (on its own thread) starting next to the current mesh.
+    fn show_dialog(&mut self, ctx: &egui::Context, purpose: DialogPurpose) {
+        let directory = std::fs::canonicalize(&self.mesh_path).ok().and_then(|p| p.parent().map(PathBuf::from));
+        let proposed = match purpose {
+            DialogPurpose::Open => String::new(),
+            DialogPurpose::ExportMesh => file_name_of(&self.view.export_input),
+            DialogPurpose::SaveScene => file_name_of(&self.view.scene_input),
+        };
+        let ctx = ctx.clone();
+        self.dialogs.show(purpose, directory, &proposed, move || ctx.request_repaint());
+    }
+
+    fn poll_dialogs(&mut self) {
+        match self.dialogs.poll() {
+            Some((DialogPurpose::Open, Some(path))) => self.open(path),
+            Some((DialogPurpose::ExportMesh, Some(path))) => self.export_mesh(path),
+            Some((DialogPurpose::SaveScene, Some(path))) => self.save_scene(path),
+            Some((_, None)) => {
+                self.view.status = "no file chosen (without a file dialog service, type the path instead)".into();
+            }
+            None => {}
+        }
+    }
+
     fn colors(&self) -> Vec<[f32; 3]> {
         let selection = self.document.selection();
         let mut colors = vec![BASE_COLOR; self.document.num_vertices()];
@@ -272,8 +316,11 @@ impl EditorApp {
             ui.heading("shapeup");
             ui.collapsing("Mesh", |ui| {
                 ui.horizontal(|ui| {
+                    if ui.add_enabled(!self.dialogs.is_open(), egui::Button::new("Open…")).clicked() {
+                        self.show_dialog(ui.ctx(), DialogPurpose::Open);
+                    }
                     ui.text_edit_singleline(&mut self.view.path_input);
-                    if ui.button("Open").clicked() {
+                    if ui.button("Open").on_hover_text("open the typed path").clicked() {
                         let path = PathBuf::from(self.view.path_input.trim());
                         self.open(path);
                     }
@@ -382,24 +429,21 @@ impl EditorApp {
                 }
             });
             ui.horizontal(|ui| {
+                if ui.add_enabled(!self.dialogs.is_open(), egui::Button::new("Export…")).clicked() {
+                    self.show_dialog(ui.ctx(), DialogPurpose::ExportMesh);
+                }
                 ui.text_edit_singleline(&mut self.view.export_input);
-                if ui.button("Export mesh").clicked() {
-                    let path = PathBuf::from(self.view.export_input.trim());
-                    self.view.status = match shapeup_core::io::write_mesh(&path, &self.document.current_mesh()) {
-                        Ok(()) => format!("wrote {}", path.display()),
-                        Err(e) => e.to_string(),
-                    };
+                if ui.button("Export mesh").on_hover_text("write OBJ, PLY or STL to the typed path").clicked() {
+                    self.export_mesh(PathBuf::from(self.view.export_input.trim()));
                 }
             });
             ui.horizontal(|ui| {
+                if ui.add_enabled(!self.dialogs.is_open(), egui::Button::new("Save…")).clicked() {
+                    self.show_dialog(ui.ctx(), DialogPurpose::SaveScene);
+                }
                 ui.text_edit_singleline(&mut self.view.scene_input);
-                if ui.button("Save scene").clicked() {
-                    let path = PathBuf::from(self.view.scene_input.trim());
-                    let mesh = std::fs::canonicalize(&self.mesh_path).unwrap_or_else(|_| self.mesh_path.clone());
-                    self.view.status = match self.document.save_scene(&path, mesh) {
-                        Ok(()) => format!("saved {}", path.display()),
-                        Err(e) => e.to_string(),
-                    };
+                if ui.button("Save scene").on_hover_text("a scene file that shapeup deform replays").clicked() {
+                    self.save_scene(PathBuf::from(self.view.scene_input.trim()));
                 }
             });
             ui.separator();
@@ -630,6 +674,11 @@ impl EditorApp {
     }
 }
 
+/// The file name part of a typed path, proposed by save dialogs.
+fn file_name_of(typed: &str) -> String {
+    std::path::Path::new(typed.trim()).file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default()
+}
+
 fn frame_camera(camera: &mut OrbitCamera, document: &Document) {
     let (lo, hi) = document
         .positions()
@@ -642,6 +691,7 @@ impl eframe::App for EditorApp {
     fn ui(&mut self, ui: &mut egui::Ui, frame: &mut eframe::Frame) {
         self.view.frames.push_back(Instant::now());
         self.poll_worker();
+        self.poll_dialogs();
         let dropped: Vec<PathBuf> = ui.input(|i| i.raw.dropped_files.iter().map(|f| f.path().to_path_buf()).collect());
         if let Some(path) = dropped.into_iter().next() {
             self.open(path);

@@ -1,6 +1,7 @@
 //! The windowed editor and headless rendering (feature `gui`).
 
 pub mod app;
+pub mod dialogs;
 pub mod headless;
 pub mod renderer;
 
