@@ -61,6 +61,7 @@ struct View {
     last_local_ms: f64,
     last_global_ms: f64,
     solves: VecDeque<Instant>,
+    solves_applied: u64,
     frames: VecDeque<Instant>,
 }
 
@@ -135,6 +136,7 @@ impl EditorApp {
                 last_local_ms: 0.0,
                 last_global_ms: 0.0,
                 solves: VecDeque::new(),
+                solves_applied: 0,
                 frames: VecDeque::new(),
             },
             document,
@@ -158,6 +160,11 @@ impl EditorApp {
     /// The document being edited.
     pub fn document(&self) -> &Document {
         &self.document
+    }
+
+    /// How many solver results the document has taken since the editor started.
+    pub fn solves_applied(&self) -> u64 {
+        self.view.solves_applied
     }
 
     fn apply(&mut self, commands: Vec<Command>) {
@@ -220,6 +227,7 @@ impl EditorApp {
                     self.view.energy_history.pop_front();
                 }
                 self.view.solves.push_back(Instant::now());
+                self.view.solves_applied += 1;
             }
         }
     }
@@ -314,12 +322,13 @@ impl EditorApp {
         let mut commands = Vec::new();
         egui::ScrollArea::vertical().show(ui, |ui| {
             ui.heading("shapeup");
-            ui.collapsing("Mesh", |ui| {
+            egui::CollapsingHeader::new("Mesh").default_open(true).show(ui, |ui| {
                 ui.horizontal(|ui| {
-                    if ui.add_enabled(!self.dialogs.is_open(), egui::Button::new("Open…")).clicked() {
+                    let browse = ui.add_enabled(!self.dialogs.is_open(), egui::Button::new("Open…"));
+                    if browse.clicked() {
                         self.show_dialog(ui.ctx(), DialogPurpose::Open);
                     }
-                    ui.text_edit_singleline(&mut self.view.path_input);
+                    ui.text_edit_singleline(&mut self.view.path_input).labelled_by(browse.id);
                     if ui.button("Open").on_hover_text("open the typed path").clicked() {
                         let path = PathBuf::from(self.view.path_input.trim());
                         self.open(path);
@@ -375,7 +384,9 @@ impl EditorApp {
                 let row = ui.horizontal(|ui| {
                     ui.label(format!("{} ({})", group.name, group.kind));
                     let mut weight = group.weight;
-                    let slider = egui::Slider::new(&mut weight, WEIGHT_RANGE.0..=WEIGHT_RANGE.1).logarithmic(true);
+                    let slider = egui::Slider::new(&mut weight, WEIGHT_RANGE.0..=WEIGHT_RANGE.1)
+                        .logarithmic(true)
+                        .text("weight");
                     if ui.add(slider).changed() {
                         commands.push(Command::SetWeight { group: group.key, weight });
                     }
@@ -394,7 +405,8 @@ impl EditorApp {
                 let key = *key;
                 let done = ui
                     .horizontal(|ui| {
-                        let edit = ui.text_edit_singleline(name);
+                        let label = ui.label("new name");
+                        let edit = ui.text_edit_singleline(name).labelled_by(label.id);
                         edit.lost_focus() || ui.button("OK").clicked()
                     })
                     .inner;
@@ -429,19 +441,21 @@ impl EditorApp {
                 }
             });
             ui.horizontal(|ui| {
-                if ui.add_enabled(!self.dialogs.is_open(), egui::Button::new("Export…")).clicked() {
+                let browse = ui.add_enabled(!self.dialogs.is_open(), egui::Button::new("Export…"));
+                if browse.clicked() {
                     self.show_dialog(ui.ctx(), DialogPurpose::ExportMesh);
                 }
-                ui.text_edit_singleline(&mut self.view.export_input);
+                ui.text_edit_singleline(&mut self.view.export_input).labelled_by(browse.id);
                 if ui.button("Export mesh").on_hover_text("write OBJ, PLY or STL to the typed path").clicked() {
                     self.export_mesh(PathBuf::from(self.view.export_input.trim()));
                 }
             });
             ui.horizontal(|ui| {
-                if ui.add_enabled(!self.dialogs.is_open(), egui::Button::new("Save…")).clicked() {
+                let browse = ui.add_enabled(!self.dialogs.is_open(), egui::Button::new("Save…"));
+                if browse.clicked() {
                     self.show_dialog(ui.ctx(), DialogPurpose::SaveScene);
                 }
-                ui.text_edit_singleline(&mut self.view.scene_input);
+                ui.text_edit_singleline(&mut self.view.scene_input).labelled_by(browse.id);
                 if ui.button("Save scene").on_hover_text("a scene file that shapeup deform replays").clicked() {
                     self.save_scene(PathBuf::from(self.view.scene_input.trim()));
                 }
