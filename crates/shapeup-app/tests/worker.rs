@@ -130,3 +130,51 @@ fn notify_is_called_once_a_result_can_be_polled() {
     assert!(result.error.is_none(), "{:?}", result.error);
     assert_eq!(calls.load(Ordering::SeqCst), 1);
 }
+
+#[test]
+fn a_kept_request_keeps_converging_until_superseded() {
+    let (mut doc, head) = document_with_handles();
+    let mut worker = SolverWorker::spawn().unwrap();
+    doc.apply(Command::MoveHandle { handle: head, delta: DVec3::new(0.05, 0.1, 0.0) }).unwrap();
+    let mut request = SolveRequest::from_document(&doc).kept_solving();
+    request.iterations = 2;
+    let seq = worker.request(request);
+    // Several rounds arrive for one request, each continuing where the last stopped.
+    let mut energies = Vec::new();
+    let deadline = Instant::now() + Duration::from_secs(60);
+    while energies.len() < 5 {
+        assert!(Instant::now() < deadline, "only {} rounds", energies.len());
+        if let Some(r) = worker.poll() {
+            assert_eq!(r.seq, seq);
+            assert!(r.error.is_none());
+            energies.extend(r.energy);
+        }
+        std::thread::sleep(Duration::from_millis(1));
+    }
+    assert!(energies.windows(2).all(|w| w[1] <= w[0] * (1.0 + 1e-12)), "energy never increases: {energies:?}");
+    // A plain request supersedes it: after its result, nothing more arrives.
+    let last = worker.request(SolveRequest::from_document(&doc));
+    let _ = wait_for(&mut worker, last);
+    std::thread::sleep(Duration::from_millis(300));
+    assert!(worker.poll().is_none(), "the kept request stopped");
+}
+
+#[test]
+fn a_kept_request_stops_once_converged() {
+    let (doc, _) = document_with_handles();
+    let mut worker = SolverWorker::spawn().unwrap();
+    // At rest with handles on their rest positions the energy is already minimal (zero).
+    worker.request(SolveRequest::from_document(&doc).kept_solving());
+    let deadline = Instant::now() + Duration::from_secs(60);
+    let mut rounds = 0;
+    let mut quiet_since = Instant::now();
+    while quiet_since.elapsed() < Duration::from_millis(500) {
+        assert!(Instant::now() < deadline, "still solving after {rounds} rounds");
+        if worker.poll().is_some() {
+            rounds += 1;
+            quiet_since = Instant::now();
+        }
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    assert!((1..=2).contains(&rounds), "{rounds} rounds for a converged shape");
+}

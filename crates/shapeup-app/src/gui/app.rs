@@ -200,9 +200,13 @@ impl EditorApp {
         if !self.document.state().has_handles() {
             return;
         }
+        // While a handle is held the worker keeps iterating on the newest targets, so the shape
+        // keeps following between mouse moves.
+        let holding = matches!(self.view.gesture, Some(Gesture::DragHandle { .. } | Gesture::RotateHandle { .. }));
         match &mut self.worker {
             Some(worker) => {
-                worker.request(SolveRequest::from_document(&self.document));
+                let request = SolveRequest::from_document(&self.document);
+                worker.request(if holding { request.kept_solving() } else { request });
             }
             None => {
                 if let Err(e) = self.document.solve(self.document.iterations()) {
@@ -587,10 +591,13 @@ impl EditorApp {
                 );
                 commands.push(Command::Select { vertices, mode });
             }
-            if matches!(self.view.gesture, Some(Gesture::DragHandle { .. } | Gesture::RotateHandle { .. })) {
-                self.document.end_drag();
-            }
+            let released = matches!(self.view.gesture, Some(Gesture::DragHandle { .. } | Gesture::RotateHandle { .. }));
             self.view.gesture = None;
+            if released {
+                self.document.end_drag();
+                // One last round on the final targets, no longer kept solving.
+                self.request_solve();
+            }
         }
         if response.hovered() {
             let scroll = ui.input(|i| i.smooth_scroll_delta.y);
