@@ -49,6 +49,19 @@ impl Topology {
     }
 }
 
+/// Unique undirected edges of `tetrahedra` (`[i, j]`, `i < j`, sorted): the six edges of each,
+/// interior ones included. [O(t log t)]
+pub fn tetrahedron_edges(tetrahedra: &[[u32; 4]]) -> Vec<[u32; 2]> {
+    let mut all: Vec<[u32; 2]> = tetrahedra
+        .iter()
+        .flat_map(|&[a, b, c, d]| [(a, b), (a, c), (a, d), (b, c), (b, d), (c, d)])
+        .map(|(a, b)| [a.min(b), a.max(b)])
+        .collect();
+    all.sort_unstable();
+    all.dedup();
+    all
+}
+
 /// Unique undirected edges of `triangles` (`[i, j]`, `i < j`, sorted) and, for each, the number
 /// of triangles it belongs to. An edge of three or more triangles counts them all.
 pub fn unique_edges(triangles: &[[u32; 3]]) -> (Vec<[u32; 2]>, Vec<u32>) {
@@ -175,6 +188,37 @@ pub fn connected_pieces<'a>(n: usize, links: impl IntoIterator<Item = &'a [u32]>
     (label, count as usize)
 }
 
+/// Boundary faces of a tetrahedral mesh: the faces that belong to exactly one tetrahedron.
+///
+/// For tetrahedron (a, b, c, d) the faces are (b, c, d), (a, d, c), (a, b, d), (a, c, b) (each
+/// named by the opposite corner a, b, c, d), so that when the tetrahedron is positively oriented,
+/// (b − a)·((c − a) × (d − a)) > 0, every face's right-hand normal points out of it. A face shared
+/// by two or more tetrahedra, whatever their orientation, is interior. The faces come in the order
+/// of their tetrahedra and, within one, in the order above, so the result is deterministic.
+/// Positions play no part. [O(t log t)]
+pub fn tetrahedron_boundary(tets: &[[u32; 4]]) -> Vec<[u32; 3]> {
+    let faces: Vec<[u32; 3]> =
+        tets.iter().flat_map(|&[a, b, c, d]| [[b, c, d], [a, d, c], [a, b, d], [a, c, b]]).collect();
+    // Sort the faces by their vertex set; a set that occurs once is on the boundary.
+    let mut keyed: Vec<([u32; 3], usize)> = faces
+        .iter()
+        .enumerate()
+        .map(|(i, f)| {
+            let mut key = *f;
+            key.sort_unstable();
+            (key, i)
+        })
+        .collect();
+    keyed.sort_unstable();
+    let mut on_boundary = vec![false; faces.len()];
+    for group in keyed.chunk_by(|x, y| x.0 == y.0) {
+        if let [(_, i)] = group {
+            on_boundary[*i] = true;
+        }
+    }
+    faces.into_iter().zip(on_boundary).filter_map(|(f, keep)| keep.then_some(f)).collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -221,5 +265,41 @@ mod tests {
         let (label, count) = connected_pieces(7, links.iter().map(|l| l.as_slice()));
         assert_eq!(count, 4);
         assert_eq!(label, vec![0, 0, 1, 2, 2, 2, 3]);
+    }
+
+    /// Signed volume ×6 of tetrahedron `t` of `p`.
+    fn volume6(p: &[[f64; 3]], t: [u32; 4]) -> f64 {
+        let [a, b, c, d] = t.map(|v| p[v as usize]);
+        let e = |q: [f64; 3]| [q[0] - a[0], q[1] - a[1], q[2] - a[2]];
+        let (u, v, w) = (e(b), e(c), e(d));
+        u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) + u[2] * (v[0] * w[1] - v[1] * w[0])
+    }
+
+    #[test]
+    fn boundary_of_one_tetrahedron_points_outward() {
+        let p = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+        let tet = [0, 1, 2, 3];
+        assert!(volume6(&p, tet) > 0.0);
+        let faces = tetrahedron_boundary(&[tet]);
+        assert_eq!(faces, vec![[1, 2, 3], [0, 3, 2], [0, 1, 3], [0, 2, 1]]);
+        for f in faces {
+            // The face with the opposite corner appended is negatively oriented: that corner is
+            // behind the face, so the normal points away from the tetrahedron.
+            let opposite = (0..4).find(|v| !f.contains(v)).unwrap();
+            assert!(volume6(&p, [f[0], f[1], f[2], opposite]) < 0.0, "{f:?}");
+        }
+    }
+
+    #[test]
+    fn shared_face_is_interior_and_surface_is_closed() {
+        // Two tetrahedra on either side of the face (0, 1, 2).
+        let tets = [[0, 1, 2, 3], [0, 2, 1, 4]];
+        let faces = tetrahedron_boundary(&tets);
+        assert_eq!(faces.len(), 6);
+        assert!(faces.iter().all(|f| !(f.contains(&0) && f.contains(&1) && f.contains(&2))));
+        let (_, counts) = unique_edges(&faces);
+        assert!(counts.iter().all(|&c| c == 2), "every edge in two faces: {counts:?}");
+        assert_eq!(tetrahedron_boundary(&tets), faces, "deterministic");
+        assert!(tetrahedron_boundary(&[]).is_empty());
     }
 }

@@ -6,6 +6,8 @@
 //! | Stanford `.ply` | ascii, binary little and big endian, any numeric types | binary little endian (default), big endian, ascii |
 //! | `.stl` | ascii and binary | binary |
 //! | `.off` | `OFF` (and `COFF`, `NOFF`, … whose extra values are ignored) | `OFF` |
+//! | Gmsh `.msh` | ASCII 4.1 and 2.2: 4-node tetrahedra, 3-node triangles (other elements skipped) | ASCII 4.1 |
+//! | TetGen `.node` + `.ele` | either path names the pair; 0- or 1-based, attributes and markers ignored | both files, 1-based |
 //!
 //! **Vertex order is preserved**: every reader returns the file's vertices, all of them (also
 //! those no face uses), in file order, so that vertex indices in scene files and selections stay
@@ -14,16 +16,19 @@
 //! reads back with the same connectivity (but without unreferenced vertices, see [`stl`]).
 //!
 //! Polygons are fan-triangulated by [`Mesh::from_polygons`]; what that changed is returned in
-//! [`LoadedMesh::report`]. Tetrahedra are not stored by any of these formats and are not written.
+//! [`LoadedMesh::report`]. Only `.msh` and `.node`/`.ele` store tetrahedra; a mesh read from them
+//! has the boundary of its tetrahedra as triangles (see [`msh`], [`tetgen`]).
 //!
 //! Every reader is hand-written (the crates available reorder or drop vertices, or do not report
 //! where a file is broken); no input makes them panic, and counts from a header never size an
 //! allocation beyond [`MAX_PREALLOCATION`]. Every writer goes through [`write_atomic`].
 
+pub mod msh;
 pub mod obj;
 pub mod off;
 pub mod ply;
 pub mod stl;
+pub mod tetgen;
 
 use std::fs::{self, File, OpenOptions};
 use std::io::{self, BufRead, BufReader, BufWriter, Write};
@@ -112,7 +117,7 @@ pub enum IoError {
     },
 }
 
-const SUPPORTED: &str = ".obj, .ply, .stl, .off";
+const SUPPORTED: &str = ".obj, .ply, .stl, .off, .msh, .node/.ele";
 
 fn describe_extension(extension: &str) -> String {
     if extension.is_empty() { "(no extension)".to_owned() } else { format!("'.{extension}'") }
@@ -138,6 +143,10 @@ pub enum MeshFormat {
     Stl,
     /// Object File Format.
     Off,
+    /// Gmsh MSH, ASCII 4.1 or 2.2.
+    Msh,
+    /// TetGen `.node` + `.ele` pair (either extension).
+    TetGen,
 }
 
 impl MeshFormat {
@@ -152,6 +161,8 @@ impl MeshFormat {
             "ply" => Ok(Self::Ply),
             "stl" => Ok(Self::Stl),
             "off" => Ok(Self::Off),
+            "msh" => Ok(Self::Msh),
+            "node" | "ele" => Ok(Self::TetGen),
             _ => Err(IoError::UnsupportedFormat { path: path.to_path_buf(), extension }),
         }
     }
@@ -168,11 +179,15 @@ pub enum WriteFormat {
     StlBinary,
     /// OFF, coordinates with enough digits to read back exactly.
     Off,
+    /// Gmsh MSH 4.1 ASCII: nodes, tetrahedra and triangles, exactly round-tripping coordinates.
+    Msh,
+    /// TetGen `X.node` + `X.ele` (for a path `X.*`), 1-based; needs tetrahedra.
+    TetGen,
 }
 
 impl WriteFormat {
     /// The default encoding for a path's extension: `.obj`, `.ply` (binary little endian),
-    /// `.stl` (binary), `.off`.
+    /// `.stl` (binary), `.off`, `.msh` (4.1 ASCII), `.node` or `.ele` (the TetGen pair).
     ///
     /// # Errors
     /// [`IoError::UnsupportedFormat`] for any other extension.
@@ -182,25 +197,32 @@ impl WriteFormat {
             MeshFormat::Ply => Self::Ply(PlyEncoding::BinaryLittleEndian),
             MeshFormat::Stl => Self::StlBinary,
             MeshFormat::Off => Self::Off,
+            MeshFormat::Msh => Self::Msh,
+            MeshFormat::TetGen => Self::TetGen,
         })
     }
 }
 
-/// Reads a mesh, choosing the format from the extension (`.obj`, `.ply`, `.stl`, `.off`,
-/// case-insensitive). Vertices keep their file order (see the [module docs](self)).
+/// Reads a mesh, choosing the format from the extension (`.obj`, `.ply`, `.stl`, `.off`, `.msh`,
+/// `.node`, `.ele`, case-insensitive). Vertices keep their file order (see the [module docs](self)).
 ///
 /// # Errors
 /// [`IoError`] naming `path`: unsupported extension, file not found, malformed content (with the
 /// line or byte offset), or an invalid mesh.
 pub fn read_mesh(path: &Path) -> Result<LoadedMesh, IoError> {
     let format = MeshFormat::from_path(path)?;
-    let file = File::open(path).map_err(|source| IoError::Open { path: path.to_path_buf(), source })?;
-    let reader = BufReader::new(file);
+    let open = || {
+        let file = File::open(path).map_err(|source| IoError::Open { path: path.to_path_buf(), source })?;
+        Ok::<_, IoError>(BufReader::new(file))
+    };
     match format {
-        MeshFormat::Obj => obj::read_obj(reader, path),
-        MeshFormat::Ply => ply::read_ply(reader, path),
-        MeshFormat::Stl => stl::read_stl(reader, path),
-        MeshFormat::Off => off::read_off(reader, path),
+        MeshFormat::Obj => obj::read_obj(open()?, path),
+        MeshFormat::Ply => ply::read_ply(open()?, path),
+        MeshFormat::Stl => stl::read_stl(open()?, path),
+        MeshFormat::Off => off::read_off(open()?, path),
+        MeshFormat::Msh => msh::read_msh(open()?, path),
+        // Two files: the TetGen reader opens both.
+        MeshFormat::TetGen => tetgen::read_tetgen_files(path),
     }
 }
 
@@ -214,19 +236,23 @@ pub fn write_mesh(path: &Path, mesh: &Mesh) -> Result<(), IoError> {
     write_mesh_with(path, mesh, WriteFormat::from_path(path)?)
 }
 
-/// Writes a mesh in the given encoding, whatever the extension, atomically.
+/// Writes a mesh in the given encoding, whatever the extension, atomically ([`WriteFormat::TetGen`]
+/// writes the pair `X.node`, `X.ele` next to `path`, each atomically).
 ///
 /// # Errors
-/// [`IoError::Mesh`] if the mesh does not validate (nothing is written), or [`IoError::Write`].
+/// [`IoError::Mesh`] if the mesh does not validate (nothing is written), [`IoError::Invalid`] for
+/// TetGen without tetrahedra (nothing is written), or [`IoError::Write`].
 pub fn write_mesh_with(path: &Path, mesh: &Mesh, format: WriteFormat) -> Result<(), IoError> {
     // A `Mesh` has public fields; refuse to write indices that would not read back.
     mesh.validate().map_err(|source| IoError::Mesh { path: path.to_path_buf(), source })?;
-    write_atomic(path, |w| match format {
-        WriteFormat::Obj => obj::write_obj(w, mesh),
-        WriteFormat::Ply(encoding) => ply::write_ply(w, mesh, encoding),
-        WriteFormat::StlBinary => stl::write_stl_binary(w, mesh),
-        WriteFormat::Off => off::write_off(w, mesh),
-    })
+    match format {
+        WriteFormat::Obj => write_atomic(path, |w| obj::write_obj(w, mesh)),
+        WriteFormat::Ply(encoding) => write_atomic(path, |w| ply::write_ply(w, mesh, encoding)),
+        WriteFormat::StlBinary => write_atomic(path, |w| stl::write_stl_binary(w, mesh)),
+        WriteFormat::Off => write_atomic(path, |w| off::write_off(w, mesh)),
+        WriteFormat::Msh => write_atomic(path, |w| msh::write_msh(w, mesh)),
+        WriteFormat::TetGen => tetgen::write_tetgen_files(path, mesh),
+    }
 }
 
 /// Distinguishes temp files of concurrent writes from one process.

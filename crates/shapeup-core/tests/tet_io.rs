@@ -1,0 +1,491 @@
+//! Tetrahedral mesh I/O: Gmsh `.msh` and TetGen `.node`/`.ele` round trips, hand-written files of
+//! both MSH versions, the derived boundary surface, and malformed inputs (an error naming the file
+//! and line, never a panic) and failed writes (nothing left behind).
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use std::fs;
+use std::path::{Path, PathBuf};
+
+use glam::DVec3;
+use shapeup_core::Mesh;
+use shapeup_core::io::{IoError, LoadedMesh, MeshFormat, WriteFormat, msh, read_mesh, tetgen, write_mesh};
+use shapeup_core::topology::{tetrahedron_boundary, unique_edges};
+
+// ---------------------------------------------------------------------------------------------
+// Helpers
+
+/// (b − a)·((c − a) × (d − a)) = 6 × the signed volume.
+fn volume6(p: &[DVec3], t: [u32; 4]) -> f64 {
+    let [a, b, c, d] = t.map(|v| p[v as usize]);
+    (b - a).dot((c - a).cross(d - a))
+}
+
+/// An `nx × ny × nz` grid of boxes, each split into six positively oriented tetrahedra around
+/// its (0,0,0)–(1,1,1) diagonal (conforming across boxes); coordinates with long decimal
+/// expansions so that round trips must be exact to pass. Triangles: the boundary.
+fn grid(nx: u32, ny: u32, nz: u32) -> Mesh {
+    let mut positions = Vec::new();
+    for k in 0..=nz {
+        for j in 0..=ny {
+            for i in 0..=nx {
+                let (i, j, k) = (f64::from(i), f64::from(j), f64::from(k));
+                positions.push(DVec3::new(0.1 * i + 1.0 / 3.0, j / 7.0 - 2.5e-3, 0.3 * k - 1e-5));
+            }
+        }
+    }
+    let index = |i: u32, j: u32, k: u32| i + (nx + 1) * (j + (ny + 1) * k);
+    let mut tets = Vec::new();
+    for k in 0..nz {
+        for j in 0..ny {
+            for i in 0..nx {
+                let corner = |bits: u32| index(i + (bits & 1), j + ((bits >> 1) & 1), k + ((bits >> 2) & 1));
+                for [p, q] in [[0, 1], [0, 2], [1, 0], [1, 2], [2, 0], [2, 1]] {
+                    let mut tet = [corner(0), corner(1 << p), corner((1 << p) | (1 << q)), corner(7)];
+                    if volume6(&positions, tet) < 0.0 {
+                        tet.swap(2, 3);
+                    }
+                    tets.push(tet);
+                }
+            }
+        }
+    }
+    let triangles = tetrahedron_boundary(&tets);
+    Mesh::with_tetrahedra(positions, triangles, tets).unwrap()
+}
+
+fn assert_exact(a: &Mesh, b: &Mesh) {
+    assert_eq!(a.positions.len(), b.positions.len(), "vertex count");
+    for (i, (p, q)) in a.positions.iter().zip(&b.positions).enumerate() {
+        assert_eq!(p.to_array().map(f64::to_bits), q.to_array().map(f64::to_bits), "vertex {i}: {p} vs {q}");
+    }
+    assert_eq!(a.tetrahedra, b.tetrahedra);
+    assert_eq!(a.triangles, b.triangles);
+}
+
+/// Every boundary triangle faces away from the centroid (the meshes here are convex) and every
+/// edge of the surface is in exactly two triangles.
+fn assert_closed_and_outward(mesh: &Mesh) {
+    let p = &mesh.positions;
+    let centroid = p.iter().sum::<DVec3>() / p.len() as f64;
+    for t in &mesh.triangles {
+        let [a, b, c] = t.map(|v| p[v as usize]);
+        let normal = (b - a).cross(c - a);
+        assert!(normal.dot((a + b + c) / 3.0 - centroid) > 0.0, "triangle {t:?} faces inward");
+    }
+    let (_, counts) = unique_edges(&mesh.triangles);
+    assert!(counts.iter().all(|&c| c == 2), "surface is not closed: {counts:?}");
+}
+
+fn dir_entries(dir: &Path) -> Vec<PathBuf> {
+    let mut entries: Vec<PathBuf> = fs::read_dir(dir).unwrap().map(|e| e.unwrap().path()).collect();
+    entries.sort();
+    entries
+}
+
+/// Writes `files` (name, contents) into a fresh temp dir and reads `read` with `read_mesh`.
+fn read_files(files: &[(&str, &str)], read: &str) -> Result<LoadedMesh, IoError> {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, text) in files {
+        fs::write(dir.path().join(name), text).unwrap();
+    }
+    read_mesh(&dir.path().join(read))
+}
+
+/// Asserts that reading `read` among `files` fails with a one-line message naming `names_file`
+/// and containing every one of `needles`.
+fn malformed(files: &[(&str, &str)], read: &str, names_file: &str, needles: &[&str]) -> IoError {
+    let err = read_files(files, read).expect_err("malformed input must be an error");
+    let message = err.to_string();
+    assert!(message.contains(names_file), "message does not name {names_file}: {message}");
+    assert!(!message.contains('\n'), "message is not one line: {message}");
+    for needle in needles {
+        assert!(message.contains(needle), "message lacks {needle:?}: {message}");
+    }
+    err
+}
+
+/// "line N" for the first line of `text` that contains `needle`.
+fn line_of(text: &str, needle: &str) -> String {
+    let at = text.find(needle).unwrap();
+    format!("line {}", text[..at].matches('\n').count() + 1)
+}
+
+/// Five points: the unit corner tetrahedron and (1, 1, 1).
+const FIVE: [[f64; 3]; 5] = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 1.0, 1.0]];
+
+/// What the hand-written files below hold: (0, 1, 2, 3) and (1, 3, 2, 4) written negatively,
+/// read back with the last two vertices swapped.
+fn two_tets_expected() -> Vec<[u32; 4]> {
+    vec![[0, 1, 2, 3], [1, 3, 4, 2]]
+}
+
+fn assert_two_tets(loaded: &LoadedMesh) {
+    let mesh = &loaded.mesh;
+    assert_eq!(mesh.positions, FIVE.map(DVec3::from_array).to_vec(), "vertices in file order");
+    assert_eq!(mesh.tetrahedra, two_tets_expected());
+    assert!(mesh.tetrahedra.iter().all(|&t| volume6(&mesh.positions, t) > 0.0));
+    assert_eq!(mesh.triangles, tetrahedron_boundary(&mesh.tetrahedra), "file triangles are ignored");
+    assert_eq!(mesh.triangles.len(), 6);
+    assert_closed_and_outward(mesh);
+}
+
+const MSH22: &str = "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n\
+$PhysicalNames\n1\n3 1 \"volume\"\n$EndPhysicalNames\n\
+$Nodes\n5\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n5 1 1 1\n$EndNodes\n\
+$Elements\n6\n\
+1 15 2 0 1 1\n\
+2 1 2 0 1 1 2\n\
+3 2 2 0 1 1 2 3\n\
+4 4 2 1 1 1 2 3 4\n\
+5 4 2 1 1 2 4 3 5\n\
+6 11 2 1 1 1 2 3 4 1 2 3 4 1 2\n\
+$EndElements\n";
+
+/// Sparse tags in order 100, 7, 42, 3, 55 over two blocks (one parametric), $Entities and
+/// $NodeData to skip, and points, lines, a triangle and a second-order tetrahedron to skip.
+const MSH41: &str = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n\
+$Entities\n1 0 0 1\n1 0 0 0 0\n1 0 0 0 1 1 1 0 1 -1\n$EndEntities\n\
+$Nodes\n2 5 3 100\n0 1 0 3\n100\n7\n42\n0 0 0\n1 0 0\n0 1 0\n\
+2 1 1 2\n3\n55\n0 0 1 0.25 0.5\n1 1 1 0.75 0.5\n$EndNodes\n\
+$Elements\n5 6 1 60\n\
+0 1 15 1\n1 100\n\
+1 1 1 1\n2 100 7\n\
+2 1 2 1\n3 100 7 42\n\
+3 1 4 2\n10 100 7 42 3\n20 7 3 42 55\n\
+3 1 11 1\n60 100 7 42 3 100 7 42 3 100 7\n\
+$EndElements\n\
+$NodeData\n1\n\"t\"\n1\n0.0\n3\n0\n1\n1\n100 3.5\n$EndNodeData\n";
+
+const NODE_1: &str = "# five points, 1 attribute, boundary markers\n5 3 1 1\n\
+1 0 0 0 0.5 1\n2 1 0 0 0.5 1\n\n3 0 1 0 0.5 1 # a comment\n4 0 0 1 0.5 0\n5 1 1 1 0.5 1\n";
+const ELE_1: &str = "2 4 1\n1 1 2 3 4 7.0\n2 2 4 3 5 7.0\n# end\n";
+const NODE_0: &str = "5 3\n0 0 0 0\n1 1 0 0\n2 0 1 0\n3 0 0 1\n4 1 1 1\n";
+const ELE_0: &str = "2\n0 0 1 2 3\n1 1 3 2 4\n";
+
+// ---------------------------------------------------------------------------------------------
+// Round trips
+
+#[test]
+fn msh_round_trip_is_exact() {
+    for mesh in [grid(1, 1, 1), grid(3, 3, 3)] {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("m.msh");
+        write_mesh(&path, &mesh).unwrap();
+        assert_eq!(dir_entries(dir.path()), vec![path.clone()], "no temp file left behind");
+        let text = fs::read_to_string(&path).unwrap();
+        assert!(text.starts_with("$MeshFormat\n4.1 0 8\n$EndMeshFormat\n"), "{}", &text[..40]);
+        assert_exact(&read_mesh(&path).unwrap().mesh, &mesh);
+    }
+}
+
+#[test]
+fn tetgen_round_trip_is_exact_from_either_file() {
+    for (mesh, written) in [(grid(1, 1, 1), "m.ele"), (grid(3, 3, 3), "m.node")] {
+        let dir = tempfile::tempdir().unwrap();
+        write_mesh(&dir.path().join(written), &mesh).unwrap();
+        let (node, ele) = (dir.path().join("m.node"), dir.path().join("m.ele"));
+        assert_eq!(dir_entries(dir.path()), vec![ele.clone(), node.clone()], "the pair and nothing else");
+        assert_exact(&read_mesh(&node).unwrap().mesh, &mesh);
+        assert_exact(&read_mesh(&ele).unwrap().mesh, &mesh);
+    }
+}
+
+#[test]
+fn triangle_mesh_round_trips_through_msh() {
+    let cube = grid(1, 1, 1);
+    let surface = Mesh::new(cube.positions.clone(), cube.triangles.clone()).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("s.msh");
+    write_mesh(&path, &surface).unwrap();
+    let loaded = read_mesh(&path).unwrap();
+    assert_exact(&loaded.mesh, &surface);
+    assert!(loaded.mesh.tetrahedra.is_empty());
+}
+
+#[test]
+fn every_truncation_is_an_error_or_a_mesh_never_a_panic() {
+    let mesh = grid(1, 1, 1);
+    let mut msh_bytes = Vec::new();
+    msh::write_msh(&mut msh_bytes, &mesh).unwrap();
+    for len in 0..msh_bytes.len() {
+        if let Err(err) = msh::read_msh(&msh_bytes[..len], Path::new("t.msh")) {
+            assert!(err.to_string().contains("t.msh"), "{err}");
+        }
+    }
+    let (mut node, mut ele) = (Vec::new(), Vec::new());
+    tetgen::write_node(&mut node, &mesh).unwrap();
+    tetgen::write_ele(&mut ele, &mesh).unwrap();
+    let read = |n: &[u8], e: &[u8]| tetgen::read_tetgen(n, Path::new("t.node"), e, Path::new("t.ele"));
+    assert_exact(&read(&node, &ele).unwrap().mesh, &mesh);
+    for len in 0..node.len() {
+        if let Err(err) = read(&node[..len], &ele) {
+            assert!(err.to_string().contains("t.node"), "{err}");
+        }
+    }
+    for len in 0..ele.len() {
+        if let Err(err) = read(&node, &ele[..len]) {
+            assert!(err.to_string().contains("t.ele"), "{err}");
+        }
+    }
+}
+
+/// Every line of every hand-written file replaced by hostile text reads as `Ok` or an error
+/// naming the file, never a panic.
+#[test]
+fn every_corrupted_line_is_an_error_or_a_mesh_never_a_panic() {
+    let hostile = ["", "x", "-1", "0", "18446744073709551616", "1 2 3 4 5 6 7 8 9 10 11 12", "$Nodes", "$EndElements"];
+    for (name, text) in [("a.msh", MSH22), ("b.msh", MSH41), ("c.node", NODE_1), ("c.ele", ELE_1)] {
+        let lines: Vec<&str> = text.lines().collect();
+        for i in 0..lines.len() {
+            for bad in hostile {
+                let mut edited = lines.clone();
+                edited[i] = bad;
+                let edited = edited.join("\n");
+                let path = Path::new(name);
+                let result = match name {
+                    "c.node" => tetgen::read_tetgen(edited.as_bytes(), path, ELE_1.as_bytes(), Path::new("c.ele")),
+                    "c.ele" => tetgen::read_tetgen(NODE_1.as_bytes(), Path::new("c.node"), edited.as_bytes(), path),
+                    _ => msh::read_msh(edited.as_bytes(), path),
+                };
+                if let Err(err) = result {
+                    assert!(err.to_string().contains(name), "{err}");
+                }
+            }
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Hand-written files and the boundary
+
+#[test]
+fn cube_boundary_is_twelve_outward_triangles_of_a_closed_surface() {
+    let cube = grid(1, 1, 1);
+    assert_eq!(cube.tetrahedra.len(), 6);
+    assert_eq!(cube.triangles.len(), 12);
+    assert_closed_and_outward(&cube);
+    let big = grid(3, 3, 3);
+    assert_eq!((big.positions.len(), big.tetrahedra.len(), big.triangles.len()), (64, 162, 108));
+    assert_closed_and_outward(&big);
+}
+
+#[test]
+fn hand_written_msh_2_2() {
+    assert_two_tets(&read_files(&[("a.msh", MSH22)], "a.msh").unwrap());
+}
+
+#[test]
+fn hand_written_msh_4_1_with_sparse_tags_and_other_elements() {
+    assert_two_tets(&read_files(&[("b.msh", MSH41)], "b.msh").unwrap());
+}
+
+#[test]
+fn msh_with_triangles_only_is_a_surface_mesh() {
+    let text = MSH22
+        .replace("$Elements\n6\n", "$Elements\n3\n")
+        .replace(&MSH22[MSH22.find("4 4 2").unwrap()..MSH22.find("$EndElements").unwrap()], "");
+    let loaded = read_files(&[("s.msh", &text)], "s.msh").unwrap();
+    assert_eq!(loaded.mesh.triangles, vec![[0, 1, 2]]);
+    assert!(loaded.mesh.tetrahedra.is_empty());
+}
+
+#[test]
+fn tetgen_one_based_with_attributes_markers_and_comments() {
+    assert_two_tets(&read_files(&[("c.node", NODE_1), ("c.ele", ELE_1)], "c.node").unwrap());
+}
+
+#[test]
+fn tetgen_zero_based() {
+    assert_two_tets(&read_files(&[("d.node", NODE_0), ("d.ele", ELE_0)], "d.ele").unwrap());
+}
+
+#[test]
+fn extensions_select_the_formats() {
+    assert_eq!(MeshFormat::from_path(Path::new("a.MSH")).unwrap(), MeshFormat::Msh);
+    assert_eq!(MeshFormat::from_path(Path::new("a.node")).unwrap(), MeshFormat::TetGen);
+    assert_eq!(MeshFormat::from_path(Path::new("a.Ele")).unwrap(), MeshFormat::TetGen);
+    assert_eq!(WriteFormat::from_path(Path::new("a.msh")).unwrap(), WriteFormat::Msh);
+    assert_eq!(WriteFormat::from_path(Path::new("a.ele")).unwrap(), WriteFormat::TetGen);
+    let err = MeshFormat::from_path(Path::new("a.vtk")).unwrap_err().to_string();
+    assert!(err.contains(".msh, .node/.ele"), "{err}");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Malformed files
+
+#[test]
+fn msh_truncated_nodes() {
+    let cut = &MSH41[..MSH41.find("1 0 0\n").unwrap()];
+    let expected = format!("line {}", cut.matches('\n').count() + 1);
+    malformed(&[("t.msh", cut)], "t.msh", "t.msh", &[&expected, "file ends early", "coordinates 2 of 3"]);
+    let cut = &MSH22[..MSH22.find("4 0 0 1").unwrap()];
+    malformed(&[("t.msh", cut)], "t.msh", "t.msh", &[&line_of(MSH22, "4 0 0 1"), "node 4 of 5"]);
+}
+
+#[test]
+fn msh_truncated_elements() {
+    let cut = &MSH41[..MSH41.find("20 7 3").unwrap()];
+    malformed(&[("e.msh", cut)], "e.msh", "e.msh", &[&line_of(MSH41, "20 7 3"), "file ends early", "element 2 of 2"]);
+    let cut = &MSH22[..MSH22.find("$EndElements").unwrap()];
+    malformed(&[("e.msh", cut)], "e.msh", "e.msh", &[&line_of(MSH22, "$EndElements"), "'$EndElements'"]);
+}
+
+#[test]
+fn msh_missing_end_nodes() {
+    let text = MSH22.replace("$EndNodes\n", "");
+    malformed(
+        &[("n.msh", &text)],
+        "n.msh",
+        "n.msh",
+        &[&line_of(&text, "$Elements"), "expected '$EndNodes'", "found '$Elements'"],
+    );
+}
+
+#[test]
+fn node_tag_out_of_range() {
+    let text = MSH41.replace("20 7 3 42 55", "20 7 3 42 56");
+    malformed(&[("r.msh", &text)], "r.msh", "r.msh", &[&line_of(&text, "20 7 3"), "node tag '56' is not defined"]);
+    let text = MSH22.replace("5 4 2 1 1 2 4 3 5", "5 4 2 1 1 2 4 3 0");
+    malformed(&[("r.msh", &text)], "r.msh", "r.msh", &[&line_of(&text, "5 4 2 1"), "element 5", "node tag '0'"]);
+    let ele = ELE_1.replace("2 2 4 3 5", "2 2 4 3 6");
+    malformed(
+        &[("r.node", NODE_1), ("r.ele", &ele)],
+        "r.node",
+        "r.ele",
+        &[&line_of(&ele, "2 2 4"), "'6' is out of range", "1..=5"],
+    );
+    let ele = ELE_1.replace("1 1 2 3 4", "1 0 2 3 4");
+    malformed(&[("r.node", NODE_1), ("r.ele", &ele)], "r.ele", "r.ele", &["line 2", "'0' is out of range"]);
+}
+
+#[test]
+fn non_numeric_coordinate() {
+    let text = MSH22.replace("3 0 1 0", "3 0 abc 0");
+    malformed(
+        &[("c.msh", &text)],
+        "c.msh",
+        "c.msh",
+        &[&line_of(&text, "abc"), "node 3: y coordinate 'abc' is not a number"],
+    );
+    let text = MSH41.replace("1 1 1 0.75", "1 1 1e9e9 0.75");
+    malformed(&[("c.msh", &text)], "c.msh", "c.msh", &[&line_of(&text, "1e9e9"), "node 55: z coordinate"]);
+    let node = NODE_0.replace("2 0 1 0", "2 0 1 z");
+    malformed(&[("c.node", &node), ("c.ele", ELE_0)], "c.ele", "c.node", &["line 4", "point 2: z coordinate 'z'"]);
+}
+
+#[test]
+fn flat_or_repeating_tetrahedron_names_the_element() {
+    // Node 5 moved into the plane x + y + z = 1 of nodes 2, 3, 4.
+    let text = MSH22.replace("5 1 1 1", "5 0.5 0.5 0");
+    malformed(&[("z.msh", &text)], "z.msh", "z.msh", &[&line_of(&text, "5 4 2 1"), "element 5 is flat"]);
+    let node = NODE_0.replace("4 1 1 1", "4 0.25 0.25 0.5");
+    malformed(&[("z.node", &node), ("z.ele", ELE_0)], "z.node", "z.ele", &["line 3", "tetrahedron 1 is flat"]);
+    let ele = ELE_0.replace("0 0 1 2 3", "0 0 1 2 1");
+    malformed(&[("z.node", NODE_0), ("z.ele", &ele)], "z.node", "z.ele", &["line 2", "tetrahedron 0 repeats a vertex"]);
+}
+
+#[test]
+fn binary_msh_is_refused() {
+    let mut bytes = b"$MeshFormat\n4.1 1 8\n".to_vec();
+    bytes.extend_from_slice(&[1, 0, 0, 0, 0xff, 0xfe, b'\n']);
+    bytes.extend_from_slice(b"$EndMeshFormat\n");
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("bin.msh");
+    fs::write(&path, bytes).unwrap();
+    let err = read_mesh(&path).unwrap_err().to_string();
+    assert!(err.contains("bin.msh: line 2") && err.contains("binary .msh is not supported; save as ASCII"), "{err}");
+}
+
+#[test]
+fn missing_partner_file_is_named() {
+    malformed(&[("p.node", NODE_1)], "p.node", "p.ele", &["cannot open"]);
+    malformed(&[("q.ele", ELE_1)], "q.ele", "q.node", &["cannot open"]);
+}
+
+#[test]
+fn empty_files_and_empty_meshes() {
+    malformed(&[("e.msh", "")], "e.msh", "e.msh", &["line 1", "empty file"]);
+    malformed(&[("e.node", ""), ("e.ele", ELE_0)], "e.ele", "e.node", &["line 1", "empty file"]);
+    malformed(&[("e.node", NODE_0), ("e.ele", "# nothing\n")], "e.ele", "e.ele", &["line 1", "empty file"]);
+    let err = malformed(&[("e.node", "0 3 0 0\n"), ("e.ele", ELE_0)], "e.ele", "e.node", &["0 points"]);
+    assert!(matches!(err, IoError::Invalid { .. }));
+    let err = malformed(&[("e.node", NODE_0), ("e.ele", "0 4 0\n")], "e.ele", "e.ele", &["0 tetrahedra"]);
+    assert!(matches!(err, IoError::Invalid { .. }));
+    let no_nodes = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n";
+    let err = malformed(&[("e.msh", no_nodes)], "e.msh", "e.msh", &["no nodes"]);
+    assert!(matches!(err, IoError::Invalid { .. }));
+    let lines_only = MSH41.replace("3 1 4 2\n10 100 7 42 3\n20 7 3 42 55\n", "").replace("2 1 2 1\n3 100 7 42\n", "");
+    let lines_only = lines_only.replace("$Elements\n5 6 1 60", "$Elements\n3 3 1 60");
+    let err = malformed(&[("l.msh", &lines_only)], "l.msh", "l.msh", &["no 4-node tetrahedra", "type 1, 11, 15"]);
+    assert!(matches!(err, IoError::Invalid { .. }));
+}
+
+#[test]
+fn huge_counts_do_not_allocate() {
+    let huge = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 18446744073709551615 1 2\n\
+                3 1 0 18446744073709551615\n1\n";
+    malformed(&[("h.msh", huge)], "h.msh", "h.msh", &["line 8", "file ends early"]);
+    let huge = "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n99999999999999999\n1 0 0 0\n";
+    malformed(&[("h.msh", huge)], "h.msh", "h.msh", &["line 7", "node 2 of 99999999999999999"]);
+    malformed(&[("h.node", "4000000000 3 0 0\n1 0 0 0\n"), ("h.ele", ELE_1)], "h.ele", "h.node", &["line 3"]);
+    malformed(&[("h.node", NODE_1), ("h.ele", "4000000000 4 0\n")], "h.ele", "h.ele", &["line 2"]);
+}
+
+#[test]
+fn other_msh_errors() {
+    let v4 = "$MeshFormat\n4 0 8\n$EndMeshFormat\n";
+    malformed(&[("v.msh", v4)], "v.msh", "v.msh", &["line 2", "MSH version 4 is not supported"]);
+    let text = MSH22.replace("3 0 1 0\n", "1 0 1 0\n");
+    malformed(&[("d.msh", &text)], "d.msh", "d.msh", &[&line_of(&text, "1 0 1 0"), "node tag 1 is defined twice"]);
+    let text = MSH41.replace("$Nodes\n2 5 3 100", "$Nodes\n2 6 3 100");
+    malformed(&[("d.msh", &text)], "d.msh", "d.msh", &[&line_of(&text, "$EndNodes"), "says 6 nodes", "hold 5"]);
+    let text = MSH41.replace("$EndNodeData\n", "");
+    malformed(&[("d.msh", &text)], "d.msh", "d.msh", &["'$EndNodeData'", &line_of(&text, "$NodeData")]);
+    let text = MSH22.replace("4 4 2 1 1 1 2 3 4", "4 4 2 1 1 1 2 3");
+    malformed(&[("d.msh", &text)], "d.msh", "d.msh", &[&line_of(&text, "4 4 2 1"), "lists 3 nodes, expected 4"]);
+    let text = MSH22.replace("4 4 2 1 1 1 2 3 4", "4 4 18446744073709551615 1 2 3 4");
+    malformed(&[("d.msh", &text)], "d.msh", "d.msh", &[&line_of(&text, "4 4 1844"), "lists 0 nodes"]);
+}
+
+#[test]
+fn nan_coordinate_is_a_mesh_error_naming_the_file() {
+    let text = MSH22.replace("2 1 0 0", "2 NaN 0 0");
+    let err = malformed(&[("n.msh", &text)], "n.msh", "n.msh", &["non-finite"]);
+    assert!(matches!(err, IoError::Mesh { .. }));
+    let node = NODE_0.replace("1 1 0 0", "1 inf 0 0");
+    let err = malformed(&[("n.node", &node), ("n.ele", ELE_0)], "n.ele", "n.node", &["non-finite"]);
+    assert!(matches!(err, IoError::Mesh { .. }));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Failed writes leave nothing
+
+#[test]
+fn tetgen_without_tetrahedra_writes_nothing() {
+    let cube = grid(1, 1, 1);
+    let surface = Mesh::new(cube.positions, cube.triangles).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    for name in ["s.node", "s.ele"] {
+        let err = write_mesh(&dir.path().join(name), &surface).unwrap_err();
+        assert!(matches!(err, IoError::Invalid { .. }), "{err}");
+        assert!(err.to_string().contains(name) && err.to_string().contains("no"), "{err}");
+    }
+    assert!(dir_entries(dir.path()).is_empty());
+}
+
+#[test]
+fn invalid_mesh_or_missing_directory_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut bad = grid(1, 1, 1);
+    bad.tetrahedra.push([0, 1, 2, 99]);
+    for name in ["b.msh", "b.node"] {
+        let err = write_mesh(&dir.path().join(name), &bad).unwrap_err();
+        assert!(matches!(err, IoError::Mesh { .. }) && err.to_string().contains(name), "{err}");
+    }
+    let missing = dir.path().join("missing");
+    for name in ["m.msh", "m.ele"] {
+        let err = write_mesh(&missing.join(name), &grid(1, 1, 1)).unwrap_err();
+        assert!(matches!(err, IoError::Write { .. }), "{err}");
+    }
+    assert!(dir_entries(dir.path()).is_empty(), "no file and no temp file");
+}
