@@ -11,6 +11,8 @@
 //! 3. [`constraints`] builds the terms `w_i ‖C_i q − p_i(q)‖²` on selections.
 //! 4. [`solver`] assembles `Σ w_i C_iᵀ C_i`, factors it once (sparse Cholesky), and iterates the
 //!    local step (all projections, in parallel) and the global step (three triangular solves).
+//! 5. [`dynamics`] steps the same system in time (Projective Dynamics): inertia, gravity,
+//!    damping, external forces and grabs.
 //!
 //! Every formula follows the math reference (`shapeup-math.md`).
 //!
@@ -47,7 +49,9 @@
 
 pub mod bench;
 pub mod constraints;
+pub mod dynamics;
 pub mod error;
+pub mod generate;
 pub mod geometry;
 pub mod io;
 pub mod linalg;
@@ -64,6 +68,7 @@ pub mod prelude {
     pub use crate::constraints::{
         BuildContext, Constraint, ConstraintType, Params, Position, RowSink, Selection, build_constraints,
     };
+    pub use crate::dynamics::{DynamicsParams, Simulation};
     pub use crate::geometry::{RestGeometry, WorkingFrame};
     pub use crate::io::{read_mesh, write_mesh};
     pub use crate::mesh::Mesh;

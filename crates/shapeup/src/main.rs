@@ -1,6 +1,7 @@
 //! `shapeup`: the command-line tool.
 //!
 //! - `shapeup deform SCENE -o OUT` — static ShapeUp solve from the rest shape.
+//! - `shapeup simulate SCENE --frames N -o DIR` — Projective Dynamics, an OBJ per frame.
 //! - `shapeup energy SCENE POSITIONS` — E of given positions under a scene's constraints.
 //! - `shapeup bench` — the standard benchmark scenarios, as a table.
 //!
@@ -17,11 +18,16 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
 
+mod simulate;
 #[cfg(feature = "gui")]
 mod view;
 
 #[derive(Parser)]
-#[command(name = "shapeup", version, about = "Constraint-based shape deformation (ShapeUp) of triangle meshes")]
+#[command(
+    name = "shapeup",
+    version,
+    about = "Constraint-based shape deformation (ShapeUp) and simulation (Projective Dynamics) of triangle and tetrahedral meshes"
+)]
 struct Cli {
     /// Worker threads for the parallel local step (default: all cores).
     #[arg(long, global = true, value_name = "N")]
@@ -43,6 +49,24 @@ enum Command {
         #[arg(long, value_name = "N")]
         iterations: Option<usize>,
         /// Write a JSON report (energies per iteration, timings).
+        #[arg(long, value_name = "REPORT.json")]
+        report: Option<PathBuf>,
+    },
+    /// Projective Dynamics time steps of a scene (whatever its mode) from rest; writes the
+    /// surface of frame k (the state after k steps) to DIR/frame_000k.obj.
+    Simulate {
+        /// Scene file (.toml or .json).
+        scene: PathBuf,
+        /// Time steps to run (overrides the scene's steps).
+        #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
+        frames: u64,
+        /// Output directory for the OBJ sequence (created if missing).
+        #[arg(short, long, value_name = "DIR")]
+        output: PathBuf,
+        /// Write only frames that are multiples of K (and always the last).
+        #[arg(long, default_value_t = 1, value_name = "K")]
+        every: usize,
+        /// Write a JSON report (energy after each step, timings).
         #[arg(long, value_name = "REPORT.json")]
         report: Option<PathBuf>,
     },
@@ -113,6 +137,13 @@ fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Deform { scene, output, iterations, report } => deform(&scene, &output, iterations, report.as_deref()),
         Command::Energy { scene, positions } => energy(&scene, &positions),
+        Command::Simulate { scene, frames, output, every, report } => simulate::run(&simulate::SimulateArgs {
+            scene: &scene,
+            frames: usize::try_from(frames).unwrap_or(usize::MAX),
+            output: &output,
+            every,
+            report: report.as_deref(),
+        }),
         #[cfg(feature = "gui")]
         Command::View { input, screenshot, size, stats } => view::run(input, screenshot, size, stats),
         Command::Bench { mesh, iterations, scenarios, factorization } => {

@@ -69,10 +69,15 @@ impl ConstraintType for EdgeSpringType {
     }
     fn build(&self, ctx: &BuildContext, _params: &mut Params) -> Result<Vec<Box<dyn Constraint>>, ConstraintError> {
         let rest = &ctx.rest.positions;
-        let built = ctx
-            .rest
-            .topology
-            .edges
+        // A volume is held by all the edges of its tetrahedra, not only its surface's.
+        let tet_edges;
+        let edges = if ctx.rest.tetrahedra.is_empty() {
+            &ctx.rest.topology.edges
+        } else {
+            tet_edges = crate::topology::tetrahedron_edges(&ctx.rest.tetrahedra);
+            &tet_edges
+        };
+        let built = edges
             .iter()
             .filter(|e| ctx.selection.contains_all(&e[..]))
             .filter_map(|e| EdgeSpring::new(e[0], e[1], rest))

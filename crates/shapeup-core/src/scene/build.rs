@@ -3,7 +3,8 @@
 
 use super::{GroupSpec, Scene, SceneError, SelectionSpec, Targets};
 use crate::constraints::{BuildContext, Params, Position, Selection, build_constraints};
-use crate::geometry::{RestGeometry, WorkingFrame};
+use crate::dynamics::{DynamicsParams, Simulation};
+use crate::geometry::{RestGeometry, WorkingFrame, lumped_masses_surface, lumped_masses_volume};
 use crate::io::read_mesh;
 use crate::mesh::{Mesh, PolygonReport};
 use crate::solver::{ConstraintGroup, GroupId, SolveError, SolveReport, SolverParams, System};
@@ -187,6 +188,61 @@ impl LoadedScene {
             .map(|(v, (&p, &input))| if self.system.is_solved(v) { self.frame.to_input(p) } else { input })
             .collect();
         Mesh { positions, triangles: self.mesh.triangles.clone(), tetrahedra: self.mesh.tetrahedra.clone() }
+    }
+
+    /// Lumped masses m_i (working frame): ρ Σ|V_T|/4 on a tetrahedral mesh, else ρ Σ A_t/3.
+    pub fn masses(&self) -> Vec<f64> {
+        let density = self.scene.solver.density;
+        if self.rest.tetrahedra.is_empty() {
+            lumped_masses_surface(self.rest.num_vertices(), &self.rest.triangles, &self.rest.triangle_areas, density)
+        } else {
+            lumped_masses_volume(&self.rest.positions, &self.rest.tetrahedra, density)
+        }
+    }
+
+    /// The scene's time-stepping settings in the working frame (gravity, an acceleration in
+    /// input units per s², scales with lengths; time is not scaled).
+    pub fn dynamics_params(&self) -> DynamicsParams {
+        let s = &self.scene.solver;
+        DynamicsParams {
+            time_step: s.time_step,
+            stiffness: s.stiffness,
+            damping: s.damping,
+            gravity: DVec3::from_array(s.gravity) * self.frame.scale,
+            iterations: s.iterations,
+            tolerance: s.tolerance,
+        }
+    }
+
+    /// Starts a Projective Dynamics simulation at rest from the rest shape. The constraint
+    /// system moves into the simulation (this scene keeps the mesh and frame, for output).
+    ///
+    /// # Errors
+    /// [`SceneError::Invalid`] for bad dynamic settings (naming the key) or a bad density.
+    pub fn start_simulation(&mut self) -> Result<Simulation, SceneError> {
+        let invalid =
+            |message: String| SceneError::Invalid { path: self.scene.file.clone(), entry: "[solver]".into(), message };
+        let density = self.scene.solver.density;
+        if !(density.is_finite() && density > 0.0) {
+            return Err(invalid(format!("density must be a finite number > 0, found {density}")));
+        }
+        let params = self.dynamics_params();
+        params.validate().map_err(invalid)?;
+        let system =
+            std::mem::replace(&mut self.system, System::new(self.mesh.num_vertices(), SolverParams::default()));
+        Simulation::new(system, self.masses(), self.rest.positions.clone(), params).map_err(|e| invalid(e.to_string()))
+    }
+
+    /// The surface at working positions `q`, mapped back to the input frame: the triangles,
+    /// and the vertices up to the last one a triangle uses (a tetrahedralized surface's
+    /// vertices come first, so its interior points are left out; indices are unchanged).
+    pub fn surface_at(&self, q: &[DVec3]) -> Mesh {
+        let used = self.mesh.triangles.iter().flatten().map(|&v| v as usize + 1).max().unwrap_or(q.len());
+        Mesh {
+            positions: q[..used.min(q.len())].iter().map(|&p| self.frame.to_input(p)).collect(),
+            triangles: self.mesh.triangles.clone(),
+            tetrahedra: Vec::new(),
+        }
     }
 
     /// E of input-frame positions under the scene's constraints (working frame).

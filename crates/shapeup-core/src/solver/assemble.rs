@@ -1,8 +1,9 @@
 //! Assembly: stacks every constraint's rows of C into one sparse matrix and builds the global
 //! matrix Σ w_i C_iᵀ C_i, once per change of the constraint set.
 //!
-//! Vertices that no constraint touches are left out of the system (they keep their positions);
-//! the others are renumbered densely ("solved" vertices).
+//! In static mode, vertices that no constraint touches are left out of the system (they keep
+//! their positions) and the others are renumbered densely ("solved" vertices); in dynamic mode
+//! inertia holds every vertex, so all of them are solved.
 
 use super::SolveError;
 use crate::constraints::{Constraint, RowSink};
@@ -59,8 +60,9 @@ pub(crate) struct Assembly {
 }
 
 impl Assembly {
-    /// Stacks the rows of `groups` (each a list of constraints) over `n` vertices.
-    pub fn new(n: usize, groups: &[&[Box<dyn Constraint>]]) -> Self {
+    /// Stacks the rows of `groups` (each a list of constraints) over `n` vertices; with
+    /// `solve_all` every vertex is in the system, touched by a constraint or not.
+    pub fn new(n: usize, groups: &[&[Box<dyn Constraint>]], solve_all: bool) -> Self {
         let mut a = Assembly { c_ptr: vec![0], ..Default::default() };
         let mut sink = RowSink::default();
         for (g, constraints) in groups.iter().enumerate() {
@@ -75,7 +77,7 @@ impl Assembly {
             }
             a.groups.push(GroupRows { start, offsets });
         }
-        a.number_solved_vertices(n);
+        a.number_solved_vertices(n, solve_all);
         a.build_transpose();
         a.build_lhs_pattern();
         a
@@ -117,8 +119,8 @@ impl Assembly {
         }
     }
 
-    fn number_solved_vertices(&mut self, n: usize) {
-        let mut touched = vec![false; n];
+    fn number_solved_vertices(&mut self, n: usize, solve_all: bool) {
+        let mut touched = vec![solve_all; n];
         for &v in &self.c_col {
             touched[v as usize] = true;
         }
@@ -170,7 +172,8 @@ impl Assembly {
         let columns: Vec<Vec<u32>> = (0..ns)
             .into_par_iter()
             .map(|b| {
-                let mut rows: Vec<u32> = Vec::new();
+                // The diagonal always, for inertia on vertices no constraint touches.
+                let mut rows: Vec<u32> = vec![b as u32];
                 for k in self.ct_ptr[b]..self.ct_ptr[b + 1] {
                     let r = self.ct_row[k] as usize;
                     for &v in &self.c_col[self.c_ptr[r]..self.c_ptr[r + 1]] {
@@ -217,7 +220,7 @@ impl Assembly {
     }
 
     /// Index of entry (row, col), row ≥ col, in the lower-triangle storage.
-    fn slot(&self, row: usize, col: usize) -> usize {
+    pub fn slot(&self, row: usize, col: usize) -> usize {
         let (lo, hi) = (self.lhs_col_ptr[col] as usize, self.lhs_col_ptr[col + 1] as usize);
         // The pattern holds every pair of every row, so the entry exists.
         lo + self.lhs_row_idx[lo..hi].partition_point(|&r| (r as usize) < row)

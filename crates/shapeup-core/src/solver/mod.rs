@@ -8,6 +8,10 @@
 //! E never increases from one iteration to the next. [`System`] owns the constraint groups;
 //! adding or removing a group re-assembles and re-analyzes the matrix, changing a multiplier
 //! only refactors it numerically, and moving a handle's targets changes neither.
+//!
+//! For Projective Dynamics ([`crate::dynamics`]) the same system takes per-vertex inertia
+//! weights μ_i and an inertial target s: the global step then solves
+//! (diag(μ) + Σ w_i C_iᵀC_i) q = μ s + Σ w_i C_iᵀ P_i.
 
 mod assemble;
 mod cholesky;
@@ -183,6 +187,12 @@ pub struct System {
     /// Right-hand side / solution, column-major (x, y, z) over solved vertices.
     rhs: Vec<f64>,
     assembled: bool,
+    /// Inertia weight μ_i of every vertex (dynamic mode), or `None` (static mode).
+    inertia: Option<Vec<f64>>,
+    /// μ_i s_i per solved vertex, the inertial part of the right-hand side.
+    inertial_rhs: Vec<DVec3>,
+    /// The inertial target s (all vertices), kept to rebuild `inertial_rhs` after re-assembly.
+    inertial_target: Vec<DVec3>,
 }
 
 impl System {
@@ -201,6 +211,63 @@ impl System {
             cq: Vec::new(),
             rhs: Vec::new(),
             assembled: false,
+            inertia: None,
+            inertial_rhs: Vec::new(),
+            inertial_target: Vec::new(),
+        }
+    }
+
+    /// Sets per-vertex inertia weights μ_i ≥ 0 (dynamic mode: μ_i = m_i / (k h²)), adding
+    /// diag(μ) to the global matrix and μ s to its right-hand side (see
+    /// [`System::set_inertial_target`]); `None` goes back to the static problem. Switching
+    /// modes re-assembles (every vertex is solved in dynamic mode); new values only refactor.
+    ///
+    /// # Errors
+    /// [`SolveError::WrongLength`], or [`SolveError::BadWeight`] for a negative or non-finite μ.
+    pub fn set_inertia(&mut self, inertia: Option<Vec<f64>>) -> Result<(), SolveError> {
+        if let Some(mu) = &inertia {
+            self.check_length(mu)?;
+            if let Some(&bad) = mu.iter().find(|m| !(m.is_finite() && **m >= 0.0)) {
+                return Err(SolveError::BadWeight { name: "inertia".into(), value: bad });
+            }
+        }
+        match (&self.inertia, &inertia) {
+            (None, None) => return Ok(()),
+            (Some(old), Some(new)) if old == new => return Ok(()),
+            (Some(_), Some(_)) => self.mark(Stale::Values),
+            _ => self.mark(Stale::Pattern),
+        }
+        self.inertia = inertia;
+        Ok(())
+    }
+
+    /// The inertia weights, if in dynamic mode.
+    pub fn inertia(&self) -> Option<&[f64]> {
+        self.inertia.as_deref()
+    }
+
+    /// Sets the inertial target s (all vertices, working frame) that diag(μ) pulls towards;
+    /// ignored in static mode. Changing it needs no refactorization.
+    ///
+    /// # Errors
+    /// [`SolveError::WrongLength`].
+    pub fn set_inertial_target(&mut self, target: &[DVec3]) -> Result<(), SolveError> {
+        self.check_length(target)?;
+        self.inertial_target.clear();
+        self.inertial_target.extend_from_slice(target);
+        self.update_inertial_rhs();
+        Ok(())
+    }
+
+    /// μ_i s_i per solved vertex (zero where no target was set).
+    fn update_inertial_rhs(&mut self) {
+        let a = &self.assembly;
+        self.inertial_rhs.clear();
+        if let Some(mu) = &self.inertia {
+            self.inertial_rhs.extend(a.solved.iter().map(|&v| {
+                let v = v as usize;
+                mu[v] * self.inertial_target.get(v).copied().unwrap_or(DVec3::ZERO)
+            }));
         }
     }
 
@@ -313,10 +380,10 @@ impl System {
         self.order = (0..self.slots.len()).filter(|&s| self.slots[s].is_some()).collect();
         let lists: Vec<&[Box<dyn Constraint>]> =
             self.order.iter().filter_map(|&s| self.slots[s].as_ref().map(|g| g.constraints.as_slice())).collect();
-        if lists.iter().all(|l| l.is_empty()) {
+        if lists.iter().all(|l| l.is_empty()) && self.inertia.is_none() {
             return Err(SolveError::NoConstraints);
         }
-        self.assembly = Assembly::new(self.num_vertices, &lists);
+        self.assembly = Assembly::new(self.num_vertices, &lists, self.inertia.is_some());
         let rows = self.assembly.num_rows();
         self.projections = vec![DVec3::ZERO; rows];
         self.cq = vec![DVec3::ZERO; rows];
@@ -324,6 +391,7 @@ impl System {
         self.factor = None;
         self.assembled = true;
         self.update_weights();
+        self.update_inertial_rhs();
         Ok(())
     }
 
@@ -346,7 +414,10 @@ impl System {
         }
         self.ensure_assembled()?;
         let g = self.multipliers();
-        self.assembly.check_anchored(&g)?;
+        if self.inertia.is_none() {
+            // Inertia anchors every vertex in dynamic mode.
+            self.assembly.check_anchored(&g)?;
+        }
         if self.factor.is_none() {
             let a = &self.assembly;
             self.factor = Some(
@@ -363,6 +434,11 @@ impl System {
         let mut values = vec![0.0; self.assembly.lhs_row_idx.len()];
         for (group, &gk) in self.assembly.group_lhs.iter().zip(&g) {
             values.iter_mut().zip(group).for_each(|(v, x)| *v += gk * x);
+        }
+        if let Some(mu) = &self.inertia {
+            for (s, &v) in self.assembly.solved.iter().enumerate() {
+                values[self.assembly.slot(s, s)] += mu[v as usize];
+            }
         }
         if let Some(factor) = self.factor.as_mut() {
             factor.factorize(&values).map_err(SolveError::Singular)?;
@@ -471,7 +547,8 @@ impl System {
     pub fn global_step(&mut self, q: &mut [DVec3]) -> Result<(), SolveError> {
         self.check_length(q)?;
         self.prepare()?;
-        global::right_hand_side(&self.assembly, &self.ct_weighted, &self.projections, None, &mut self.rhs);
+        let inertial = self.inertia.is_some().then_some(self.inertial_rhs.as_slice());
+        global::right_hand_side(&self.assembly, &self.ct_weighted, &self.projections, inertial, &mut self.rhs);
         if let Some(factor) = self.factor.as_mut() {
             factor.solve_in_place(&mut self.rhs);
         }
@@ -494,7 +571,7 @@ impl System {
         rows.map(|r| self.assembly.row_weight[r] * (self.cq[r] - self.projections[r]).length_squared()).sum()
     }
 
-    fn check_length(&self, q: &[DVec3]) -> Result<(), SolveError> {
+    fn check_length<T>(&self, q: &[T]) -> Result<(), SolveError> {
         if q.len() == self.num_vertices {
             Ok(())
         } else {
