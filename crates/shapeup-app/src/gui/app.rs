@@ -200,13 +200,12 @@ impl EditorApp {
         if !self.document.state().has_handles() {
             return;
         }
-        // While a handle is held the worker keeps iterating on the newest targets, so the shape
-        // keeps following between mouse moves.
-        let holding = matches!(self.view.gesture, Some(Gesture::DragHandle { .. } | Gesture::RotateHandle { .. }));
+        // One round per change: measured on 2 cores with software rendering, iterating on
+        // between mouse moves (`SolveRequest::kept_solving`) took frames from the renderer
+        // without adding updates per second.
         match &mut self.worker {
             Some(worker) => {
-                let request = SolveRequest::from_document(&self.document);
-                worker.request(if holding { request.kept_solving() } else { request });
+                worker.request(SolveRequest::from_document(&self.document));
             }
             None => {
                 if let Err(e) = self.document.solve(self.document.iterations()) {
@@ -595,7 +594,7 @@ impl EditorApp {
             self.view.gesture = None;
             if released {
                 self.document.end_drag();
-                // One last round on the final targets, no longer kept solving.
+                // One more round on the final targets.
                 self.request_solve();
             }
         }
