@@ -504,7 +504,7 @@ impl Document {
     /// [`EditorError::Load`] for an unreadable mesh, a bad selection or target, or a
     /// tetrahedralized scene; [`EditorError::Constraint`] for a group that cannot be built.
     pub fn from_scene(scene: &Scene) -> Result<Document, EditorError> {
-        let loaded = read_mesh(&scene.mesh_path()).map_err(|e| EditorError::Load(e.to_string()))?;
+        let loaded = scene.read_mesh().map_err(|e| EditorError::Load(e.to_string()))?;
         Document::from_scene_with_mesh(scene, loaded.mesh)
     }
 
@@ -586,7 +586,12 @@ impl Document {
             })
             .collect();
         Scene {
-            mesh: MeshSettings { path: mesh_path.into(), normalize: self.state.rest.normalize, tetrahedralize: false },
+            mesh: MeshSettings {
+                path: mesh_path.into(),
+                generate: None,
+                normalize: self.state.rest.normalize,
+                tetrahedralize: false,
+            },
             solver: SolverSettings { iterations: self.state.iterations, ..self.solver_settings },
             groups,
             base_dir: PathBuf::new(),

@@ -81,7 +81,7 @@ pub fn scenario_scene(scenario: Scenario, mesh: &Mesh, mesh_path: PathBuf) -> Sc
         });
     }
     Scene {
-        mesh: MeshSettings { path: mesh_path.clone(), normalize: true, tetrahedralize: false },
+        mesh: MeshSettings { path: mesh_path.clone(), generate: None, normalize: true, tetrahedralize: false },
         solver: SolverSettings::default(),
         groups,
         base_dir: PathBuf::new(),

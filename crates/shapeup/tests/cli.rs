@@ -956,6 +956,9 @@ fn selected(selection: &SelectionSpec, mesh: &Mesh) -> Vec<bool> {
 fn check_example(ws: &Workspace, scene_path: &Path) -> Result<(), String> {
     let name = scene_path.file_stem().unwrap().to_string_lossy().into_owned();
     let scene = Scene::from_file(scene_path).map_err(|e| format!("{name}: the scene does not parse: {e}"))?;
+    if scene.solver.mode == shapeup_core::scene::Mode::Dynamic {
+        return check_dynamic_example(ws, scene_path, &scene);
+    }
     let rest = read(&scene.mesh_path());
     let (o, r) = (ws.out(&format!("{name}.obj")), ws.out(&format!("{name}.json")));
     // Run from an unrelated working directory: the mesh path is relative to the scene file.
@@ -1031,6 +1034,51 @@ fn check_example(ws: &Workspace, scene_path: &Path) -> Result<(), String> {
     if problems.is_empty() { Ok(()) } else { Err(format!("{name}: {}", problems.join("; "))) }
 }
 
+/// A dynamic example: 30 steps, every 10th frame, from an unrelated working directory.
+fn check_dynamic_example(ws: &Workspace, scene_path: &Path, scene: &Scene) -> Result<(), String> {
+    let name = scene_path.file_stem().unwrap().to_string_lossy().into_owned();
+    let rest = scene.read_mesh().map_err(|e| format!("{name}: {e}"))?.mesh;
+    let (dir, r) = (ws.out(&format!("{name}-frames")), ws.out(&format!("{name}.json")));
+    let out = shapeup_in(
+        Some(ws.dir.path()),
+        [
+            OsStr::new("simulate"),
+            scene_path.as_os_str(),
+            "--frames".as_ref(),
+            "30".as_ref(),
+            "--every".as_ref(),
+            "10".as_ref(),
+            "-o".as_ref(),
+            dir.as_os_str(),
+            "--report".as_ref(),
+            r.as_os_str(),
+        ],
+    );
+    if out.code != Some(0) {
+        return Err(format!("{name}: simulate failed\n{}", out.describe()));
+    }
+    let mut frames: Vec<String> =
+        std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    frames.sort();
+    let expected = ["frame_0000.obj", "frame_0010.obj", "frame_0020.obj", "frame_0030.obj"];
+    if frames != expected {
+        return Err(format!("{name}: frames {frames:?}, expected {expected:?}"));
+    }
+    let first = read(&dir.join(expected[0]));
+    let last = read(&dir.join(expected[3]));
+    if first.triangles != rest.triangles || last.triangles != rest.triangles {
+        return Err(format!("{name}: the frames do not have the mesh's surface"));
+    }
+    if last.positions.iter().any(|p| !p.is_finite()) || last.positions == first.positions {
+        return Err(format!("{name}: the last frame is not finite or did not move"));
+    }
+    let report = report(&r);
+    if report["steps"].as_u64() != Some(30) || report["energy"].as_array().map(Vec::len) != Some(30) {
+        return Err(format!("{name}: report steps {} energy {}", report["steps"], report["energy"]));
+    }
+    Ok(())
+}
+
 #[test]
 fn shipped_examples_deform() {
     let ws = Workspace::new();
@@ -1046,4 +1094,170 @@ fn shipped_examples_deform() {
     // The bunny example keeps all 35,947 vertices, including those in no triangle.
     let bunny = read(&ws.out("bunny-springs.obj"));
     assert_eq!(bunny.num_vertices(), 35_947);
+}
+
+// ---- simulate ----
+
+/// A 3×3 cloth with no constraints falling under `gravity`: frame k must be the discrete free
+/// fall y_k = g h² k(k+1)/2 (x_{n+1} = x_n + h v_n + h² g from rest), in input units whether
+/// or not the scene works in the normalized frame.
+#[test]
+fn simulate_free_fall_is_the_discrete_formula_in_input_units() {
+    let ws = Workspace::new();
+    let h = 0.01;
+    for normalize in [false, true] {
+        let scene = ws.scene(
+            &format!("fall-{normalize}.toml"),
+            &format!(
+                "[mesh]\ngenerate = {{ kind = \"cloth\", vertices = [3, 3], size = [2.0, 2.0] }}\nnormalize = {normalize}\n\
+                 [solver]\nmode = \"dynamic\"\ntime_step = {h}\ngravity = [0.0, -10.0, 0.0]\n"
+            ),
+        );
+        let dir = ws.out(&format!("fall-{normalize}"));
+        let out = shapeup([
+            "simulate".as_ref(),
+            scene.as_os_str(),
+            "--frames".as_ref(),
+            "6".as_ref(),
+            "-o".as_ref(),
+            dir.as_os_str(),
+        ]);
+        assert_eq!(out.code, Some(0), "{}", out.describe());
+        let rest = read(&dir.join("frame_0000.obj"));
+        let fallen = read(&dir.join("frame_0006.obj"));
+        let drop = -10.0 * h * h * 21.0;
+        for (a, b) in rest.positions.iter().zip(&fallen.positions) {
+            assert!(
+                (b.y - (a.y + drop)).abs() < 1e-12,
+                "normalize {normalize}: {} -> {}, expected drop {drop}",
+                a.y,
+                b.y
+            );
+            assert!((b.x - a.x).abs() < 1e-12 && (b.z - a.z).abs() < 1e-12);
+        }
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 7, "frames 0..=6");
+    }
+}
+
+#[test]
+fn simulate_rejects_bad_requests_and_writes_nothing() {
+    let ws = Workspace::new();
+    let good =
+        "[mesh]\ngenerate = { kind = \"cloth\", vertices = [4, 4], size = [1.0, 1.0] }\n[solver]\nmode = \"dynamic\"\n";
+    let scene = ws.scene("good.toml", good);
+    let dir = ws.out("frames");
+    let run = |args: &[&OsStr]| shapeup(args);
+    // --frames 0 and --every 0.
+    let out = run(&[
+        OsStr::new("simulate"),
+        scene.as_os_str(),
+        "--frames".as_ref(),
+        "0".as_ref(),
+        "-o".as_ref(),
+        dir.as_os_str(),
+    ]);
+    assert_eq!(out.code, Some(2), "{}", out.describe());
+    let out = run(&[
+        OsStr::new("simulate"),
+        scene.as_os_str(),
+        "--frames".as_ref(),
+        "3".as_ref(),
+        "--every".as_ref(),
+        "0".as_ref(),
+        "-o".as_ref(),
+        dir.as_os_str(),
+    ]);
+    assert_eq!(out.code, Some(1), "{}", out.describe());
+    assert!(out.stderr.contains("--every"), "{}", out.stderr);
+    // A report that is not JSON.
+    let out = run(&[
+        OsStr::new("simulate"),
+        scene.as_os_str(),
+        "--frames".as_ref(),
+        "3".as_ref(),
+        "-o".as_ref(),
+        dir.as_os_str(),
+        "--report".as_ref(),
+        "r.txt".as_ref(),
+    ]);
+    assert_eq!(out.code, Some(1), "{}", out.describe());
+    // Bad dynamic settings name the key.
+    for (bad, key) in [("damping = 1.5", "damping"), ("time_step = -1.0", "time_step"), ("density = 0.0", "density")] {
+        let scene = ws.scene("bad.toml", &format!("{good}{bad}\n"));
+        let out = run(&[
+            OsStr::new("simulate"),
+            scene.as_os_str(),
+            "--frames".as_ref(),
+            "3".as_ref(),
+            "-o".as_ref(),
+            dir.as_os_str(),
+        ]);
+        assert_eq!(out.code, Some(1), "{}", out.describe());
+        assert!(out.stderr.contains(key) && out.stderr.lines().count() == 1, "{}", out.stderr);
+    }
+    // A generated mesh with a bad count, and both a path and a generator.
+    for (mesh, needle) in [
+        ("generate = { kind = \"cloth\", vertices = [1, 4], size = [1.0, 1.0] }", "at least 2"),
+        ("generate = { kind = \"tet_box\", cells = [2, 2, 2], size = [1.0, -1.0, 1.0] }", "size"),
+        ("generate = { kind = \"sphere\" }", "sphere"),
+        ("path = 'x.obj'\ngenerate = { kind = \"cloth\", vertices = [4, 4], size = [1.0, 1.0] }", "not both"),
+    ] {
+        let scene = ws.scene("gen.toml", &format!("[mesh]\n{mesh}\n[solver]\nmode = \"dynamic\"\n"));
+        let out = run(&[
+            OsStr::new("simulate"),
+            scene.as_os_str(),
+            "--frames".as_ref(),
+            "3".as_ref(),
+            "-o".as_ref(),
+            dir.as_os_str(),
+        ]);
+        assert_eq!(out.code, Some(1), "{}", out.describe());
+        assert!(out.stderr.contains(needle), "{mesh}: {}", out.stderr);
+    }
+    assert!(!dir.exists(), "no output directory after errors");
+    // An output "directory" that is a file.
+    let file = write(&ws.path("taken"), "x");
+    let out = run(&[
+        OsStr::new("simulate"),
+        scene.as_os_str(),
+        "--frames".as_ref(),
+        "3".as_ref(),
+        "-o".as_ref(),
+        file.as_os_str(),
+    ]);
+    assert_eq!(out.code, Some(1), "{}", out.describe());
+    assert!(out.stderr.contains("taken"), "{}", out.stderr);
+}
+
+#[test]
+fn simulate_every_k_writes_multiples_of_k_and_the_last_frame() {
+    let ws = Workspace::new();
+    let scene = ws.scene(
+        "s.toml",
+        "[mesh]\ngenerate = { kind = \"cloth\", vertices = [5, 5], size = [1.0, 1.0] }\n[solver]\nmode = \"dynamic\"\n\
+         [[constraints]]\ntype = \"edge_spring\"\n[[constraints]]\ntype = \"position\"\nvertices = [0, 4]\nweight = 100.0\n",
+    );
+    let dir = ws.out("frames");
+    let r = ws.out("r.json");
+    let out = shapeup([
+        "simulate".as_ref(),
+        scene.as_os_str(),
+        "--frames".as_ref(),
+        "11".as_ref(),
+        "--every".as_ref(),
+        "4".as_ref(),
+        "-o".as_ref(),
+        dir.as_os_str(),
+        "--report".as_ref(),
+        r.as_os_str(),
+    ]);
+    assert_eq!(out.code, Some(0), "{}", out.describe());
+    let mut names: Vec<String> =
+        std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    names.sort();
+    assert_eq!(names, ["frame_0000.obj", "frame_0004.obj", "frame_0008.obj", "frame_0011.obj"]);
+    let report = report(&r);
+    assert_eq!(report["frames_written"], 4);
+    assert_eq!(report["energy"].as_array().map(Vec::len), Some(11));
+    assert!(report["timings"]["total_s"].as_f64().is_some_and(|t| t > 0.0));
 }

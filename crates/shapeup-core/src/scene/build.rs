@@ -41,10 +41,20 @@ impl Scene {
     /// [`SceneError`] naming the scene file and the entry (bad selection, option, mesh file…).
     pub fn load(&self) -> Result<LoadedScene, SceneError> {
         let t = Instant::now();
-        let loaded =
-            read_mesh(&self.mesh_path()).map_err(|source| SceneError::Mesh { path: self.file.clone(), source })?;
+        let loaded = self.read_mesh()?;
         let load_seconds = t.elapsed().as_secs_f64();
         self.build(loaded.mesh, loaded.report, load_seconds)
+    }
+
+    /// The scene's mesh: read from its file, or generated.
+    ///
+    /// # Errors
+    /// [`SceneError::Mesh`] naming the scene and the mesh file's problem.
+    pub fn read_mesh(&self) -> Result<crate::io::LoadedMesh, SceneError> {
+        match &self.mesh.generate {
+            Some(generated) => Ok(crate::io::LoadedMesh { mesh: generated.mesh(), report: PolygonReport::default() }),
+            None => read_mesh(&self.mesh_path()).map_err(|source| SceneError::Mesh { path: self.file.clone(), source }),
+        }
     }
 
     /// Builds the scene's groups on an already loaded mesh.

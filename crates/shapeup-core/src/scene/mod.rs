@@ -10,7 +10,9 @@ mod write;
 
 pub use build::LoadedScene;
 
+use crate::mesh::Mesh;
 use crate::solver::Factorization;
+use glam::DVec3;
 use serde::{Deserialize, Serialize};
 use serde_json::{Map, Value};
 use std::path::{Path, PathBuf};
@@ -73,8 +75,12 @@ impl Default for SolverSettings {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MeshSettings {
-    /// Mesh file, relative to the scene file (as written).
+    /// Mesh file, relative to the scene file (as written); empty when `generate` is used.
+    #[serde(default)]
     pub path: PathBuf,
+    /// A generated mesh instead of a file (an extension of the contract).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub generate: Option<GeneratedMesh>,
     /// Work in the normalized frame (default true).
     #[serde(default = "yes")]
     pub normalize: bool,
@@ -85,6 +91,64 @@ pub struct MeshSettings {
 
 fn yes() -> bool {
     true
+}
+
+/// A mesh the scene generates instead of reading a file (`[mesh] generate = { kind = … }`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum GeneratedMesh {
+    /// A flat cloth in the plane y = 0 ([`crate::generate::cloth_grid`]): `vertices = [nx, nz]`,
+    /// `size = [width, depth]`.
+    Cloth {
+        /// Vertices along x and z (each ≥ 2).
+        vertices: [usize; 2],
+        /// Extent along x and z.
+        size: [f64; 2],
+    },
+    /// A box of tetrahedra ([`crate::generate::tet_box`]): `cells = [nx, ny, nz]`,
+    /// `size = [x, y, z]`.
+    TetBox {
+        /// Cubes along x, y and z (each ≥ 1).
+        cells: [usize; 3],
+        /// Extent along x, y and z.
+        size: [f64; 3],
+    },
+}
+
+/// Most vertices a generated mesh may have (a typo must not ask for terabytes).
+const MAX_GENERATED_VERTICES: usize = 20_000_000;
+
+impl GeneratedMesh {
+    /// Checks the counts and sizes.
+    ///
+    /// # Errors
+    /// A one-line message naming the bad value.
+    pub fn validate(&self) -> Result<(), String> {
+        let (counts, minimum, sizes, vertices): (&[usize], usize, &[f64], f64) = match self {
+            GeneratedMesh::Cloth { vertices, size } => {
+                (vertices, 2, size, vertices.iter().map(|&n| n as f64).product())
+            }
+            GeneratedMesh::TetBox { cells, size } => (cells, 1, size, cells.iter().map(|&n| n as f64 + 1.0).product()),
+        };
+        if let Some(n) = counts.iter().find(|&&n| n < minimum) {
+            return Err(format!("generate: every count must be at least {minimum}, found {n}"));
+        }
+        if vertices > MAX_GENERATED_VERTICES as f64 {
+            return Err(format!("generate: {vertices} vertices is more than the {MAX_GENERATED_VERTICES} allowed"));
+        }
+        if let Some(x) = sizes.iter().find(|x| !(x.is_finite() && **x > 0.0)) {
+            return Err(format!("generate: every size must be a finite number > 0, found {x}"));
+        }
+        Ok(())
+    }
+
+    /// The mesh.
+    pub fn mesh(&self) -> Mesh {
+        match *self {
+            GeneratedMesh::Cloth { vertices: [nx, nz], size: [w, d] } => crate::generate::cloth_grid(nx, nz, w, d),
+            GeneratedMesh::TetBox { cells, size } => crate::generate::tet_box(cells, DVec3::from_array(size)),
+        }
+    }
 }
 
 /// Which vertices a group applies to (coordinates in the input frame).
@@ -336,6 +400,13 @@ impl Scene {
             SceneFormat::Toml => toml::from_str(text).map_err(|e| parse_error(toml_message(text, &e)))?,
             SceneFormat::Json => serde_json::from_str(text).map_err(|e| parse_error(e.to_string()))?,
         };
+        let mesh_error = |message: String| SceneError::Invalid { path: path.into(), entry: "[mesh]".into(), message };
+        match (&raw.mesh.generate, raw.mesh.path.as_os_str().is_empty()) {
+            (Some(g), true) => g.validate().map_err(mesh_error)?,
+            (Some(_), false) => return Err(mesh_error("give either path or generate, not both".into())),
+            (None, true) => return Err(mesh_error("missing path (a mesh file), or generate".into())),
+            (None, false) => {}
+        }
         validate_solver(&raw.solver).map_err(|message| SceneError::Invalid {
             path: path.into(),
             entry: "[solver]".into(),

@@ -20,7 +20,13 @@ impl Scene {
     pub fn to_toml_string(&self) -> String {
         let mut out = String::new();
         out.push_str("[mesh]\n");
-        line(&mut out, "path", Value::String(self.mesh.path.to_string_lossy().into_owned()));
+        match &self.mesh.generate {
+            Some(generated) => {
+                let table = toml::Value::try_from(generated).unwrap_or(Value::Table(toml::Table::new()));
+                line(&mut out, "generate", table);
+            }
+            None => line(&mut out, "path", Value::String(self.mesh.path.to_string_lossy().into_owned())),
+        }
         line(&mut out, "normalize", Value::Boolean(self.mesh.normalize));
         if self.mesh.tetrahedralize {
             line(&mut out, "tetrahedralize", Value::Boolean(true));
@@ -173,7 +179,12 @@ mod tests {
         floor.options.insert("height".into(), serde_json::json!(-1));
         floor.options.insert("push".into(), serde_json::json!(0.5));
         let scene = Scene {
-            mesh: MeshSettings { path: PathBuf::from("meshes/my mesh.obj"), normalize: false, tetrahedralize: true },
+            mesh: MeshSettings {
+                path: PathBuf::from("meshes/my mesh.obj"),
+                generate: None,
+                normalize: false,
+                tetrahedralize: true,
+            },
             solver: SolverSettings {
                 mode: Mode::Dynamic,
                 iterations: 7,
