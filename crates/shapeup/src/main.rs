@@ -107,6 +107,10 @@ enum Command {
         /// Sparse Cholesky layout: auto, simplicial or supernodal.
         #[arg(long, default_value = "auto", value_parser = parse_factorization)]
         factorization: Factorization,
+        /// Run the dynamic scenarios instead (cloth-10k, cloth-40k, tet-box-20k: generated
+        /// meshes, 10 iterations per time step); `--iterations` counts time steps.
+        #[arg(long)]
+        dynamic: bool,
     },
 }
 
@@ -146,7 +150,8 @@ fn run(cli: Cli) -> Result<()> {
         }),
         #[cfg(feature = "gui")]
         Command::View { input, screenshot, size, stats } => view::run(input, screenshot, size, stats),
-        Command::Bench { mesh, iterations, scenarios, factorization } => {
+        Command::Bench { dynamic: true, iterations, scenarios, .. } => bench_dynamic(iterations, &scenarios),
+        Command::Bench { mesh, iterations, scenarios, factorization, dynamic: false } => {
             bench(mesh, iterations, &scenarios, factorization)
         }
     }
@@ -245,6 +250,61 @@ fn energy(scene_path: &Path, positions_path: &Path) -> Result<()> {
         if let Some(g) = loaded.system.group(*id) {
             writeln!(out, "  {:<20} {:<16} {value:.12e}", g.name, g.kind)?;
         }
+    }
+    Ok(())
+}
+
+/// `shapeup bench --dynamic`: time steps per second of the dynamic scenarios.
+fn bench_dynamic(steps: usize, names: &[String]) -> Result<()> {
+    use shapeup_core::bench::DynamicScenario;
+    let scenarios: Vec<DynamicScenario> = if names.is_empty() {
+        DynamicScenario::ALL.to_vec()
+    } else {
+        names
+            .iter()
+            .map(|n| {
+                DynamicScenario::ALL.into_iter().find(|s| s.name() == n).with_context(|| {
+                    format!("unknown scenario \"{n}\" (known: {})", DynamicScenario::ALL.map(|s| s.name()).join(", "))
+                })
+            })
+            .collect::<Result<_>>()?
+    };
+    let mut out = std::io::stdout().lock();
+    writeln!(out, "{} threads; {steps} time steps per scenario after 3 warm-up steps", rayon::current_num_threads())?;
+    writeln!(
+        out,
+        "{:<14} {:>9} {:>7} {:>11} {:>9} {:>10} {:>11} {:>9} {:>9}",
+        "scenario", "vertices", "tets", "constraints", "setup s", "local ms", "global ms", "ms/step", "steps/s"
+    )?;
+    for s in scenarios {
+        let t = Instant::now();
+        let (loaded, mut simulation) = s.load()?;
+        for _ in 0..3 {
+            simulation.step().with_context(|| format!("{}: step failed", s.name()))?;
+        }
+        let setup_s = t.elapsed().as_secs_f64();
+        let (mut local, mut global) = (0.0, 0.0);
+        let t = Instant::now();
+        for _ in 0..steps.max(1) {
+            let r = simulation.step().with_context(|| format!("{}: step failed", s.name()))?;
+            local += r.local_seconds;
+            global += r.global_seconds;
+        }
+        let per_step = t.elapsed().as_secs_f64() / steps.max(1) as f64;
+        let n = steps.max(1) as f64;
+        writeln!(
+            out,
+            "{:<14} {:>9} {:>7} {:>11} {:>9.3} {:>10.2} {:>11.2} {:>9.2} {:>9.1}",
+            s.name(),
+            loaded.mesh.num_vertices(),
+            loaded.mesh.num_tetrahedra(),
+            simulation.system().num_constraints(),
+            setup_s,
+            1e3 * local / n,
+            1e3 * global / n,
+            1e3 * per_step,
+            1.0 / per_step
+        )?;
     }
     Ok(())
 }
