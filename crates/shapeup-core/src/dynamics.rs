@@ -143,10 +143,12 @@ pub struct Simulation {
 
 impl Simulation {
     /// A simulation of `system`'s constraints on vertices with `masses`, starting at rest at
-    /// `positions` (working frame).
+    /// `positions` (working frame). A vertex of mass 0 has no inertia: if no constraint touches
+    /// it, it stays where it is (as a vertex in no element does in static mode).
     ///
     /// # Errors
-    /// [`DynamicsError`] for bad settings, a wrong length or a mass that is not finite and > 0.
+    /// [`DynamicsError`] for bad settings, a wrong length or a mass that is negative or not
+    /// finite.
     pub fn new(
         mut system: System,
         masses: Vec<f64>,
@@ -162,8 +164,8 @@ impl Simulation {
                 positions.len()
             )));
         }
-        if let Some(i) = masses.iter().position(|m| !(m.is_finite() && *m > 0.0)) {
-            return Err(DynamicsError::BadState(format!("vertex {i} has mass {}, must be > 0", masses[i])));
+        if let Some(i) = masses.iter().position(|m| !(m.is_finite() && *m >= 0.0)) {
+            return Err(DynamicsError::BadState(format!("vertex {i} has mass {}, must be ≥ 0", masses[i])));
         }
         if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
             return Err(DynamicsError::BadState(format!("vertex {i} has a non-finite position")));
@@ -193,7 +195,9 @@ impl Simulation {
         // 1. Inertial target s = x + h v + h² a_ext, q starts at s.
         for (i, s) in self.target.iter_mut().enumerate() {
             let mut a = self.params.gravity;
-            if let Some(f) = &self.forces {
+            if let Some(f) = &self.forces
+                && self.masses[i] > 0.0
+            {
                 a += f[i] / self.masses[i];
             }
             *s = self.positions[i] + h * self.velocities[i] + h * h * a;

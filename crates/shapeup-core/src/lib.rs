@@ -58,6 +58,8 @@ pub mod linalg;
 pub mod mesh;
 pub mod scene;
 pub mod solver;
+#[cfg(feature = "tetgen")]
+pub mod tetrahedralize;
 pub mod topology;
 
 pub use error::Error;

@@ -117,7 +117,7 @@ fn nothing_falls_through_the_floor() {
     mesh.positions.iter_mut().for_each(|p| *p += DVec3::new(0.0, 0.5, 0.0));
     let params = DynamicsParams { damping: 0.02, ..DynamicsParams::default() };
     let (mut sim, rest) = simulation(&mesh, &[("tet_strain", 10.0)], params);
-    // The floor type's default multiplier.
+    // A floor of multiplier 1000.
     let floor = group("floor", 1000.0, &rest, Params::default().with("height", 0.0));
     sim.system_mut().add_group(floor).unwrap();
     let mut lowest_ever = f64::INFINITY;
@@ -238,8 +238,8 @@ fn bad_settings_are_refused() {
         assert!(Simulation::new(system, m.clone(), mesh.positions.clone(), bad).is_err(), "{bad:?}");
     }
     let system = System::new(mesh.num_vertices(), SolverParams::default());
-    let mut zero = m.clone();
-    zero[4] = 0.0;
-    let err = Simulation::new(system, zero, mesh.positions.clone(), DynamicsParams::default()).unwrap_err();
+    let mut negative = m.clone();
+    negative[4] = -1.0;
+    let err = Simulation::new(system, negative, mesh.positions.clone(), DynamicsParams::default()).unwrap_err();
     assert!(err.to_string().contains("vertex 4"), "{err}");
 }

@@ -73,12 +73,11 @@ impl Scene {
             entry: entry.into(),
             message,
         };
-        if self.mesh.tetrahedralize {
-            return Err(invalid(
-                "[mesh]",
-                "tetrahedralize = true is not available in this version (it comes with dynamic mode); remove it".into(),
-            ));
-        }
+        let mesh = if self.mesh.tetrahedralize && mesh.tetrahedra.is_empty() {
+            fill_with_tetrahedra(&mesh).map_err(|m| invalid("[mesh]", m))?
+        } else {
+            mesh
+        };
         if mesh.triangles.is_empty() && mesh.tetrahedra.is_empty() {
             return Err(invalid("[mesh]", format!("{} has no faces", self.mesh_path().display())));
         }
@@ -109,6 +108,19 @@ impl Scene {
             build_seconds: t.elapsed().as_secs_f64(),
         })
     }
+}
+
+/// `tetrahedralize = true`: TetGen when built with the `tetgen` feature.
+#[cfg(feature = "tetgen")]
+fn fill_with_tetrahedra(mesh: &Mesh) -> Result<Mesh, String> {
+    crate::tetrahedralize::tetrahedralize(mesh, None).map_err(|e| e.to_string())
+}
+
+#[cfg(not(feature = "tetgen"))]
+fn fill_with_tetrahedra(_mesh: &Mesh) -> Result<Mesh, String> {
+    Err("tetrahedralize = true needs TetGen, which this build leaves out (it is AGPL-3.0): build shapeup with \
+         `--features tetgen`, or give a tetrahedral mesh (.msh, .node/.ele)"
+        .into())
 }
 
 fn build_group(
@@ -200,14 +212,21 @@ impl LoadedScene {
         Mesh { positions, triangles: self.mesh.triangles.clone(), tetrahedra: self.mesh.tetrahedra.clone() }
     }
 
-    /// Lumped masses m_i (working frame): ρ Σ|V_T|/4 on a tetrahedral mesh, else ρ Σ A_t/3.
+    /// Lumped masses m_i (working frame): ρ Σ|V_T|/4 on a tetrahedral mesh, else ρ Σ A_t/3
+    /// (floored at 1e-9); 0 for a vertex in no element, which is not simulated and keeps its
+    /// position (as in static mode).
     pub fn masses(&self) -> Vec<f64> {
         let density = self.scene.solver.density;
-        if self.rest.tetrahedra.is_empty() {
+        let mut in_element = vec![false; self.rest.num_vertices()];
+        let mut masses = if self.rest.tetrahedra.is_empty() {
+            self.rest.triangles.iter().flatten().for_each(|&v| in_element[v as usize] = true);
             lumped_masses_surface(self.rest.num_vertices(), &self.rest.triangles, &self.rest.triangle_areas, density)
         } else {
+            self.rest.tetrahedra.iter().flatten().for_each(|&v| in_element[v as usize] = true);
             lumped_masses_volume(&self.rest.positions, &self.rest.tetrahedra, density)
-        }
+        };
+        masses.iter_mut().zip(&in_element).filter(|(_, inside)| !**inside).for_each(|(m, _)| *m = 0.0);
+        masses
     }
 
     /// The scene's time-stepping settings in the working frame (gravity, an acceleration in

@@ -1,9 +1,9 @@
 //! Assembly: stacks every constraint's rows of C into one sparse matrix and builds the global
 //! matrix Σ w_i C_iᵀ C_i, once per change of the constraint set.
 //!
-//! In static mode, vertices that no constraint touches are left out of the system (they keep
-//! their positions) and the others are renumbered densely ("solved" vertices); in dynamic mode
-//! inertia holds every vertex, so all of them are solved.
+//! Vertices that no constraint touches and that have no inertia (static mode, or a massless
+//! vertex in dynamic mode) are left out of the system (they keep their positions); the others
+//! are renumbered densely ("solved" vertices).
 
 use super::SolveError;
 use crate::constraints::{Constraint, RowSink};
@@ -60,9 +60,9 @@ pub(crate) struct Assembly {
 }
 
 impl Assembly {
-    /// Stacks the rows of `groups` (each a list of constraints) over `n` vertices; with
-    /// `solve_all` every vertex is in the system, touched by a constraint or not.
-    pub fn new(n: usize, groups: &[&[Box<dyn Constraint>]], solve_all: bool) -> Self {
+    /// Stacks the rows of `groups` (each a list of constraints) over `n` vertices; a vertex
+    /// with positive `inertia` is in the system even if no constraint touches it.
+    pub fn new(n: usize, groups: &[&[Box<dyn Constraint>]], inertia: Option<&[f64]>) -> Self {
         let mut a = Assembly { c_ptr: vec![0], ..Default::default() };
         let mut sink = RowSink::default();
         for (g, constraints) in groups.iter().enumerate() {
@@ -77,7 +77,7 @@ impl Assembly {
             }
             a.groups.push(GroupRows { start, offsets });
         }
-        a.number_solved_vertices(n, solve_all);
+        a.number_solved_vertices(n, inertia);
         a.build_transpose();
         a.build_lhs_pattern();
         a
@@ -119,8 +119,11 @@ impl Assembly {
         }
     }
 
-    fn number_solved_vertices(&mut self, n: usize, solve_all: bool) {
-        let mut touched = vec![solve_all; n];
+    fn number_solved_vertices(&mut self, n: usize, inertia: Option<&[f64]>) {
+        let mut touched: Vec<bool> = match inertia {
+            Some(mu) => mu.iter().map(|&m| m > 0.0).collect(),
+            None => vec![false; n],
+        };
         for &v in &self.c_col {
             touched[v as usize] = true;
         }

@@ -234,7 +234,11 @@ impl System {
         match (&self.inertia, &inertia) {
             (None, None) => return Ok(()),
             (Some(old), Some(new)) if old == new => return Ok(()),
-            (Some(_), Some(_)) => self.mark(Stale::Values),
+            // Which vertices have inertia decides which are solved.
+            (Some(old), Some(new)) if old.iter().zip(new).all(|(a, b)| (*a > 0.0) == (*b > 0.0)) => {
+                self.mark(Stale::Values)
+            }
+            (Some(_), Some(_)) => self.mark(Stale::Pattern),
             _ => self.mark(Stale::Pattern),
         }
         self.inertia = inertia;
@@ -383,7 +387,7 @@ impl System {
         if lists.iter().all(|l| l.is_empty()) && self.inertia.is_none() {
             return Err(SolveError::NoConstraints);
         }
-        self.assembly = Assembly::new(self.num_vertices, &lists, self.inertia.is_some());
+        self.assembly = Assembly::new(self.num_vertices, &lists, self.inertia.as_deref());
         let rows = self.assembly.num_rows();
         self.projections = vec![DVec3::ZERO; rows];
         self.cq = vec![DVec3::ZERO; rows];
