@@ -238,6 +238,8 @@ pub enum EditorError {
     Constraint(String),
     /// The solver failed.
     Solve(SolveError),
+    /// Dynamic mode could not start or failed.
+    Simulation(String),
 }
 
 impl fmt::Display for EditorError {
@@ -255,6 +257,7 @@ impl fmt::Display for EditorError {
                 write!(f, "{m}")
             }
             EditorError::Solve(e) => write!(f, "{e}"),
+            EditorError::Simulation(e) => write!(f, "simulation: {e}"),
         }
     }
 }

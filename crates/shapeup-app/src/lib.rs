@@ -9,13 +9,16 @@
 //!   selection, the current shape, undo/redo and scene round trips;
 //! - [`command`]: the [`command::Command`]s a panel or a drag emits, applied by
 //!   [`document::Document::apply`];
-//! - [`worker`]: a background solver thread, so the UI never waits for a solve.
+//! - [`worker`]: a background solver thread, so the UI never waits for a solve;
+//! - [`simulation`]: dynamic mode, a Projective Dynamics simulation of the document on its own
+//!   thread (run/pause, gravity, floor, tetrahedra, grab).
 #![warn(missing_docs)]
 
 pub mod camera;
 pub mod command;
 pub mod document;
 pub mod picking;
+pub mod simulation;
 pub mod worker;
 
 pub use camera::OrbitCamera;

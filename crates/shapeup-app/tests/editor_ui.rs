@@ -82,21 +82,18 @@ fn the_weight_slider_sets_the_group_weight_and_undo_restores_it() {
     let mut harness = editor(spot_with_selection());
     let before = harness.state().document().groups()[0].weight;
     assert_eq!(before, 10.0, "edge springs start at the reference multiplier");
-    // Group sliders have no text of their own; the iteration slider is labelled.
+    // The group's slider is labelled "weight" (the others: iterations, damping).
+    let is_weight = |s: &egui_kittest::Node<'_>| s.accesskit_node().label().unwrap_or_default().contains("weight");
     let sliders: Vec<_> = harness.get_all_by_role(Role::Slider).collect();
-    assert_eq!(sliders.len(), 2, "one group slider and the iterations slider");
-    let group_slider = sliders
-        .iter()
-        .find(|s| !s.accesskit_node().label().unwrap_or_default().contains("iterations"))
-        .expect("the shape group's slider");
+    assert_eq!(sliders.iter().filter(|s| is_weight(s)).count(), 1, "one group, one weight slider");
+    let group_slider = sliders.iter().find(|s| is_weight(s)).expect("the shape group's slider");
     group_slider.set_value_accesskit(250.0);
     harness.run();
     let after = harness.state().document().groups()[0].weight;
     assert!((after - 250.0).abs() < 1e-9, "weight {after}");
     // The slider clamps to the logarithmic range [1e-4, 1e4].
     let sliders: Vec<_> = harness.get_all_by_role(Role::Slider).collect();
-    let group_slider =
-        sliders.iter().find(|s| !s.accesskit_node().label().unwrap_or_default().contains("iterations")).unwrap();
+    let group_slider = sliders.iter().find(|s| is_weight(s)).unwrap();
     group_slider.set_value_accesskit(1e9);
     harness.run();
     assert_eq!(harness.state().document().groups()[0].weight, 1e4);
@@ -142,4 +139,31 @@ fn the_viewport_shows_the_mesh() {
         }
     }
     assert!(mesh > 2000, "only {mesh} mesh pixels in the viewport");
+}
+
+#[test]
+fn run_simulates_the_shape_under_gravity_and_pause_stops_it() {
+    let mut harness = editor(spot_with_selection());
+    let rest = harness.state().document().positions().to_vec();
+    assert!(!harness.state().is_simulating());
+    harness.get_by_label("Run").click();
+    harness.run_steps(2);
+    assert!(harness.state().is_simulating());
+    // Gravity pulls every vertex down; wait until it shows.
+    step_until(&mut harness, |app| app.document().positions().iter().zip(&rest).all(|(p, r)| p.y < r.y - 1e-3));
+    harness.get_by_label("Pause").click();
+    harness.run_steps(2);
+    assert!(!harness.state().is_running(), "paused");
+    // A step already under way may still land.
+    std::thread::sleep(Duration::from_millis(300));
+    harness.run_steps(3);
+    let paused = harness.state().document().positions().to_vec();
+    std::thread::sleep(Duration::from_millis(300));
+    harness.run_steps(3);
+    assert!(harness.state().document().positions() == &paused[..], "paused: nothing moves");
+    // Stop leaves dynamic mode with the current shape.
+    harness.get_by_label("Stop").click();
+    harness.run_steps(2);
+    assert!(!harness.state().is_simulating());
+    assert!(harness.state().document().positions() == &paused[..], "stop keeps the shape");
 }

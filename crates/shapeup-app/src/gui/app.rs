@@ -8,6 +8,7 @@ use crate::camera::OrbitCamera;
 use crate::command::{Command, SelectMode};
 use crate::document::{Document, GroupKey, GroupRole, ShapeModel, WEIGHT_RANGE};
 use crate::picking::{box_select, pick_vertex, visible_vertices};
+use crate::simulation::{SimulationRunner, SimulationSettings};
 use crate::worker::{SolveRequest, SolverWorker};
 use eframe::egui;
 use egui::{Color32, Pos2, Rect, Sense, Stroke};
@@ -36,14 +37,34 @@ pub fn sample_path(relative: &str) -> PathBuf {
     if local.exists() { local } else { PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../..")).join(relative) }
 }
 
+/// Where a grab started (the picked vertex's position); the grabbed vertices are in
+/// `EditorApp::grabbed`.
+#[derive(Debug, Clone, Copy)]
+struct GrabAnchor {
+    anchor: Vec3,
+}
+
 /// Viewport interaction in progress.
 #[derive(Debug, Clone, Copy)]
 enum Gesture {
     Orbit,
     Pan,
-    BoxSelect { start: Pos2, mode: SelectMode },
-    DragHandle { handle: GroupKey, anchor: Vec3 },
-    RotateHandle { handle: GroupKey },
+    BoxSelect {
+        start: Pos2,
+        mode: SelectMode,
+    },
+    DragHandle {
+        handle: GroupKey,
+        anchor: Vec3,
+    },
+    /// Dynamic mode: pulling `vertices` (their grab-time positions plus `offset`).
+    Grab {
+        vertices: GrabAnchor,
+        offset: Vec3,
+    },
+    RotateHandle {
+        handle: GroupKey,
+    },
 }
 
 /// UI-only state (nothing here changes the solve).
@@ -99,6 +120,11 @@ pub struct EditorApp {
     options: WindowOptions,
     last_stats_print: Instant,
     dialogs: FileDialogs,
+    /// Dynamic mode: what to simulate, the running simulation, and the grabbed vertices with
+    /// their positions at grab time.
+    dynamics: SimulationSettings,
+    simulation: Option<SimulationRunner>,
+    grabbed: Vec<(u32, DVec3)>,
 }
 
 impl EditorApp {
@@ -154,6 +180,9 @@ impl EditorApp {
             options,
             last_stats_print: Instant::now(),
             dialogs: FileDialogs::default(),
+            dynamics: SimulationSettings::default(),
+            simulation: None,
+            grabbed: Vec::new(),
         }
     }
 
@@ -192,7 +221,87 @@ impl EditorApp {
             }
         }
         if changed {
+            // The simulation was built from the old constraints.
+            if self.simulation.take().is_some() {
+                self.view.status = "simulation stopped: the constraints changed".into();
+            }
             self.request_solve();
+        }
+    }
+
+    /// Whether dynamic mode is on (a simulation exists, running or paused).
+    pub fn is_simulating(&self) -> bool {
+        self.simulation.is_some()
+    }
+
+    /// Whether the simulation is stepping.
+    pub fn is_running(&self) -> bool {
+        self.simulation.as_ref().is_some_and(SimulationRunner::is_running)
+    }
+
+    fn dynamics_panel(&mut self, ui: &mut egui::Ui) {
+        let running = self.simulation.as_ref().is_some_and(SimulationRunner::is_running);
+        let mut settings = self.dynamics;
+        ui.horizontal_wrapped(|ui| {
+            ui.checkbox(&mut settings.gravity, "Gravity");
+            ui.checkbox(&mut settings.floor, "Floor");
+            let tetgen = cfg!(feature = "tetgen");
+            ui.add_enabled(tetgen, egui::Checkbox::new(&mut settings.tetrahedralize, "Tetrahedralize"))
+                .on_disabled_hover_text("this build has no TetGen (cargo feature `tetgen`)")
+                .on_hover_text("fill the closed surface with tetrahedra (TetGen)");
+        });
+        ui.add(egui::Slider::new(&mut settings.damping, 0.0..=0.5).text("damping"));
+        if settings != self.dynamics {
+            self.dynamics = settings;
+            // New settings, new simulation (from the current shape).
+            self.simulation = None;
+        }
+        ui.horizontal_wrapped(|ui| {
+            if ui.button(if running { "Pause" } else { "Run" }).clicked() {
+                if self.simulation.is_none() {
+                    let ctx = ui.ctx().clone();
+                    match SimulationRunner::start(&self.document, self.dynamics, move || ctx.request_repaint()) {
+                        Ok(runner) => self.simulation = Some(runner),
+                        Err(e) => self.view.status = e.to_string(),
+                    }
+                }
+                if let Some(runner) = &self.simulation {
+                    runner.set_running(!running);
+                }
+            }
+            if ui.add_enabled(self.simulation.is_some(), egui::Button::new("Restart")).clicked()
+                && let Some(runner) = &self.simulation
+            {
+                runner.reset();
+            }
+            if ui
+                .add_enabled(self.simulation.is_some(), egui::Button::new("Stop"))
+                .on_hover_text("leave dynamic mode, keeping the current shape")
+                .clicked()
+            {
+                self.simulation = None;
+            }
+        });
+        if let Some(runner) = &self.simulation {
+            let (steps, ms, error) = runner.stats();
+            let tets = if runner.num_tetrahedra > 0 {
+                format!(", {} tetrahedra", runner.num_tetrahedra)
+            } else {
+                String::new()
+            };
+            ui.label(format!("{steps} steps, {ms:.1} ms per step{tets}"));
+            if let Some(e) = error {
+                ui.colored_label(Color32::RED, e);
+            }
+            ui.label("alt+left drag: grab and pull the mesh");
+        }
+    }
+
+    fn poll_simulation(&mut self) {
+        if let Some(positions) = self.simulation.as_ref().and_then(SimulationRunner::poll)
+            && self.document.accept_positions(self.document.epoch(), &positions)
+        {
+            self.geometry_dirty = true;
         }
     }
 
@@ -353,6 +462,7 @@ impl EditorApp {
                     "left drag: orbit · right or shift+left drag: pan · wheel: zoom\n\
                      ctrl+left drag: select visible vertices in a box (ctrl+alt adds, ctrl+shift removes)\n\
                      alt+left drag on a handle: move it · alt+right drag: rotate it\n\
+                     dynamics running: alt+left drag grabs and pulls the mesh\n\
                      ctrl+z / ctrl+shift+z: undo / redo",
                 );
             });
@@ -464,6 +574,8 @@ impl EditorApp {
                 }
             });
             ui.separator();
+            egui::CollapsingHeader::new("Dynamics").default_open(true).show(ui, |ui| self.dynamics_panel(ui));
+            ui.separator();
             ui.checkbox(&mut self.view.wireframe, "Wireframe");
             if ui.button("Reset view").clicked() {
                 frame_camera(&mut self.view.camera, &self.document);
@@ -536,6 +648,8 @@ impl EditorApp {
                     SelectMode::Replace
                 };
                 Some(Gesture::BoxSelect { start, mode })
+            } else if primary && modifiers.alt && self.simulation.is_some() {
+                self.start_grab(to_local(start), viewport)
             } else if primary && modifiers.alt {
                 self.handle_under(to_local(start), viewport).map(|(handle, v)| {
                     self.document.begin_drag();
@@ -564,6 +678,18 @@ impl EditorApp {
                 self.view.gesture = Some(Gesture::DragHandle { handle, anchor: anchor + moved });
                 commands.push(Command::MoveHandle { handle, delta: moved.as_dvec3() });
             }
+            Some(Gesture::Grab { vertices, offset }) if delta != Vec2::ZERO => {
+                let moved = self.view.camera.drag_in_view_plane(delta, vertices.anchor + offset, viewport);
+                let offset = offset + moved;
+                self.view.gesture = Some(Gesture::Grab { vertices, offset });
+                if let Some(runner) = &self.simulation {
+                    let d = offset.as_dvec3();
+                    runner.grab(
+                        self.grabbed.iter().map(|(v, _)| *v).collect(),
+                        self.grabbed.iter().map(|(_, p)| *p + d).collect(),
+                    );
+                }
+            }
             Some(Gesture::RotateHandle { handle }) if delta.x != 0.0 => {
                 // Turn about the view direction through the handle's centroid: horizontal mouse
                 // motion, 0.01 rad per pixel.
@@ -589,6 +715,12 @@ impl EditorApp {
                     to_local(end),
                 );
                 commands.push(Command::Select { vertices, mode });
+            }
+            if matches!(self.view.gesture, Some(Gesture::Grab { .. }))
+                && let Some(runner) = &self.simulation
+            {
+                runner.release();
+                self.grabbed.clear();
             }
             let released = matches!(self.view.gesture, Some(Gesture::DragHandle { .. } | Gesture::RotateHandle { .. }));
             self.view.gesture = None;
@@ -617,6 +749,24 @@ impl EditorApp {
             );
         }
         commands
+    }
+
+    /// Dynamic mode: grabs the visible vertex nearest to `pixel` and those within 3 % of the
+    /// mesh's diagonal of it.
+    fn start_grab(&mut self, pixel: Vec2, viewport: Vec2) -> Option<Gesture> {
+        let positions = self.document.positions();
+        let visible = visible_vertices(positions, self.document.triangles(), &self.view.camera, viewport);
+        let v = pick_vertex(positions, &visible, &self.view.camera, viewport, pixel, 12.0)?;
+        let (lo, hi) = self.document.rest_mesh().bounding_box();
+        let radius = 0.03 * (hi - lo).length();
+        let centre = positions[v as usize];
+        self.grabbed = positions
+            .iter()
+            .enumerate()
+            .filter(|(_, p)| (**p - centre).length() <= radius)
+            .map(|(i, p)| (i as u32, *p))
+            .collect();
+        Some(Gesture::Grab { vertices: GrabAnchor { anchor: centre.as_vec3() }, offset: Vec3::ZERO })
     }
 
     /// The handle owning the visible vertex nearest to `pixel` (within 12 px), and that vertex.
@@ -711,6 +861,7 @@ impl eframe::App for EditorApp {
     fn ui(&mut self, ui: &mut egui::Ui, frame: &mut eframe::Frame) {
         self.view.frames.push_back(Instant::now());
         self.poll_worker();
+        self.poll_simulation();
         self.poll_dialogs();
         let dropped: Vec<PathBuf> = ui.input(|i| i.raw.dropped_files.iter().map(|f| f.path().to_path_buf()).collect());
         if let Some(path) = dropped.into_iter().next() {
