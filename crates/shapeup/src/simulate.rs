@@ -62,7 +62,12 @@ pub fn run(args: &SimulateArgs<'_>) -> Result<()> {
         ProgressBar::hidden()
     };
     let (mut energies, mut local, mut global, mut setup) = (Vec::with_capacity(args.frames), 0.0, 0.0, 0.0);
+    let h = simulation.params().time_step;
     for k in 1..=args.frames {
+        // Spinning handles: their targets at the end of this step.
+        for (id, targets) in loaded.spinning_targets(k as f64 * h)? {
+            simulation.system_mut().set_position_targets(id, &targets)?;
+        }
         let step = simulation
             .step()
             .with_context(|| format!("{}: step {k} of {} failed", args.scene.display(), args.frames))?;

@@ -274,6 +274,30 @@ impl LoadedScene {
         }
     }
 
+    /// The working-frame targets at time `t` of every position group that spins (see
+    /// [`super::Spin`]), with its id, to set before a time step ending at `t`.
+    ///
+    /// # Errors
+    /// [`SceneError::Invalid`] naming the group (e.g. a selection that no longer resolves).
+    pub fn spinning_targets(&self, t: f64) -> Result<Vec<(GroupId, Vec<DVec3>)>, SceneError> {
+        let mut out = Vec::new();
+        for (i, (spec, &id)) in self.scene.groups.iter().zip(&self.group_ids).enumerate() {
+            if spec.kind != "position" || spec.targets.spin.is_none() {
+                continue;
+            }
+            let invalid = |message: String| SceneError::Invalid {
+                path: self.scene.file.clone(),
+                entry: format!("constraints[{i}] (\"{}\")", spec.name),
+                message,
+            };
+            let picked = spec.selection.resolve(&self.mesh.positions).map_err(invalid)?;
+            let rest: Vec<DVec3> = picked.iter().map(|&v| self.mesh.positions[v]).collect();
+            let targets = spec.targets.resolve_at(&rest, t).map_err(invalid)?;
+            out.push((id, targets.into_iter().map(|p| self.frame.to_working(p)).collect()));
+        }
+        Ok(out)
+    }
+
     /// E of input-frame positions under the scene's constraints (working frame).
     ///
     /// # Errors

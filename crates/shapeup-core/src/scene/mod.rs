@@ -219,6 +219,20 @@ pub struct Rotate {
     pub center: Option<[f64; 3]>,
 }
 
+/// A handle turning at a constant rate in dynamic mode (an extension of the contract): at time
+/// t its targets are the static ones turned by `deg_per_s` · t about the axis through `center`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Spin {
+    /// Rotation axis (normalized on use; must be non-zero).
+    pub axis: [f64; 3],
+    /// Turning rate in degrees per second, right-handed about the axis.
+    pub deg_per_s: f64,
+    /// Centre; default the centroid of the static targets.
+    #[serde(default)]
+    pub center: Option<[f64; 3]>,
+}
+
 /// Where a position group's vertices should go (input frame).
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Targets {
@@ -228,9 +242,29 @@ pub struct Targets {
     pub rotate: Option<Rotate>,
     /// Explicit targets, one per selected vertex (overrides translate and rotate).
     pub explicit: Option<Vec<[f64; 3]>>,
+    /// Dynamic mode: the targets turn at a constant rate (see [`Spin`]); static mode ignores it.
+    pub spin: Option<Spin>,
 }
 
 impl Targets {
+    /// The targets at time `t` (seconds) of a dynamic simulation: [`Targets::resolve`], turned
+    /// by the [`Spin`] if there is one.
+    ///
+    /// # Errors
+    /// As [`Targets::resolve`].
+    pub fn resolve_at(&self, rest: &[glam::DVec3], t: f64) -> Result<Vec<glam::DVec3>, String> {
+        use glam::{DQuat, DVec3};
+        let targets = self.resolve(rest)?;
+        let Some(spin) = &self.spin else { return Ok(targets) };
+        let axis = DVec3::from(spin.axis).try_normalize().ok_or("spin axis must be non-zero")?;
+        let center = spin
+            .center
+            .map(DVec3::from)
+            .unwrap_or_else(|| targets.iter().copied().sum::<DVec3>() / targets.len().max(1) as f64);
+        let turn = DQuat::from_axis_angle(axis, (spin.deg_per_s * t).to_radians());
+        Ok(targets.iter().map(|&p| center + turn * (p - center)).collect())
+    }
+
     /// The targets (input frame) of vertices at `rest` (input frame): the explicit ones, or
     /// `rest` rotated about the centre (default: their centroid) and then translated.
     ///
@@ -544,6 +578,14 @@ fn parse_targets(entry: &mut Map<String, Value>) -> Result<Targets, String> {
             return Err("\"rotate\" needs a non-zero axis and a finite angle_deg".into());
         }
         t.rotate = Some(r);
+    }
+    if let Some(v) = entry.remove("spin") {
+        let spin: Spin = serde_json::from_value(v)
+            .map_err(|e| format!("\"spin\": {e} (expected {{ axis = [x,y,z], deg_per_s = w, center = [x,y,z] }})"))?;
+        if spin.axis.iter().map(|a| a * a).sum::<f64>() <= 0.0 || !spin.deg_per_s.is_finite() {
+            return Err("\"spin\" needs a non-zero axis and a finite deg_per_s".into());
+        }
+        t.spin = Some(spin);
     }
     if let Some(v) = entry.remove("targets") {
         if t.rotate.is_some() || t.translate != [0.0; 3] {

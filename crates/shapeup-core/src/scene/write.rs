@@ -96,6 +96,15 @@ impl Scene {
                     line(&mut out, "rotate", Value::Table(table));
                 }
             }
+            if let Some(spin) = &t.spin {
+                let mut table = toml::Table::new();
+                table.insert("axis".into(), vec3(spin.axis));
+                table.insert("deg_per_s".into(), Value::Float(spin.deg_per_s));
+                if let Some(c) = spin.center {
+                    table.insert("center".into(), vec3(c));
+                }
+                line(&mut out, "spin", Value::Table(table));
+            }
             for (key, value) in &group.options {
                 if let Some(value) = from_json(value) {
                     line(&mut out, key, value);
@@ -173,6 +182,7 @@ mod tests {
             group("position", "rot", 2.5, SelectionSpec::Sphere { center: [0.0, 1.0, 2.0], radius: 0.25 });
         rotated.targets.translate = [0.1, 0.0, 0.3];
         rotated.targets.rotate = Some(Rotate { axis: [0.0, 1.0, 0.0], angle_deg: 30.0, center: Some([1.0, 2.0, 3.0]) });
+        rotated.targets.spin = Some(super::super::Spin { axis: [1.0, 0.0, 0.0], deg_per_s: 45.5, center: None });
         let mut strain = group("triangle_strain", "shape", 10.0, SelectionSpec::All);
         strain.options.insert("strain_freedom".into(), serde_json::json!(0.1));
         let mut floor = group("floor", "floor", 1.0, SelectionSpec::Box { min: [-1.0; 3], max: [1.0, 2.0, 3.0] });
@@ -198,6 +208,18 @@ mod tests {
         };
         let text = scene.to_toml_string();
         assert_eq!(parse(&text), scene, "{text}");
+    }
+
+    #[test]
+    fn generated_meshes_round_trip() {
+        for generate in [
+            "{ kind = \"cloth\", vertices = [4, 5], size = [1.5, 2.0] }",
+            "{ kind = \"tet_box\", cells = [2, 3, 4], size = [1.0, 0.5, 0.25] }",
+        ] {
+            let scene = parse(&format!("[mesh]\ngenerate = {generate}\n[[constraints]]\ntype = \"edge_spring\"\n"));
+            assert!(scene.mesh.generate.is_some());
+            assert_eq!(parse(&scene.to_toml_string()), scene);
+        }
     }
 
     #[test]
