@@ -370,6 +370,17 @@ pub(crate) fn write_f64(w: &mut dyn Write, x: f64) -> io::Result<()> {
     write!(w, "{x:?}")
 }
 
+/// Writes `x y z` and a newline, each coordinate as [`write_f64`] does (every text writer's
+/// vertex line, after its own prefix).
+pub(crate) fn write_point(w: &mut dyn Write, p: glam::DVec3) -> io::Result<()> {
+    write_f64(w, p.x)?;
+    w.write_all(b" ")?;
+    write_f64(w, p.y)?;
+    w.write_all(b" ")?;
+    write_f64(w, p.z)?;
+    w.write_all(b"\n")
+}
+
 #[cfg(test)]
 mod tests {
     #![allow(clippy::unwrap_used, clippy::expect_used)]

@@ -21,7 +21,7 @@ use std::str::SplitWhitespace;
 
 use glam::DVec3;
 
-use super::{IoError, Lines, LoadedMesh, bounded_vec, build_mesh, parse_coordinate, write_f64};
+use super::{IoError, Lines, LoadedMesh, bounded_vec, build_mesh, parse_coordinate, write_point};
 use crate::mesh::{Mesh, MeshError, PolygonReport};
 use crate::topology::tetrahedron_boundary;
 
@@ -349,12 +349,7 @@ pub fn write_msh(w: &mut dyn Write, mesh: &Mesh) -> io::Result<()> {
         writeln!(w, "{tag}")?;
     }
     for p in &mesh.positions {
-        write_f64(w, p.x)?;
-        w.write_all(b" ")?;
-        write_f64(w, p.y)?;
-        w.write_all(b" ")?;
-        write_f64(w, p.z)?;
-        w.write_all(b"\n")?;
+        write_point(w, *p)?;
     }
     let blocks = usize::from(t > 0) + usize::from(m > 0);
     let min_tag = usize::from(t + m > 0);

@@ -14,7 +14,7 @@ use std::path::Path;
 
 use glam::DVec3;
 
-use super::{IoError, Lines, LoadedMesh, build_mesh, parse_coordinate, write_f64};
+use super::{IoError, Lines, LoadedMesh, build_mesh, parse_coordinate, write_point};
 use crate::mesh::Mesh;
 
 /// Reads an OBJ file from `reader`; `path` only names it in errors.
@@ -154,12 +154,7 @@ pub fn write_obj(w: &mut dyn Write, mesh: &Mesh) -> io::Result<()> {
     writeln!(w, "# written by shapeup: {} vertices, {} triangles", mesh.num_vertices(), mesh.num_triangles())?;
     for p in &mesh.positions {
         w.write_all(b"v ")?;
-        write_f64(w, p.x)?;
-        w.write_all(b" ")?;
-        write_f64(w, p.y)?;
-        w.write_all(b" ")?;
-        write_f64(w, p.z)?;
-        w.write_all(b"\n")?;
+        write_point(w, *p)?;
     }
     for [a, b, c] in &mesh.triangles {
         writeln!(w, "f {} {} {}", u64::from(*a) + 1, u64::from(*b) + 1, u64::from(*c) + 1)?;

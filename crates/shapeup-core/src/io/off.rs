@@ -10,7 +10,7 @@ use std::path::Path;
 
 use glam::DVec3;
 
-use super::{IoError, Lines, LoadedMesh, bounded_vec, build_mesh, parse_coordinate, write_f64};
+use super::{IoError, Lines, LoadedMesh, bounded_vec, build_mesh, parse_coordinate, write_point};
 use crate::mesh::Mesh;
 
 /// Reads an OFF file from `reader`; `path` only names it in errors.
@@ -144,12 +144,7 @@ fn is_off_keyword(keyword: &str) -> bool {
 pub fn write_off(w: &mut dyn Write, mesh: &Mesh) -> io::Result<()> {
     writeln!(w, "OFF\n{} {} 0", mesh.num_vertices(), mesh.num_triangles())?;
     for p in &mesh.positions {
-        write_f64(w, p.x)?;
-        w.write_all(b" ")?;
-        write_f64(w, p.y)?;
-        w.write_all(b" ")?;
-        write_f64(w, p.z)?;
-        w.write_all(b"\n")?;
+        write_point(w, *p)?;
     }
     for [a, b, c] in &mesh.triangles {
         writeln!(w, "3 {a} {b} {c}")?;

@@ -16,7 +16,7 @@ use std::path::{Path, PathBuf};
 
 use glam::DVec3;
 
-use super::{IoError, Lines, LoadedMesh, bounded_vec, build_mesh, write_f64};
+use super::{IoError, Lines, LoadedMesh, bounded_vec, build_mesh, write_point};
 use crate::mesh::Mesh;
 
 /// How a PLY file encodes its elements.
@@ -543,12 +543,7 @@ pub fn write_ply(w: &mut dyn Write, mesh: &Mesh, encoding: PlyEncoding) -> io::R
     match encoding {
         PlyEncoding::Ascii => {
             for p in &mesh.positions {
-                write_f64(w, p.x)?;
-                w.write_all(b" ")?;
-                write_f64(w, p.y)?;
-                w.write_all(b" ")?;
-                write_f64(w, p.z)?;
-                w.write_all(b"\n")?;
+                write_point(w, *p)?;
             }
             for [a, b, c] in &mesh.triangles {
                 writeln!(w, "3 {a} {b} {c}")?;

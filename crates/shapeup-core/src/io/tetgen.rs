@@ -17,7 +17,7 @@ use std::io::{self, BufRead, BufReader, Write};
 use std::path::{Path, PathBuf};
 
 use super::msh::{Records, parse_point, tetrahedral_mesh};
-use super::{IoError, LoadedMesh, bounded_vec, write_atomic, write_f64};
+use super::{IoError, LoadedMesh, bounded_vec, write_atomic, write_point};
 use crate::mesh::{Mesh, MeshError};
 
 /// The `.node` and `.ele` paths of the pair that `path` (with any extension) names; an
@@ -178,12 +178,7 @@ pub fn write_node(w: &mut dyn Write, mesh: &Mesh) -> io::Result<()> {
     writeln!(w, "# points, dimension, attributes, boundary markers\n{} 3 0 0", mesh.num_vertices())?;
     for (i, p) in mesh.positions.iter().enumerate() {
         write!(w, "{} ", i + 1)?;
-        write_f64(w, p.x)?;
-        w.write_all(b" ")?;
-        write_f64(w, p.y)?;
-        w.write_all(b" ")?;
-        write_f64(w, p.z)?;
-        w.write_all(b"\n")?;
+        write_point(w, *p)?;
     }
     Ok(())
 }
