@@ -65,6 +65,13 @@ where
     }
 }
 
+/// `shapeup simulate SCENE -o DIR EXTRA…`, from `cwd` when given.
+fn simulate_in<S: AsRef<OsStr>>(cwd: Option<&Path>, scene: &Path, dir: &Path, extra: &[S]) -> Output {
+    let mut args: Vec<&OsStr> = vec!["simulate".as_ref(), scene.as_os_str(), "-o".as_ref(), dir.as_os_str()];
+    args.extend(extra.iter().map(AsRef::as_ref));
+    shapeup_in(cwd, args)
+}
+
 fn read(path: &Path) -> Mesh {
     read_mesh(path).unwrap_or_else(|e| panic!("cannot read back {}: {e}", path.display())).mesh
 }
@@ -1039,18 +1046,16 @@ fn check_dynamic_example(ws: &Workspace, scene_path: &Path, scene: &Scene) -> Re
     let name = scene_path.file_stem().unwrap().to_string_lossy().into_owned();
     let rest = scene.read_mesh().map_err(|e| format!("{name}: {e}"))?.mesh;
     let (dir, r) = (ws.out(&format!("{name}-frames")), ws.out(&format!("{name}.json")));
-    let out = shapeup_in(
+    let out = simulate_in(
         Some(ws.dir.path()),
-        [
-            OsStr::new("simulate"),
-            scene_path.as_os_str(),
-            "--frames".as_ref(),
-            "30".as_ref(),
-            "--every".as_ref(),
-            "10".as_ref(),
-            "-o".as_ref(),
-            dir.as_os_str(),
-            "--report".as_ref(),
+        scene_path,
+        &dir,
+        &[
+            OsStr::new("--frames"),
+            OsStr::new("30"),
+            OsStr::new("--every"),
+            OsStr::new("10"),
+            OsStr::new("--report"),
             r.as_os_str(),
         ],
     );
@@ -1114,14 +1119,7 @@ fn simulate_free_fall_is_the_discrete_formula_in_input_units() {
             ),
         );
         let dir = ws.out(&format!("fall-{normalize}"));
-        let out = shapeup([
-            "simulate".as_ref(),
-            scene.as_os_str(),
-            "--frames".as_ref(),
-            "6".as_ref(),
-            "-o".as_ref(),
-            dir.as_os_str(),
-        ]);
+        let out = simulate_in(None, &scene, &dir, &["--frames", "6"]);
         assert_eq!(out.code, Some(0), "{}", out.describe());
         let rest = read(&dir.join("frame_0000.obj"));
         let fallen = read(&dir.join("frame_0006.obj"));
@@ -1146,52 +1144,19 @@ fn simulate_rejects_bad_requests_and_writes_nothing() {
         "[mesh]\ngenerate = { kind = \"cloth\", vertices = [4, 4], size = [1.0, 1.0] }\n[solver]\nmode = \"dynamic\"\n";
     let scene = ws.scene("good.toml", good);
     let dir = ws.out("frames");
-    let run = |args: &[&OsStr]| shapeup(args);
     // --frames 0 and --every 0.
-    let out = run(&[
-        OsStr::new("simulate"),
-        scene.as_os_str(),
-        "--frames".as_ref(),
-        "0".as_ref(),
-        "-o".as_ref(),
-        dir.as_os_str(),
-    ]);
+    let out = simulate_in(None, &scene, &dir, &["--frames", "0"]);
     assert_eq!(out.code, Some(2), "{}", out.describe());
-    let out = run(&[
-        OsStr::new("simulate"),
-        scene.as_os_str(),
-        "--frames".as_ref(),
-        "3".as_ref(),
-        "--every".as_ref(),
-        "0".as_ref(),
-        "-o".as_ref(),
-        dir.as_os_str(),
-    ]);
+    let out = simulate_in(None, &scene, &dir, &["--frames", "3", "--every", "0"]);
     assert_eq!(out.code, Some(1), "{}", out.describe());
     assert!(out.stderr.contains("--every"), "{}", out.stderr);
     // A report that is not JSON.
-    let out = run(&[
-        OsStr::new("simulate"),
-        scene.as_os_str(),
-        "--frames".as_ref(),
-        "3".as_ref(),
-        "-o".as_ref(),
-        dir.as_os_str(),
-        "--report".as_ref(),
-        "r.txt".as_ref(),
-    ]);
+    let out = simulate_in(None, &scene, &dir, &["--frames", "3", "--report", "r.txt"]);
     assert_eq!(out.code, Some(1), "{}", out.describe());
     // Bad dynamic settings name the key.
     for (bad, key) in [("damping = 1.5", "damping"), ("time_step = -1.0", "time_step"), ("density = 0.0", "density")] {
         let scene = ws.scene("bad.toml", &format!("{good}{bad}\n"));
-        let out = run(&[
-            OsStr::new("simulate"),
-            scene.as_os_str(),
-            "--frames".as_ref(),
-            "3".as_ref(),
-            "-o".as_ref(),
-            dir.as_os_str(),
-        ]);
+        let out = simulate_in(None, &scene, &dir, &["--frames", "3"]);
         assert_eq!(out.code, Some(1), "{}", out.describe());
         assert!(out.stderr.contains(key) && out.stderr.lines().count() == 1, "{}", out.stderr);
     }
@@ -1203,28 +1168,14 @@ fn simulate_rejects_bad_requests_and_writes_nothing() {
         ("path = 'x.obj'\ngenerate = { kind = \"cloth\", vertices = [4, 4], size = [1.0, 1.0] }", "not both"),
     ] {
         let scene = ws.scene("gen.toml", &format!("[mesh]\n{mesh}\n[solver]\nmode = \"dynamic\"\n"));
-        let out = run(&[
-            OsStr::new("simulate"),
-            scene.as_os_str(),
-            "--frames".as_ref(),
-            "3".as_ref(),
-            "-o".as_ref(),
-            dir.as_os_str(),
-        ]);
+        let out = simulate_in(None, &scene, &dir, &["--frames", "3"]);
         assert_eq!(out.code, Some(1), "{}", out.describe());
         assert!(out.stderr.contains(needle), "{mesh}: {}", out.stderr);
     }
     assert!(!dir.exists(), "no output directory after errors");
     // An output "directory" that is a file.
     let file = write(&ws.path("taken"), "x");
-    let out = run(&[
-        OsStr::new("simulate"),
-        scene.as_os_str(),
-        "--frames".as_ref(),
-        "3".as_ref(),
-        "-o".as_ref(),
-        file.as_os_str(),
-    ]);
+    let out = simulate_in(None, &scene, &file, &["--frames", "3"]);
     assert_eq!(out.code, Some(1), "{}", out.describe());
     assert!(out.stderr.contains("taken"), "{}", out.stderr);
 }
@@ -1239,18 +1190,19 @@ fn simulate_every_k_writes_multiples_of_k_and_the_last_frame() {
     );
     let dir = ws.out("frames");
     let r = ws.out("r.json");
-    let out = shapeup([
-        "simulate".as_ref(),
-        scene.as_os_str(),
-        "--frames".as_ref(),
-        "11".as_ref(),
-        "--every".as_ref(),
-        "4".as_ref(),
-        "-o".as_ref(),
-        dir.as_os_str(),
-        "--report".as_ref(),
-        r.as_os_str(),
-    ]);
+    let out = simulate_in(
+        None,
+        &scene,
+        &dir,
+        &[
+            OsStr::new("--frames"),
+            OsStr::new("11"),
+            OsStr::new("--every"),
+            OsStr::new("4"),
+            OsStr::new("--report"),
+            r.as_os_str(),
+        ],
+    );
     assert_eq!(out.code, Some(0), "{}", out.describe());
     let mut names: Vec<String> =
         std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
@@ -1277,16 +1229,7 @@ fn simulate_spinning_handle_turns_the_end_of_a_bar() {
          spin = { axis = [1.0, 0.0, 0.0], deg_per_s = 90.0, center = [0.75, 0.0, 0.0] }\n",
     );
     let dir = ws.out("spin");
-    let out = shapeup([
-        "simulate".as_ref(),
-        scene.as_os_str(),
-        "--frames".as_ref(),
-        "60".as_ref(),
-        "--every".as_ref(),
-        "60".as_ref(),
-        "-o".as_ref(),
-        dir.as_os_str(),
-    ]);
+    let out = simulate_in(None, &scene, &dir, &["--frames", "60", "--every", "60"]);
     assert_eq!(out.code, Some(0), "{}", out.describe());
     let rest = read(&dir.join("frame_0000.obj"));
     let turned = read(&dir.join("frame_0060.obj"));
@@ -1308,14 +1251,7 @@ fn simulate_spinning_handle_turns_the_end_of_a_bar() {
         "[mesh]\ngenerate = { kind = \"cloth\", vertices = [3, 3], size = [1.0, 1.0] }\n[solver]\nmode = \"dynamic\"\n\
          [[constraints]]\ntype = \"position\"\nvertices = [0]\nspin = { axis = [0.0, 0.0, 0.0], deg_per_s = 1.0 }\n",
     );
-    let out = shapeup([
-        "simulate".as_ref(),
-        bad.as_os_str(),
-        "--frames".as_ref(),
-        "2".as_ref(),
-        "-o".as_ref(),
-        dir.as_os_str(),
-    ]);
+    let out = simulate_in(None, &bad, &dir, &["--frames", "2"]);
     assert_eq!(out.code, Some(1), "{}", out.describe());
     assert!(out.stderr.contains("spin"), "{}", out.stderr);
 }
