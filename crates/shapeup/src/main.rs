@@ -254,21 +254,27 @@ fn energy(scene_path: &Path, positions_path: &Path) -> Result<()> {
     Ok(())
 }
 
+/// The scenarios named by `--scenario` (all of them when none is), or an error listing the
+/// known names.
+fn pick_scenarios<T: Copy>(names: &[String], all: &[T], name: fn(T) -> &'static str) -> Result<Vec<T>> {
+    if names.is_empty() {
+        return Ok(all.to_vec());
+    }
+    names
+        .iter()
+        .map(|n| {
+            all.iter().copied().find(|&s| name(s) == n).with_context(|| {
+                let known: Vec<&str> = all.iter().map(|&s| name(s)).collect();
+                format!("unknown scenario \"{n}\" (known: {})", known.join(", "))
+            })
+        })
+        .collect()
+}
+
 /// `shapeup bench --dynamic`: time steps per second of the dynamic scenarios.
 fn bench_dynamic(steps: usize, names: &[String]) -> Result<()> {
     use shapeup_core::bench::DynamicScenario;
-    let scenarios: Vec<DynamicScenario> = if names.is_empty() {
-        DynamicScenario::ALL.to_vec()
-    } else {
-        names
-            .iter()
-            .map(|n| {
-                DynamicScenario::ALL.into_iter().find(|s| s.name() == n).with_context(|| {
-                    format!("unknown scenario \"{n}\" (known: {})", DynamicScenario::ALL.map(|s| s.name()).join(", "))
-                })
-            })
-            .collect::<Result<_>>()?
-    };
+    let scenarios = pick_scenarios(names, &DynamicScenario::ALL, DynamicScenario::name)?;
     let mut out = std::io::stdout().lock();
     writeln!(out, "{} threads; {steps} time steps per scenario after 3 warm-up steps", rayon::current_num_threads())?;
     writeln!(
@@ -337,18 +343,7 @@ fn parse_factorization(s: &str) -> Result<Factorization, String> {
 }
 
 fn bench(mesh: Option<PathBuf>, iterations: usize, names: &[String], factorization: Factorization) -> Result<()> {
-    let scenarios: Vec<Scenario> = if names.is_empty() {
-        Scenario::ALL.to_vec()
-    } else {
-        names
-            .iter()
-            .map(|n| {
-                Scenario::ALL.into_iter().find(|s| s.name() == n).with_context(|| {
-                    format!("unknown scenario \"{n}\" (known: {})", Scenario::ALL.map(|s| s.name()).join(", "))
-                })
-            })
-            .collect::<Result<_>>()?
-    };
+    let scenarios = pick_scenarios(names, &Scenario::ALL, Scenario::name)?;
     let path = mesh.unwrap_or_else(default_bench_mesh);
     let t = Instant::now();
     let loaded = read_mesh(&path)?;

@@ -87,23 +87,11 @@ impl Scene {
                     line(&mut out, "translate", vec3(t.translate));
                 }
                 if let Some(r) = &t.rotate {
-                    let mut table = toml::Table::new();
-                    table.insert("axis".into(), vec3(r.axis));
-                    table.insert("angle_deg".into(), Value::Float(r.angle_deg));
-                    if let Some(c) = r.center {
-                        table.insert("center".into(), vec3(c));
-                    }
-                    line(&mut out, "rotate", Value::Table(table));
+                    line(&mut out, "rotate", turn_table(r.axis, ("angle_deg", r.angle_deg), r.center));
                 }
             }
             if let Some(spin) = &t.spin {
-                let mut table = toml::Table::new();
-                table.insert("axis".into(), vec3(spin.axis));
-                table.insert("deg_per_s".into(), Value::Float(spin.deg_per_s));
-                if let Some(c) = spin.center {
-                    table.insert("center".into(), vec3(c));
-                }
-                line(&mut out, "spin", Value::Table(table));
+                line(&mut out, "spin", turn_table(spin.axis, ("deg_per_s", spin.deg_per_s), spin.center));
             }
             for (key, value) in &group.options {
                 if let Some(value) = from_json(value) {
@@ -113,6 +101,17 @@ impl Scene {
         }
         out
     }
+}
+
+/// `{ axis = […], <amount> = x, center = […] }` of a `rotate` or `spin` (no center when `None`).
+fn turn_table(axis: [f64; 3], (key, amount): (&str, f64), center: Option<[f64; 3]>) -> Value {
+    let mut table = toml::Table::new();
+    table.insert("axis".into(), vec3(axis));
+    table.insert(key.into(), Value::Float(amount));
+    if let Some(c) = center {
+        table.insert("center".into(), vec3(c));
+    }
+    Value::Table(table)
 }
 
 /// Appends `key = value` (the value inline).
