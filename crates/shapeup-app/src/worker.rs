@@ -25,10 +25,6 @@ pub struct SolveRequest {
     pub epoch: u64,
     /// Positions (input frame) the epoch starts from.
     pub start: Arc<Vec<DVec3>>,
-    /// Keep solving this request, `iterations` at a time, sending a result after each round,
-    /// until a newer request arrives or the shape has converged (while a handle is held, the
-    /// shape keeps settling towards the newest targets even when the mouse stops).
-    pub keep_solving: bool,
 }
 
 impl SolveRequest {
@@ -39,16 +35,7 @@ impl SolveRequest {
             iterations: document.iterations(),
             epoch: document.epoch(),
             start: Arc::clone(document.epoch_start()),
-            keep_solving: false,
         }
-    }
-
-    /// The same request, solved repeatedly until converged or superseded (see
-    /// [`SolveRequest::keep_solving`]).
-    #[must_use]
-    pub fn kept_solving(mut self) -> Self {
-        self.keep_solving = true;
-        self
     }
 }
 
@@ -186,8 +173,6 @@ impl Drop for SolverWorker {
 fn run(shared: &Shared, results: &Sender<SolveResult>, notify: &dyn Fn()) {
     let mut solver = Solver::new();
     let mut epoch = None;
-    // A request being kept solving (see `SolveRequest::keep_solving`).
-    let mut kept: Option<(u64, SolveRequest)> = None;
     loop {
         let (seq, request) = {
             let mut pending = shared.pending.lock().unwrap_or_else(PoisonError::into_inner);
@@ -196,36 +181,16 @@ fn run(shared: &Shared, results: &Sender<SolveResult>, notify: &dyn Fn()) {
                     return;
                 }
                 if let Some(request) = pending.request.take() {
-                    // A newer request supersedes the one being kept.
-                    kept = None;
-                    break request;
-                }
-                if let Some(request) = kept.take() {
                     break request;
                 }
                 pending = shared.wake.wait(pending).unwrap_or_else(PoisonError::into_inner);
             }
         };
         let result = solve(&mut solver, &mut epoch, seq, &request);
-        if request.keep_solving && result.error.is_none() && !converged(&result.energy) {
-            kept = Some((seq, request));
-        }
         if results.send(result).is_err() {
             return;
         }
         notify();
-    }
-}
-
-/// A kept request stops when a round changes E by less than this, relative...
-const CONVERGED: f64 = 1e-6;
-/// ...or absolute (the working frame has radius 0.5, so this is round-off at rest).
-const NEGLIGIBLE_ENERGY: f64 = 1e-15;
-
-fn converged(energy: &[f64]) -> bool {
-    match (energy.first(), energy.last()) {
-        (Some(&first), Some(&last)) => (first - last).abs() <= CONVERGED * first.abs() + NEGLIGIBLE_ENERGY,
-        _ => true,
     }
 }
 

@@ -37,13 +37,6 @@ pub fn sample_path(relative: &str) -> PathBuf {
     if local.exists() { local } else { PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../..")).join(relative) }
 }
 
-/// Where a grab started (the picked vertex's position); the grabbed vertices are in
-/// `EditorApp::grabbed`.
-#[derive(Debug, Clone, Copy)]
-struct GrabAnchor {
-    anchor: Vec3,
-}
-
 /// Viewport interaction in progress.
 #[derive(Debug, Clone, Copy)]
 enum Gesture {
@@ -57,9 +50,10 @@ enum Gesture {
         handle: GroupKey,
         anchor: Vec3,
     },
-    /// Dynamic mode: pulling `vertices` (their grab-time positions plus `offset`).
+    /// Dynamic mode: pulling the vertices in `EditorApp::grabbed` by `offset` from where they
+    /// were; `anchor` is the picked vertex's position then.
     Grab {
-        vertices: GrabAnchor,
+        anchor: Vec3,
         offset: Vec3,
     },
     RotateHandle {
@@ -310,8 +304,7 @@ impl EditorApp {
             return;
         }
         // One round per change: measured on 2 cores with software rendering, iterating on
-        // between mouse moves (`SolveRequest::kept_solving`) took frames from the renderer
-        // without adding updates per second.
+        // between mouse moves took frames from the renderer without adding updates per second.
         match &mut self.worker {
             Some(worker) => {
                 worker.request(SolveRequest::from_document(&self.document));
@@ -678,10 +671,10 @@ impl EditorApp {
                 self.view.gesture = Some(Gesture::DragHandle { handle, anchor: anchor + moved });
                 commands.push(Command::MoveHandle { handle, delta: moved.as_dvec3() });
             }
-            Some(Gesture::Grab { vertices, offset }) if delta != Vec2::ZERO => {
-                let moved = self.view.camera.drag_in_view_plane(delta, vertices.anchor + offset, viewport);
+            Some(Gesture::Grab { anchor, offset }) if delta != Vec2::ZERO => {
+                let moved = self.view.camera.drag_in_view_plane(delta, anchor + offset, viewport);
                 let offset = offset + moved;
-                self.view.gesture = Some(Gesture::Grab { vertices, offset });
+                self.view.gesture = Some(Gesture::Grab { anchor, offset });
                 if let Some(runner) = &self.simulation {
                     let d = offset.as_dvec3();
                     runner.grab(
@@ -766,7 +759,7 @@ impl EditorApp {
             .filter(|(_, p)| (**p - centre).length() <= radius)
             .map(|(i, p)| (i as u32, *p))
             .collect();
-        Some(Gesture::Grab { vertices: GrabAnchor { anchor: centre.as_vec3() }, offset: Vec3::ZERO })
+        Some(Gesture::Grab { anchor: centre.as_vec3(), offset: Vec3::ZERO })
     }
 
     /// The handle owning the visible vertex nearest to `pixel` (within 12 px), and that vertex.
