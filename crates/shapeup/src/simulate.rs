@@ -63,10 +63,11 @@ pub fn run(args: &SimulateArgs<'_>) -> Result<()> {
     };
     let (mut energies, mut local, mut global, mut setup) = (Vec::with_capacity(args.frames), 0.0, 0.0, 0.0);
     let h = simulation.params().time_step;
+    let spinning = loaded.spinning_handles()?;
     for k in 1..=args.frames {
         // Spinning handles: their targets at the end of this step.
-        for (id, targets) in loaded.spinning_targets(k as f64 * h)? {
-            simulation.system_mut().set_position_targets(id, &targets)?;
+        for handle in &spinning {
+            simulation.system_mut().set_position_targets(handle.id, &handle.targets_at(k as f64 * h))?;
         }
         let step = simulation
             .step()

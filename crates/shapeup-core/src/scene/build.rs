@@ -123,6 +123,28 @@ fn fill_with_tetrahedra(_mesh: &Mesh) -> Result<Mesh, String> {
         .into())
 }
 
+/// A position group whose targets turn at a constant rate in dynamic mode.
+#[derive(Debug, Clone)]
+pub struct SpinningHandle {
+    /// The group in the system.
+    pub id: GroupId,
+    /// Its static targets (input frame).
+    targets: Vec<DVec3>,
+    axis: DVec3,
+    center: DVec3,
+    deg_per_s: f64,
+    frame: WorkingFrame,
+}
+
+impl SpinningHandle {
+    /// The targets at time `t` (seconds), in the working frame: the static ones turned by
+    /// `deg_per_s` · t about the axis through the centre.
+    pub fn targets_at(&self, t: f64) -> Vec<DVec3> {
+        let turn = glam::DQuat::from_axis_angle(self.axis, (self.deg_per_s * t).to_radians());
+        self.targets.iter().map(|&p| self.frame.to_working(self.center + turn * (p - self.center))).collect()
+    }
+}
+
 fn build_group(
     spec: &GroupSpec,
     mesh: &Mesh,
@@ -274,17 +296,16 @@ impl LoadedScene {
         }
     }
 
-    /// The working-frame targets at time `t` of every position group that spins (see
-    /// [`super::Spin`]), with its id, to set before a time step ending at `t`.
+    /// Every position group that spins (see [`super::Spin`]), with its static targets resolved
+    /// once, so that a time step only turns them ([`SpinningHandle::targets_at`]).
     ///
     /// # Errors
-    /// [`SceneError::Invalid`] naming the group (e.g. a selection that no longer resolves).
-    pub fn spinning_targets(&self, t: f64) -> Result<Vec<(GroupId, Vec<DVec3>)>, SceneError> {
+    /// [`SceneError::Invalid`] naming the group (a selection or targets that do not resolve, or
+    /// a zero spin axis).
+    pub fn spinning_handles(&self) -> Result<Vec<SpinningHandle>, SceneError> {
         let mut out = Vec::new();
         for (i, (spec, &id)) in self.scene.groups.iter().zip(&self.group_ids).enumerate() {
-            if spec.kind != "position" || spec.targets.spin.is_none() {
-                continue;
-            }
+            let Some(spin) = spec.targets.spin.filter(|_| spec.kind == "position") else { continue };
             let invalid = |message: String| SceneError::Invalid {
                 path: self.scene.file.clone(),
                 entry: format!("constraints[{i}] (\"{}\")", spec.name),
@@ -292,8 +313,9 @@ impl LoadedScene {
             };
             let picked = spec.selection.resolve(&self.mesh.positions).map_err(invalid)?;
             let rest: Vec<DVec3> = picked.iter().map(|&v| self.mesh.positions[v]).collect();
-            let targets = spec.targets.resolve_at(&rest, t).map_err(invalid)?;
-            out.push((id, targets.into_iter().map(|p| self.frame.to_working(p)).collect()));
+            let targets = spec.targets.resolve(&rest).map_err(invalid)?;
+            let (axis, center) = spin.pivot(&targets).map_err(invalid)?;
+            out.push(SpinningHandle { id, targets, axis, center, deg_per_s: spin.deg_per_s, frame: self.frame });
         }
         Ok(out)
     }

@@ -8,7 +8,7 @@
 mod build;
 mod write;
 
-pub use build::LoadedScene;
+pub use build::{LoadedScene, SpinningHandle};
 
 use crate::mesh::Mesh;
 use crate::solver::Factorization;
@@ -233,6 +233,22 @@ pub struct Spin {
     pub center: Option<[f64; 3]>,
 }
 
+impl Spin {
+    /// The unit axis and the centre it turns about (default: the centroid of `targets`).
+    ///
+    /// # Errors
+    /// A zero axis.
+    pub fn pivot(&self, targets: &[glam::DVec3]) -> Result<(glam::DVec3, glam::DVec3), String> {
+        use glam::DVec3;
+        let axis = DVec3::from(self.axis).try_normalize().ok_or("spin axis must be non-zero")?;
+        let center = self
+            .center
+            .map(DVec3::from)
+            .unwrap_or_else(|| targets.iter().copied().sum::<DVec3>() / targets.len().max(1) as f64);
+        Ok((axis, center))
+    }
+}
+
 /// Where a position group's vertices should go (input frame).
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Targets {
@@ -247,24 +263,6 @@ pub struct Targets {
 }
 
 impl Targets {
-    /// The targets at time `t` (seconds) of a dynamic simulation: [`Targets::resolve`], turned
-    /// by the [`Spin`] if there is one.
-    ///
-    /// # Errors
-    /// As [`Targets::resolve`].
-    pub fn resolve_at(&self, rest: &[glam::DVec3], t: f64) -> Result<Vec<glam::DVec3>, String> {
-        use glam::{DQuat, DVec3};
-        let targets = self.resolve(rest)?;
-        let Some(spin) = &self.spin else { return Ok(targets) };
-        let axis = DVec3::from(spin.axis).try_normalize().ok_or("spin axis must be non-zero")?;
-        let center = spin
-            .center
-            .map(DVec3::from)
-            .unwrap_or_else(|| targets.iter().copied().sum::<DVec3>() / targets.len().max(1) as f64);
-        let turn = DQuat::from_axis_angle(axis, (spin.deg_per_s * t).to_radians());
-        Ok(targets.iter().map(|&p| center + turn * (p - center)).collect())
-    }
-
     /// The targets (input frame) of vertices at `rest` (input frame): the explicit ones, or
     /// `rest` rotated about the centre (default: their centroid) and then translated.
     ///
