@@ -389,11 +389,43 @@ impl EditorApp {
         self.dialogs.show(purpose, directory, &proposed, move || ctx.request_repaint());
     }
 
+    /// Opens, exports or saves to `path`, whether it came from a dialog or was typed.
+    fn act_on_path(&mut self, purpose: DialogPurpose, path: PathBuf) {
+        match purpose {
+            DialogPurpose::Open => self.open(path),
+            DialogPurpose::ExportMesh => self.export_mesh(path),
+            DialogPurpose::SaveScene => self.save_scene(path),
+        }
+    }
+
+    /// One file row: the dialog button, the typed path, and the button acting on the typed path.
+    fn path_row(&mut self, ui: &mut egui::Ui, purpose: DialogPurpose) {
+        let (browse_label, act_label, hint) = match purpose {
+            DialogPurpose::Open => ("Open…", "Open", "open the typed path"),
+            DialogPurpose::ExportMesh => ("Export…", "Export mesh", "write OBJ, PLY or STL to the typed path"),
+            DialogPurpose::SaveScene => ("Save…", "Save scene", "a scene file that shapeup deform replays"),
+        };
+        ui.horizontal(|ui| {
+            let browse = ui.add_enabled(!self.dialogs.is_open(), egui::Button::new(browse_label));
+            if browse.clicked() {
+                self.show_dialog(ui.ctx(), purpose);
+            }
+            let typed = match purpose {
+                DialogPurpose::Open => &mut self.view.path_input,
+                DialogPurpose::ExportMesh => &mut self.view.export_input,
+                DialogPurpose::SaveScene => &mut self.view.scene_input,
+            };
+            ui.text_edit_singleline(typed).labelled_by(browse.id);
+            if ui.button(act_label).on_hover_text(hint).clicked() {
+                let path = PathBuf::from(typed.trim());
+                self.act_on_path(purpose, path);
+            }
+        });
+    }
+
     fn poll_dialogs(&mut self) {
         match self.dialogs.poll() {
-            Some((DialogPurpose::Open, Some(path))) => self.open(path),
-            Some((DialogPurpose::ExportMesh, Some(path))) => self.export_mesh(path),
-            Some((DialogPurpose::SaveScene, Some(path))) => self.save_scene(path),
+            Some((purpose, Some(path))) => self.act_on_path(purpose, path),
             Some((_, None)) => {
                 self.view.status = "no file chosen (without a file dialog service, type the path instead)".into();
             }
@@ -428,17 +460,7 @@ impl EditorApp {
         egui::ScrollArea::vertical().show(ui, |ui| {
             ui.heading("shapeup");
             egui::CollapsingHeader::new("Mesh").default_open(true).show(ui, |ui| {
-                ui.horizontal(|ui| {
-                    let browse = ui.add_enabled(!self.dialogs.is_open(), egui::Button::new("Open…"));
-                    if browse.clicked() {
-                        self.show_dialog(ui.ctx(), DialogPurpose::Open);
-                    }
-                    ui.text_edit_singleline(&mut self.view.path_input).labelled_by(browse.id);
-                    if ui.button("Open").on_hover_text("open the typed path").clicked() {
-                        let path = PathBuf::from(self.view.path_input.trim());
-                        self.open(path);
-                    }
-                });
+                self.path_row(ui, DialogPurpose::Open);
                 ui.label("or drop a mesh or scene file on the window");
                 ui.menu_button("Sample meshes", |ui| {
                     for (name, relative) in SAMPLES {
@@ -546,26 +568,8 @@ impl EditorApp {
                     commands.push(Command::Redo);
                 }
             });
-            ui.horizontal(|ui| {
-                let browse = ui.add_enabled(!self.dialogs.is_open(), egui::Button::new("Export…"));
-                if browse.clicked() {
-                    self.show_dialog(ui.ctx(), DialogPurpose::ExportMesh);
-                }
-                ui.text_edit_singleline(&mut self.view.export_input).labelled_by(browse.id);
-                if ui.button("Export mesh").on_hover_text("write OBJ, PLY or STL to the typed path").clicked() {
-                    self.export_mesh(PathBuf::from(self.view.export_input.trim()));
-                }
-            });
-            ui.horizontal(|ui| {
-                let browse = ui.add_enabled(!self.dialogs.is_open(), egui::Button::new("Save…"));
-                if browse.clicked() {
-                    self.show_dialog(ui.ctx(), DialogPurpose::SaveScene);
-                }
-                ui.text_edit_singleline(&mut self.view.scene_input).labelled_by(browse.id);
-                if ui.button("Save scene").on_hover_text("a scene file that shapeup deform replays").clicked() {
-                    self.save_scene(PathBuf::from(self.view.scene_input.trim()));
-                }
-            });
+            self.path_row(ui, DialogPurpose::ExportMesh);
+            self.path_row(ui, DialogPurpose::SaveScene);
             ui.separator();
             egui::CollapsingHeader::new("Dynamics").default_open(true).show(ui, |ui| self.dynamics_panel(ui));
             ui.separator();
