@@ -21,7 +21,7 @@ use std::time::Instant;
 pub struct SimulationSettings {
     /// Gravity (0, −9.81, 0) in the mesh's units per s², or none.
     pub gravity: bool,
-    /// A floor just below the current shape (all vertices, the floor's default multiplier).
+    /// A floor just below the current shape (all vertices, the floor type's default multiplier).
     pub floor: bool,
     /// Fill the closed surface with tetrahedra (TetGen; needs the `tetgen` feature).
     pub tetrahedralize: bool,
@@ -97,7 +97,9 @@ impl SimulationRunner {
             scene.groups.push(GroupSpec {
                 kind: "floor".into(),
                 name: "floor".into(),
-                weight: 1e4,
+                weight: shapeup_core::constraints::constraint_type("floor")
+                    .map_err(|e| EditorError::Simulation(e.to_string()))?
+                    .default_multiplier(),
                 selection: SelectionSpec::All,
                 targets: Targets::default(),
                 options,
