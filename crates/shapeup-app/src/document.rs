@@ -669,13 +669,10 @@ impl Document {
         &self.state.rest.mesh
     }
 
-    /// The current shape as a mesh (input frame), e.g. to export.
+    /// The current shape as a mesh (input frame), e.g. to export: the opened file's every
+    /// vertex in order, its polygons and attributes, at the current positions.
     pub fn current_mesh(&self) -> Mesh {
-        Mesh {
-            positions: self.positions.clone(),
-            triangles: self.state.rest.mesh.triangles.clone(),
-            tetrahedra: self.state.rest.mesh.tetrahedra.clone(),
-        }
+        self.state.rest.mesh.with_positions(self.positions.clone())
     }
 
     /// Boundary flags of the vertices (an edge with one triangle).
@@ -882,11 +879,7 @@ impl Document {
             }
             Command::MakeRest => {
                 let old = &state.rest;
-                let mesh = Mesh {
-                    positions: self.positions.clone(),
-                    triangles: old.mesh.triangles.clone(),
-                    tetrahedra: old.mesh.tetrahedra.clone(),
-                };
+                let mesh = old.mesh.with_positions(self.positions.clone());
                 state.rest = Arc::new(Rest::new(mesh, old.normalize));
             }
             Command::SetIterations(n) => {

@@ -10,7 +10,6 @@
 use crate::document::{Document, EditorError};
 use glam::DVec3;
 use serde_json::{Map, Value};
-use shapeup_core::mesh::PolygonReport;
 use shapeup_core::scene::{GroupSpec, Mode, SelectionSpec, Targets};
 use std::sync::{Arc, Condvar, Mutex, PoisonError};
 use std::thread::JoinHandle;
@@ -107,7 +106,7 @@ impl SimulationRunner {
         }
         let solve_error = EditorError::Simulation;
         let mut loaded = scene
-            .build(document.rest_mesh().clone(), PolygonReport::default(), 0.0)
+            .build(document.rest_mesh().clone(), shapeup_core::warnings::Warnings::new(), 0.0)
             .map_err(|e| solve_error(e.to_string()))?;
         let mut simulation = loaded.start_simulation().map_err(|e| solve_error(e.to_string()))?;
         // Start from the current shape at rest (vertices TetGen added start at their rest place).

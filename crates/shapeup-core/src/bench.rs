@@ -2,7 +2,7 @@
 //! 2 % lowest vertices (by y) fixed and its 2 % highest moved by (0.25 D, 0.1 D, 0), D the
 //! bounding-box diagonal, under one of three shape models.
 
-use crate::mesh::{Mesh, PolygonReport};
+use crate::mesh::Mesh;
 use crate::scene::{GroupSpec, LoadedScene, MeshSettings, Scene, SceneError, SelectionSpec, SolverSettings, Targets};
 use std::path::PathBuf;
 
@@ -94,7 +94,7 @@ pub fn scenario_scene(scenario: Scenario, mesh: &Mesh, mesh_path: PathBuf) -> Sc
 /// # Errors
 /// As [`Scene::build`].
 pub fn load_scenario(scenario: Scenario, mesh: &Mesh, mesh_path: PathBuf) -> Result<LoadedScene, SceneError> {
-    scenario_scene(scenario, mesh, mesh_path).build(mesh.clone(), PolygonReport::default(), 0.0)
+    scenario_scene(scenario, mesh, mesh_path).build(mesh.clone(), crate::warnings::Warnings::new(), 0.0)
 }
 
 /// The dynamic (Projective Dynamics) benchmark scenarios: generated meshes, 10 iterations per

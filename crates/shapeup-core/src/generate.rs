@@ -32,7 +32,7 @@ pub fn cloth_grid(nx: usize, nz: usize, width: f64, depth: f64) -> Mesh {
             }
         }
     }
-    Mesh { positions, triangles, tetrahedra: Vec::new() }
+    Mesh::from_parts_unchecked(positions, triangles, Vec::new())
 }
 
 /// A box of `cells[0]` × `cells[1]` × `cells[2]` cubes (each count at least 1) of total `size`,
@@ -75,7 +75,7 @@ pub fn tet_box(cells: [usize; 3], size: DVec3) -> Mesh {
         }
     }
     let triangles = tetrahedron_boundary(&tetrahedra);
-    Mesh { positions, triangles, tetrahedra }
+    Mesh::from_parts_unchecked(positions, triangles, tetrahedra)
 }
 
 #[cfg(test)]

@@ -100,6 +100,51 @@ pub fn vertex_normals(positions: &[DVec3], triangles: &[[u32; 3]]) -> Vec<DVec3>
     normals
 }
 
+/// Angle-weighted normal contribution of every polygon corner: θ_c n_f, with n_f the unit
+/// Newell normal of the corner's polygon (n_f ∝ Σ_i p_i × p_{i+1}) and θ_c the angle between
+/// the corner's two edges (Thürmer & Wüthrich 1998, "Computing vertex normals from polygonal
+/// facets"). Summing these over the corners that share a normal and normalizing gives that
+/// normal; zero for a degenerate corner or polygon.
+pub fn corner_normal_weights(positions: &[DVec3], polygons: &crate::mesh::Polygons) -> Vec<DVec3> {
+    let mut out = Vec::with_capacity(polygons.num_corners());
+    for poly in polygons.iter() {
+        let k = poly.len();
+        let p = |i: usize| positions[poly[i % k] as usize];
+        let mut newell = DVec3::ZERO;
+        for i in 0..k {
+            newell += p(i).cross(p(i + 1));
+        }
+        let n = newell.normalize_or_zero();
+        for i in 0..k {
+            let (a, b) = (p(i + k - 1) - p(i), p(i + 1) - p(i));
+            let angle = a.cross(b).length().atan2(a.dot(b));
+            out.push(if angle.is_finite() { angle * n } else { DVec3::ZERO });
+        }
+    }
+    out
+}
+
+/// Normals as a file indexes them: normal `j` is the normalized sum of
+/// [`corner_normal_weights`] over the corners c with `corner_index[c] == j` (corners with
+/// [`crate::attributes::NO_INDEX`] count for none). `None` for a normal no corner uses, or
+/// whose sum vanishes (the caller keeps the file's value). Indexing per vertex
+/// (`corner_index = polygons.indices()`) gives smooth vertex normals; a file's own indexing
+/// keeps its hard edges and smoothing groups.
+pub fn indexed_normals(
+    positions: &[DVec3],
+    polygons: &crate::mesh::Polygons,
+    corner_index: &[u32],
+    count: usize,
+) -> Vec<Option<DVec3>> {
+    let mut sums = vec![DVec3::ZERO; count];
+    for (w, &j) in corner_normal_weights(positions, polygons).iter().zip(corner_index) {
+        if let Some(s) = sums.get_mut(j as usize) {
+            *s += *w;
+        }
+    }
+    sums.into_iter().map(|s| s.try_normalize()).collect()
+}
+
 /// Lumped masses of a surface: m_i = max(ρ Σ_{t ∋ i} A_t / 3, 1e-9).
 pub fn lumped_masses_surface(n: usize, triangles: &[[u32; 3]], triangle_areas: &[f64], density: f64) -> Vec<f64> {
     let mut m = vec![0.0; n];

@@ -47,6 +47,7 @@
 //! ```
 #![warn(missing_docs)]
 
+pub mod attributes;
 pub mod bench;
 pub mod constraints;
 pub mod dynamics;
@@ -61,6 +62,7 @@ pub mod solver;
 #[cfg(feature = "tetgen")]
 pub mod tetrahedralize;
 pub mod topology;
+pub mod warnings;
 
 pub use error::Error;
 pub use mesh::Mesh;

@@ -84,8 +84,11 @@ pub fn tetrahedralize(mesh: &Mesh, max_volume: Option<f64>) -> Result<Mesh, Tetr
             t
         })
         .collect();
-    Mesh::with_tetrahedra(positions, mesh.triangles.clone(), tetrahedra)
-        .map_err(|e| TetrahedralizeError::TetGen(format!("invalid output: {e}")))
+    // The input's faces and attributes stay: its vertices keep their indices.
+    let mut filled = mesh.with_positions(positions);
+    filled.tetrahedra = tetrahedra;
+    filled.validate().map_err(|e| TetrahedralizeError::TetGen(format!("invalid output: {e}")))?;
+    Ok(filled)
 }
 
 #[cfg(test)]

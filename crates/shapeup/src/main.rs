@@ -42,7 +42,7 @@ enum Command {
     Deform {
         /// Scene file (.toml or .json).
         scene: PathBuf,
-        /// Output mesh (.obj, .ply or .stl); keeps the input's vertex count and order.
+        /// Output mesh (.obj, .ply, .off, .stl, .vtu or .msh); keeps the input's vertex count and order, faces and attributes (STL cannot).
         #[arg(short, long, value_name = "OUT")]
         output: PathBuf,
         /// Total local-global iterations (default: the scene's steps × iterations).
@@ -169,7 +169,7 @@ fn check_output_extension(path: &Path, allowed: &[&str]) -> Result<()> {
 
 fn deform(scene_path: &Path, output: &Path, iterations: Option<usize>, report_path: Option<&Path>) -> Result<()> {
     let start = Instant::now();
-    check_output_extension(output, &["obj", "ply", "stl"])?;
+    check_output_extension(output, &["obj", "ply", "off", "stl", "vtu", "msh"])?;
     if let Some(r) = report_path {
         check_output_extension(r, &["json"])?;
     }
@@ -177,7 +177,8 @@ fn deform(scene_path: &Path, output: &Path, iterations: Option<usize>, report_pa
     let mut loaded = scene.load()?;
     let (q, solve) = loaded.solve_static(iterations)?;
     let mesh = loaded.mesh_at(&q);
-    write_mesh(output, &mesh)?;
+    let mut warnings = loaded.warnings.clone();
+    warnings.extend(write_mesh(output, &mesh)?);
     let total = start.elapsed().as_secs_f64();
     if let Some(path) = report_path {
         let groups: Vec<_> = loaded
@@ -198,6 +199,7 @@ fn deform(scene_path: &Path, output: &Path, iterations: Option<usize>, report_pa
             "iterations": solve.energies.len(),
             "energy": solve.energies,
             "factor": {"nnz_lower": nnz_a, "nnz_l": nnz_l},
+            "warnings": warnings.to_json(),
             "timings": {
                 "load_s": loaded.load_seconds,
                 "setup_s": loaded.build_seconds + solve.setup_seconds,
@@ -209,6 +211,7 @@ fn deform(scene_path: &Path, output: &Path, iterations: Option<usize>, report_pa
         let text = serde_json::to_string_pretty(&report)?;
         write_atomic(path, |w| w.write_all(text.as_bytes()))?;
     }
+    print_warnings(&warnings);
     let first = solve.energies.first().copied().unwrap_or(0.0);
     let last = solve.energies.last().copied().unwrap_or(0.0);
     let mut out = std::io::stdout().lock();
@@ -220,15 +223,15 @@ fn deform(scene_path: &Path, output: &Path, iterations: Option<usize>, report_pa
         solve.energies.len(),
         output.display()
     )?;
-    if loaded.polygon_report.faces_dropped > 0 {
-        let _ = writeln!(
-            std::io::stderr(),
-            "shapeup: warning: {}: {} faces that repeat a vertex were dropped on load",
-            loaded.scene.mesh_path().display(),
-            loaded.polygon_report.faces_dropped
-        );
-    }
     Ok(())
+}
+
+/// Each warning once, as one line on stderr.
+pub(crate) fn print_warnings(warnings: &shapeup_core::warnings::Warnings) {
+    let mut err = std::io::stderr().lock();
+    for w in warnings.iter() {
+        let _ = writeln!(err, "shapeup: warning: {w}");
+    }
 }
 
 fn energy(scene_path: &Path, positions_path: &Path) -> Result<()> {

@@ -47,7 +47,8 @@ pub fn run(args: &SimulateArgs<'_>) -> Result<()> {
         .with_context(|| format!("cannot create the output directory {}", args.output.display()))?;
 
     let write_frame = |k: usize, q: &[glam::DVec3]| -> Result<()> {
-        Ok(write_mesh(&frame_path(args.output, k, args.frames), &loaded.surface_at(q))?)
+        write_mesh(&frame_path(args.output, k, args.frames), &loaded.surface_at(q))?;
+        Ok(())
     };
     write_frame(0, simulation.positions())?;
     let mut written = 1;

@@ -387,11 +387,7 @@ fn normalized_frame_is_scale_invariant() {
     let ws = Workspace::new();
     let rest = spot();
     let scale = 1000.0;
-    let big = Mesh {
-        positions: rest.positions.iter().map(|&p| p * scale).collect(),
-        triangles: rest.triangles.clone(),
-        tetrahedra: Vec::new(),
-    };
+    let big = rest.with_positions(rest.positions.iter().map(|&p| p * scale).collect());
     let big_path = ws.path("spot1000.obj");
     write_mesh(&big_path, &big).unwrap();
 

@@ -29,13 +29,16 @@ pub mod off;
 pub mod ply;
 pub mod stl;
 pub mod tetgen;
+pub mod vtu;
 
 use std::fs::{self, File, OpenOptions};
 use std::io::{self, BufRead, BufReader, BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use crate::mesh::{Mesh, MeshError, PolygonReport};
+use crate::attributes::AttributeKind;
+use crate::mesh::{Mesh, MeshError, Polygons};
+use crate::warnings::Warnings;
 
 pub use ply::PlyEncoding;
 
@@ -123,13 +126,14 @@ fn describe_extension(extension: &str) -> String {
     if extension.is_empty() { "(no extension)".to_owned() } else { format!("'.{extension}'") }
 }
 
-/// A mesh read from a file, with what triangulation changed.
+/// A mesh read from a file, with what reading changed.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LoadedMesh {
-    /// The mesh, vertices in file order.
+    /// The mesh, vertices in file order, with the file's polygons and attributes.
     pub mesh: Mesh,
-    /// Polygons split into fans and degenerate faces dropped.
-    pub report: PolygonReport,
+    /// What was split, dropped or recomputed (polygons triangulated, faces left out of the
+    /// triangulation, …), each naming the file.
+    pub warnings: Warnings,
 }
 
 /// The formats [`read_mesh`] understands.
@@ -171,10 +175,13 @@ impl MeshFormat {
 /// How [`write_mesh_with`] encodes a mesh.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum WriteFormat {
-    /// Wavefront OBJ, coordinates with enough digits to read back exactly.
+    /// Wavefront OBJ, coordinates with enough digits to read back exactly; a mesh read from
+    /// OBJ comes back line for line.
     Obj,
-    /// PLY with `double` coordinates and `list uchar int vertex_indices` faces.
-    Ply(PlyEncoding),
+    /// PLY: a mesh read from PLY keeps every element and property with its type, in the given
+    /// encoding (`None`: the file's own); others get `double` coordinates and
+    /// `list uchar int vertex_indices` faces (`None`: binary little endian).
+    Ply(Option<PlyEncoding>),
     /// Binary STL (`f32` coordinates, one normal per face; unreferenced vertices are lost).
     StlBinary,
     /// OFF, coordinates with enough digits to read back exactly.
@@ -183,18 +190,24 @@ pub enum WriteFormat {
     Msh,
     /// TetGen `X.node` + `X.ele` (for a path `X.*`), 1-based; needs tetrahedra.
     TetGen,
+    /// VTK XML unstructured grid (`.vtu`): tetrahedra when the mesh has them, else its polygons.
+    Vtu,
 }
 
 impl WriteFormat {
-    /// The default encoding for a path's extension: `.obj`, `.ply` (binary little endian),
-    /// `.stl` (binary), `.off`, `.msh` (4.1 ASCII), `.node` or `.ele` (the TetGen pair).
+    /// The default encoding for a path's extension: `.obj`, `.ply` (the input's encoding, else
+    /// binary little endian), `.stl` (binary), `.off`, `.msh` (4.1 ASCII), `.node` or `.ele`
+    /// (the TetGen pair), `.vtu`.
     ///
     /// # Errors
     /// [`IoError::UnsupportedFormat`] for any other extension.
     pub fn from_path(path: &Path) -> Result<Self, IoError> {
+        if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("vtu")) {
+            return Ok(Self::Vtu);
+        }
         Ok(match MeshFormat::from_path(path)? {
             MeshFormat::Obj => Self::Obj,
-            MeshFormat::Ply => Self::Ply(PlyEncoding::BinaryLittleEndian),
+            MeshFormat::Ply => Self::Ply(None),
             MeshFormat::Stl => Self::StlBinary,
             MeshFormat::Off => Self::Off,
             MeshFormat::Msh => Self::Msh,
@@ -227,31 +240,73 @@ pub fn read_mesh(path: &Path) -> Result<LoadedMesh, IoError> {
 }
 
 /// Writes a mesh in the default encoding for the extension (see [`WriteFormat::from_path`]),
-/// atomically.
+/// atomically. Returns what the format could not keep or what was recomputed (normals), each
+/// naming `path`.
 ///
 /// # Errors
 /// [`IoError::UnsupportedFormat`], [`IoError::Mesh`] if the mesh does not validate, or
 /// [`IoError::Write`].
-pub fn write_mesh(path: &Path, mesh: &Mesh) -> Result<(), IoError> {
+pub fn write_mesh(path: &Path, mesh: &Mesh) -> Result<Warnings, IoError> {
     write_mesh_with(path, mesh, WriteFormat::from_path(path)?)
 }
 
 /// Writes a mesh in the given encoding, whatever the extension, atomically ([`WriteFormat::TetGen`]
-/// writes the pair `X.node`, `X.ele` next to `path`, each atomically).
+/// writes the pair `X.node`, `X.ele` next to `path`, each atomically). Returns the warnings, as
+/// [`write_mesh`].
 ///
 /// # Errors
 /// [`IoError::Mesh`] if the mesh does not validate (nothing is written), [`IoError::Invalid`] for
 /// TetGen without tetrahedra (nothing is written), or [`IoError::Write`].
-pub fn write_mesh_with(path: &Path, mesh: &Mesh, format: WriteFormat) -> Result<(), IoError> {
+pub fn write_mesh_with(path: &Path, mesh: &Mesh, format: WriteFormat) -> Result<Warnings, IoError> {
     // A `Mesh` has public fields; refuse to write indices that would not read back.
     mesh.validate().map_err(|source| IoError::Mesh { path: path.to_path_buf(), source })?;
+    let mut warnings = Warnings::new();
+    let warn = &mut warnings;
     match format {
-        WriteFormat::Obj => write_atomic(path, |w| obj::write_obj(w, mesh)),
-        WriteFormat::Ply(encoding) => write_atomic(path, |w| ply::write_ply(w, mesh, encoding)),
-        WriteFormat::StlBinary => write_atomic(path, |w| stl::write_stl_binary(w, mesh)),
-        WriteFormat::Off => write_atomic(path, |w| off::write_off(w, mesh)),
-        WriteFormat::Msh => write_atomic(path, |w| msh::write_msh(w, mesh)),
-        WriteFormat::TetGen => tetgen::write_tetgen_files(path, mesh),
+        WriteFormat::Obj => write_atomic(path, |w| obj::write_obj(w, mesh, warn))?,
+        WriteFormat::Ply(encoding) => write_atomic(path, |w| ply::write_ply(w, mesh, encoding, warn))?,
+        WriteFormat::StlBinary => write_atomic(path, |w| stl::write_stl_binary(w, mesh, warn))?,
+        WriteFormat::Off => write_atomic(path, |w| off::write_off(w, mesh, warn))?,
+        WriteFormat::Msh => {
+            report_dropped(mesh, &[], "MSH", warn);
+            write_atomic(path, |w| msh::write_msh(w, mesh))?;
+        }
+        WriteFormat::TetGen => {
+            report_dropped(mesh, &[], "TetGen files", warn);
+            tetgen::write_tetgen_files(path, mesh)?;
+        }
+        WriteFormat::Vtu => write_atomic(path, |w| vtu::write_vtu(w, mesh, &[], warn))?,
+    }
+    Ok(warnings.for_file(path))
+}
+
+/// Counts, in `warnings`, each kind of `mesh`'s attributes that a writer of `format` does not
+/// keep (`kept`), and the polygons it has to split when it stores triangles only.
+pub(crate) fn report_dropped(mesh: &Mesh, kept: &[AttributeKind], format: &str, warnings: &mut Warnings) {
+    for kind in mesh.attributes.kinds() {
+        if !kept.contains(&kind) {
+            let what = kind.describe();
+            warnings.add(
+                "attributes_dropped",
+                &format!("kinds of attribute that {format} cannot hold, dropped"),
+                || what.clone(),
+            );
+        }
+    }
+}
+
+/// Counts, in `warnings`, the polygons with more than 3 corners that a triangles-only format
+/// (`format`) writes as their triangles.
+pub(crate) fn report_polygons_split(mesh: &Mesh, format: &str, warnings: &mut Warnings) {
+    let mut split = mesh.polygons.iter().enumerate().filter(|(_, p)| p.len() > 3);
+    if let Some((first, p)) = split.next() {
+        let corners = p.len();
+        warnings.add_many(
+            "polygons_split",
+            &format!("polygons written as triangles ({format} stores triangles only)"),
+            1 + split.count(),
+            || format!("face {first} ({corners} corners)"),
+        );
     }
 }
 
@@ -299,8 +354,12 @@ pub fn write_atomic(path: &Path, write: impl FnOnce(&mut dyn Write) -> io::Resul
     Ok(())
 }
 
-/// Line-by-line reading of a text file with 1-based line numbers, `\n` or `\r\n` endings and
-/// invalid UTF-8 replaced (it only ever occurs in comments and names).
+/// The UTF-8 byte-order mark, skipped at the start of every text file.
+pub const UTF8_BOM: &[u8] = b"\xEF\xBB\xBF";
+
+/// Line-by-line reading of a text file with 1-based line numbers, `\n` or `\r\n` endings, a
+/// UTF-8 byte-order mark at the start skipped, and invalid UTF-8 replaced (it only ever occurs
+/// in comments and names).
 pub(crate) struct Lines<R> {
     reader: R,
     bytes: Vec<u8>,
@@ -325,6 +384,10 @@ impl<R: BufRead> Lines<R> {
         }
         self.number += 1;
         self.consumed += read as u64;
+        if self.number == 1 && self.bytes.starts_with(UTF8_BOM) {
+            // A UTF-8 byte-order mark is not part of the first line (editors on Windows add it).
+            self.bytes.drain(..UTF8_BOM.len());
+        }
         if self.bytes.last() == Some(&b'\n') {
             self.bytes.pop();
         }
@@ -342,15 +405,11 @@ impl<R: BufRead> Lines<R> {
     }
 }
 
-/// Builds the mesh from polygons, attributing any error to `path`.
-pub(crate) fn build_mesh(
-    path: &Path,
-    positions: Vec<glam::DVec3>,
-    polygons: &[Vec<u32>],
-) -> Result<LoadedMesh, IoError> {
-    let (mesh, report) = Mesh::from_polygons(positions, polygons)
+/// Builds the mesh from polygons, attributing any error (and every warning) to `path`.
+pub(crate) fn build_mesh(path: &Path, positions: Vec<glam::DVec3>, polygons: Polygons) -> Result<LoadedMesh, IoError> {
+    let (mesh, warnings) = Mesh::from_polygons(positions, polygons)
         .map_err(|source| IoError::Mesh { path: path.to_path_buf(), source })?;
-    Ok(LoadedMesh { mesh, report })
+    Ok(LoadedMesh { mesh, warnings: warnings.for_file(path) })
 }
 
 /// Parses one coordinate, naming it in the error.
@@ -410,6 +469,9 @@ mod tests {
         assert_eq!(lines.next_line().unwrap(), Some((4, "c")));
         assert_eq!(lines.number, 4);
         assert_eq!(lines.next_line().unwrap(), None);
+        let mut lines = Lines::new(&b"\xEF\xBB\xBFv 1 2 3\n\xEF\xBB\xBF"[..]);
+        assert_eq!(lines.next_line().unwrap(), Some((1, "v 1 2 3")), "the mark is skipped at the start");
+        assert_eq!(lines.next_line().unwrap(), Some((2, "\u{feff}")), "and only there");
     }
 
     #[test]

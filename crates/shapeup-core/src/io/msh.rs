@@ -22,7 +22,7 @@ use std::str::SplitWhitespace;
 use glam::DVec3;
 
 use super::{IoError, Lines, LoadedMesh, bounded_vec, build_mesh, parse_coordinate, write_point};
-use crate::mesh::{Mesh, MeshError, PolygonReport};
+use crate::mesh::{Mesh, MeshError};
 use crate::topology::tetrahedron_boundary;
 
 /// Gmsh element type of a 3-node triangle.
@@ -102,7 +102,7 @@ pub fn read_msh(reader: impl BufRead, path: &Path) -> Result<LoadedMesh, IoError
         });
     }
     // Triangles only (or a bare point cloud): a surface mesh.
-    build_mesh(path, nodes.positions, &elements.triangles)
+    build_mesh(path, nodes.positions, elements.triangles.iter().map(Vec::as_slice).collect())
 }
 
 /// Nodes read so far: positions in file order and the index of each tag.
@@ -332,8 +332,9 @@ pub(super) fn tetrahedral_mesh(
             tet.swap(2, 3);
         }
     }
-    mesh.triangles = tetrahedron_boundary(&mesh.tetrahedra);
-    Ok(LoadedMesh { mesh, report: PolygonReport::default() })
+    let boundary = tetrahedron_boundary(&mesh.tetrahedra);
+    mesh.set_triangles(boundary);
+    Ok(LoadedMesh { mesh, warnings: crate::warnings::Warnings::new() })
 }
 
 /// Writes `mesh` as MSH 4.1 ASCII: node tags are vertex indices + 1; element tags number the

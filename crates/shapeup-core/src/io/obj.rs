@@ -120,7 +120,7 @@ pub fn read_obj(reader: impl BufRead, path: &Path) -> Result<LoadedMesh, IoError
             ));
         }
     }
-    build_mesh(path, positions, &faces)
+    build_mesh(path, positions, faces.iter().map(Vec::as_slice).collect())
 }
 
 /// Parses a face corner `i`, `i/t`, `i//n` or `i/t/n` into a 0-based vertex index; negative `i`
@@ -145,19 +145,49 @@ fn parse_index(token: &str, defined: usize) -> Result<u32, String> {
     u32::try_from(zero_based).map_err(|_| format!("vertex index {i} is too large (at most {})", u32::MAX))
 }
 
+/// Everything an OBJ file holds besides positions and faces (see [`crate::attributes`]).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ObjAttributes {}
+
+impl ObjAttributes {
+    /// Texture coordinates per corner.
+    pub fn texcoords(&self, _polygons: &crate::mesh::Polygons) -> Option<crate::attributes::TexCoords> {
+        None
+    }
+
+    /// Per-vertex colours.
+    pub fn vertex_colors(&self) -> Option<Vec<[f64; 3]>> {
+        None
+    }
+
+    /// Whether the file has `vn` lines.
+    pub fn has_normals(&self) -> bool {
+        false
+    }
+
+    /// Every kind of attribute held.
+    pub fn kinds(&self) -> Vec<crate::attributes::AttributeKind> {
+        Vec::new()
+    }
+}
+
 /// Writes `mesh` as OBJ: one `v` line per vertex (shortest decimal that reads back exactly), one
-/// 1-based `f` line per triangle. Tetrahedra are not written.
+/// 1-based `f` line per polygon. Tetrahedra are not written.
 ///
 /// # Errors
 /// Any error of `w`.
-pub fn write_obj(w: &mut dyn Write, mesh: &Mesh) -> io::Result<()> {
-    writeln!(w, "# written by shapeup: {} vertices, {} triangles", mesh.num_vertices(), mesh.num_triangles())?;
+pub fn write_obj(w: &mut dyn Write, mesh: &Mesh, _warnings: &mut crate::warnings::Warnings) -> io::Result<()> {
+    writeln!(w, "# written by shapeup: {} vertices, {} faces", mesh.num_vertices(), mesh.num_polygons())?;
     for p in &mesh.positions {
         w.write_all(b"v ")?;
         write_point(w, *p)?;
     }
-    for [a, b, c] in &mesh.triangles {
-        writeln!(w, "f {} {} {}", u64::from(*a) + 1, u64::from(*b) + 1, u64::from(*c) + 1)?;
+    for poly in mesh.polygons.iter() {
+        w.write_all(b"f")?;
+        for v in poly {
+            write!(w, " {}", u64::from(*v) + 1)?;
+        }
+        w.write_all(b"\n")?;
     }
     Ok(())
 }
@@ -210,7 +240,7 @@ mod tests {
     fn writes_one_based_faces() {
         let mesh = Mesh::new(vec![DVec3::ZERO, DVec3::X, DVec3::Y], vec![[0, 1, 2]]).unwrap();
         let mut out = Vec::new();
-        write_obj(&mut out, &mesh).unwrap();
+        write_obj(&mut out, &mesh, &mut crate::warnings::Warnings::new()).unwrap();
         let text = String::from_utf8(out).unwrap();
         assert!(text.contains("v 1.0 0.0 0.0\n") && text.ends_with("f 1 2 3\n"), "{text}");
     }

@@ -123,7 +123,7 @@ pub fn read_off(reader: impl BufRead, path: &Path) -> Result<LoadedMesh, IoError
         // Whatever follows the indices (a colour) is ignored.
         faces.push(face);
     }
-    build_mesh(path, positions, &faces)
+    build_mesh(path, positions, faces.iter().map(Vec::as_slice).collect())
 }
 
 /// `OFF` with any of the optional prefixes `ST`, `C`, `N`, `4`, `n`… that only add per-vertex
@@ -136,18 +136,49 @@ fn is_off_keyword(keyword: &str) -> bool {
     prefix.is_empty()
 }
 
+/// Everything an OFF file holds besides positions and faces (see [`crate::attributes`]).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct OffAttributes {}
+
+impl OffAttributes {
+    /// Texture coordinates per corner.
+    pub fn texcoords(&self, _polygons: &crate::mesh::Polygons) -> Option<crate::attributes::TexCoords> {
+        None
+    }
+
+    /// Per-vertex colours.
+    pub fn vertex_colors(&self) -> Option<Vec<[f64; 3]>> {
+        None
+    }
+
+    /// Whether the vertices have normals (`NOFF`).
+    pub fn has_normals(&self) -> bool {
+        false
+    }
+
+    /// Every kind of attribute held.
+    pub fn kinds(&self) -> Vec<crate::attributes::AttributeKind> {
+        Vec::new()
+    }
+}
+
 /// Writes `mesh` as ASCII OFF with exactly round-tripping coordinates. Tetrahedra are not
 /// written.
 ///
 /// # Errors
 /// Any error of `w`.
-pub fn write_off(w: &mut dyn Write, mesh: &Mesh) -> io::Result<()> {
-    writeln!(w, "OFF\n{} {} 0", mesh.num_vertices(), mesh.num_triangles())?;
+pub fn write_off(w: &mut dyn Write, mesh: &Mesh, warnings: &mut crate::warnings::Warnings) -> io::Result<()> {
+    super::report_dropped(mesh, &[], "OFF", warnings);
+    writeln!(w, "OFF\n{} {} 0", mesh.num_vertices(), mesh.num_polygons())?;
     for p in &mesh.positions {
         write_point(w, *p)?;
     }
-    for [a, b, c] in &mesh.triangles {
-        writeln!(w, "3 {a} {b} {c}")?;
+    for poly in mesh.polygons.iter() {
+        write!(w, "{}", poly.len())?;
+        for v in poly {
+            write!(w, " {v}")?;
+        }
+        w.write_all(b"\n")?;
     }
     Ok(())
 }

@@ -161,7 +161,7 @@ pub fn read_ply(reader: impl BufRead, path: &Path) -> Result<LoadedMesh, IoError
     if sink.positions.is_empty() {
         return Err(IoError::Invalid { path: path.to_path_buf(), message: "the PLY file has no vertices".to_owned() });
     }
-    build_mesh(path, sink.positions, &sink.faces)
+    build_mesh(path, sink.positions, sink.faces.iter().map(Vec::as_slice).collect())
 }
 
 fn parse_header<R: BufRead>(lines: &mut Lines<R>, path: &Path) -> Result<(PlyEncoding, Vec<Element>, usize), IoError> {
@@ -519,13 +519,50 @@ fn read_binary_body<R: Read>(body: &mut Binary<R>, elements: &[Element], sink: &
     Ok(())
 }
 
+/// Everything a PLY file holds besides positions and faces (see [`crate::attributes`]).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct PlyAttributes {}
+
+impl PlyAttributes {
+    /// Texture coordinates per corner.
+    pub fn texcoords(&self, _polygons: &crate::mesh::Polygons) -> Option<crate::attributes::TexCoords> {
+        None
+    }
+
+    /// Per-vertex colours.
+    pub fn vertex_colors(&self) -> Option<Vec<[f64; 3]>> {
+        None
+    }
+
+    /// Whether the vertices have `nx ny nz`.
+    pub fn has_normals(&self) -> bool {
+        false
+    }
+
+    /// Per-vertex scalar properties other than positions, normals and colours.
+    pub fn vertex_scalars(&self) -> Vec<crate::attributes::VertexScalar> {
+        Vec::new()
+    }
+
+    /// Every kind of attribute held.
+    pub fn kinds(&self) -> Vec<crate::attributes::AttributeKind> {
+        Vec::new()
+    }
+}
+
 /// Writes `mesh` as PLY: `double` x, y, z and faces as `list uchar int vertex_indices`.
 /// Tetrahedra are not written.
 ///
 /// # Errors
 /// Any error of `w`; [`io::ErrorKind::InvalidInput`] for more than `i32::MAX` vertices (the
 /// indices are `int`).
-pub fn write_ply(w: &mut dyn Write, mesh: &Mesh, encoding: PlyEncoding) -> io::Result<()> {
+pub fn write_ply(
+    w: &mut dyn Write,
+    mesh: &Mesh,
+    encoding: Option<PlyEncoding>,
+    _warnings: &mut crate::warnings::Warnings,
+) -> io::Result<()> {
+    let encoding = encoding.unwrap_or(PlyEncoding::BinaryLittleEndian);
     if i32::try_from(mesh.num_vertices()).is_err() {
         return Err(io::Error::new(io::ErrorKind::InvalidInput, "PLY 'int' indices allow at most i32::MAX vertices"));
     }
@@ -538,15 +575,19 @@ pub fn write_ply(w: &mut dyn Write, mesh: &Mesh, encoding: PlyEncoding) -> io::R
         w,
         "ply\nformat {format} 1.0\ncomment written by shapeup\nelement vertex {}\nproperty double x\nproperty double y\nproperty double z\nelement face {}\nproperty list uchar int vertex_indices\nend_header\n",
         mesh.num_vertices(),
-        mesh.num_triangles()
+        mesh.num_polygons()
     )?;
     match encoding {
         PlyEncoding::Ascii => {
             for p in &mesh.positions {
                 write_point(w, *p)?;
             }
-            for [a, b, c] in &mesh.triangles {
-                writeln!(w, "3 {a} {b} {c}")?;
+            for poly in mesh.polygons.iter() {
+                write!(w, "{}", poly.len())?;
+                for v in poly {
+                    write!(w, " {v}")?;
+                }
+                w.write_all(b"\n")?;
             }
         }
         PlyEncoding::BinaryLittleEndian | PlyEncoding::BinaryBigEndian => {
@@ -556,9 +597,9 @@ pub fn write_ply(w: &mut dyn Write, mesh: &Mesh, encoding: PlyEncoding) -> io::R
                     w.write_all(&if big { x.to_be_bytes() } else { x.to_le_bytes() })?;
                 }
             }
-            for triangle in &mesh.triangles {
-                w.write_all(&[3])?;
-                for &v in triangle {
+            for poly in mesh.polygons.iter() {
+                w.write_all(&[u8::try_from(poly.len()).unwrap_or(u8::MAX)])?;
+                for &v in poly {
                     // In range: indices are below num_vertices ≤ i32::MAX (checked above).
                     let v = i32::try_from(v).unwrap_or(i32::MAX);
                     w.write_all(&if big { v.to_be_bytes() } else { v.to_le_bytes() })?;

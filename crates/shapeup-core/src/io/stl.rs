@@ -56,6 +56,10 @@ pub fn parse_stl(bytes: &[u8], path: &Path) -> Result<LoadedMesh, IoError> {
     if looks_ascii(bytes) {
         return parse_ascii(bytes, path);
     }
+    // An ascii file that starts with a UTF-8 byte-order mark (the line reader skips the mark).
+    if bytes.strip_prefix(super::UTF8_BOM).is_some_and(looks_ascii) {
+        return parse_ascii(bytes, path);
+    }
     match count {
         Some(count) => parse_binary(bytes, count, path),
         None => Err(IoError::Binary {
@@ -112,7 +116,7 @@ fn finish(merger: Merger, faces: &[Vec<u32>], path: &Path) -> Result<LoadedMesh,
     if faces.is_empty() {
         return Err(IoError::Invalid { path: path.to_path_buf(), message: "the STL file has no triangles".to_owned() });
     }
-    build_mesh(path, merger.positions, faces)
+    build_mesh(path, merger.positions, faces.iter().map(Vec::as_slice).collect())
 }
 
 fn parse_binary(bytes: &[u8], count: u32, path: &Path) -> Result<LoadedMesh, IoError> {
@@ -242,7 +246,15 @@ fn parse_ascii(bytes: &[u8], path: &Path) -> Result<LoadedMesh, IoError> {
 ///
 /// # Errors
 /// Any error of `w`; [`io::ErrorKind::InvalidInput`] for more than `u32::MAX` triangles.
-pub fn write_stl_binary(w: &mut dyn Write, mesh: &Mesh) -> io::Result<()> {
+pub fn write_stl_binary(w: &mut dyn Write, mesh: &Mesh, warnings: &mut crate::warnings::Warnings) -> io::Result<()> {
+    super::report_dropped(mesh, &[], "STL", warnings);
+    super::report_polygons_split(mesh, "STL", warnings);
+    warnings.add_many(
+        "vertices_not_kept",
+        "vertices not kept as such: STL stores separate triangles, so the output's vertex count and order are not the input's (use OBJ, PLY or OFF to keep them)",
+        mesh.num_vertices(),
+        || format!("{} triangles written", mesh.num_triangles()),
+    );
     let count = u32::try_from(mesh.num_triangles())
         .map_err(|_| io::Error::new(io::ErrorKind::InvalidInput, "binary STL holds at most u32::MAX triangles"))?;
     let mut header = [b' '; HEADER_LEN];
@@ -282,7 +294,7 @@ mod tests {
     fn written_header_is_not_ascii_and_sizes_match() {
         let mesh = Mesh::new(vec![DVec3::ZERO, DVec3::X, DVec3::Y], vec![[0, 1, 2]]).unwrap();
         let mut out = Vec::new();
-        write_stl_binary(&mut out, &mesh).unwrap();
+        write_stl_binary(&mut out, &mesh, &mut crate::warnings::Warnings::new()).unwrap();
         assert_eq!(out.len(), 84 + 50);
         assert!(!out.starts_with(b"solid"));
         // The normal of a counter-clockwise triangle in the xy plane is +z.

@@ -6,7 +6,8 @@ use crate::constraints::{BuildContext, Params, Position, Selection, build_constr
 use crate::dynamics::{DynamicsParams, Simulation};
 use crate::geometry::{RestGeometry, WorkingFrame, lumped_masses_surface, lumped_masses_volume};
 use crate::io::read_mesh;
-use crate::mesh::{Mesh, PolygonReport};
+use crate::mesh::Mesh;
+use crate::warnings::Warnings;
 use crate::solver::{ConstraintGroup, GroupId, SolveError, SolveReport, SolverParams, System};
 use glam::DVec3;
 use std::time::Instant;
@@ -16,10 +17,13 @@ use std::time::Instant;
 pub struct LoadedScene {
     /// The parsed scene.
     pub scene: Scene,
-    /// The mesh as read (input frame).
+    /// The mesh as read (input frame); after `tetrahedralize`, with TetGen's points after the
+    /// input's vertices.
     pub mesh: Mesh,
-    /// What loading changed (polygons split, degenerate faces dropped).
-    pub polygon_report: PolygonReport,
+    /// Vertices of the input mesh (before tetrahedralization added points): what outputs write.
+    pub input_vertices: usize,
+    /// What loading changed (polygons triangulated, faces left out…), each naming the file.
+    pub warnings: Warnings,
     /// Input ↔ working frame.
     pub frame: WorkingFrame,
     /// Rest geometry in the working frame.
@@ -43,7 +47,7 @@ impl Scene {
         let t = Instant::now();
         let loaded = self.read_mesh()?;
         let load_seconds = t.elapsed().as_secs_f64();
-        self.build(loaded.mesh, loaded.report, load_seconds)
+        self.build(loaded.mesh, loaded.warnings, load_seconds)
     }
 
     /// The scene's mesh: read from its file, or generated.
@@ -52,7 +56,7 @@ impl Scene {
     /// [`SceneError::Mesh`] naming the scene and the mesh file's problem.
     pub fn read_mesh(&self) -> Result<crate::io::LoadedMesh, SceneError> {
         match &self.mesh.generate {
-            Some(generated) => Ok(crate::io::LoadedMesh { mesh: generated.mesh(), report: PolygonReport::default() }),
+            Some(generated) => Ok(crate::io::LoadedMesh { mesh: generated.mesh(), warnings: Warnings::new() }),
             None => read_mesh(&self.mesh_path()).map_err(|source| SceneError::Mesh { path: self.file.clone(), source }),
         }
     }
@@ -61,18 +65,14 @@ impl Scene {
     ///
     /// # Errors
     /// As [`Scene::load`], but for the mesh file itself.
-    pub fn build(
-        &self,
-        mesh: Mesh,
-        polygon_report: PolygonReport,
-        load_seconds: f64,
-    ) -> Result<LoadedScene, SceneError> {
+    pub fn build(&self, mesh: Mesh, warnings: Warnings, load_seconds: f64) -> Result<LoadedScene, SceneError> {
         let t = Instant::now();
         let invalid = |entry: &str, message: String| SceneError::Invalid {
             path: self.file.clone(),
             entry: entry.into(),
             message,
         };
+        let input_vertices = mesh.num_vertices();
         let mesh = if self.mesh.tetrahedralize && mesh.tetrahedra.is_empty() {
             fill_with_tetrahedra(&mesh).map_err(|m| invalid("[mesh]", m))?
         } else {
@@ -99,7 +99,8 @@ impl Scene {
         Ok(LoadedScene {
             scene: self.clone(),
             mesh,
-            polygon_report,
+            input_vertices,
+            warnings,
             frame,
             rest,
             system,
@@ -222,8 +223,8 @@ impl LoadedScene {
         positions.iter().map(|&p| self.frame.to_working(p)).collect()
     }
 
-    /// The input mesh with its positions replaced by `q` (working frame) mapped back; vertices
-    /// that no constraint touches keep their input positions bit for bit.
+    /// The input mesh (faces, attributes) with its positions replaced by `q` (working frame)
+    /// mapped back; vertices that no constraint touches keep their input positions bit for bit.
     pub fn mesh_at(&self, q: &[DVec3]) -> Mesh {
         let positions = q
             .iter()
@@ -231,7 +232,7 @@ impl LoadedScene {
             .enumerate()
             .map(|(v, (&p, &input))| if self.system.is_solved(v) { self.frame.to_input(p) } else { input })
             .collect();
-        Mesh { positions, triangles: self.mesh.triangles.clone(), tetrahedra: self.mesh.tetrahedra.clone() }
+        self.mesh.with_positions(positions)
     }
 
     /// Lumped masses m_i (working frame): ρ Σ|V_T|/4 on a tetrahedral mesh, else ρ Σ A_t/3
@@ -284,16 +285,21 @@ impl LoadedScene {
         Simulation::new(system, self.masses(), self.rest.positions.clone(), params).map_err(|e| invalid(e.to_string()))
     }
 
-    /// The surface at working positions `q`, mapped back to the input frame: the triangles,
-    /// and the vertices up to the last one a triangle uses (a tetrahedralized surface's
-    /// vertices come first, so its interior points are left out; indices are unchanged).
+    /// The input mesh at working positions `q`, mapped back to the input frame: every input
+    /// vertex in file order (also those no face uses), its faces and attributes; no
+    /// tetrahedra. After `tetrahedralize`, TetGen's added points (which come after the input's
+    /// vertices) are left out, so frames line up with the input file.
     pub fn surface_at(&self, q: &[DVec3]) -> Mesh {
-        let used = self.mesh.triangles.iter().flatten().map(|&v| v as usize + 1).max().unwrap_or(q.len());
-        Mesh {
-            positions: q[..used.min(q.len())].iter().map(|&p| self.frame.to_input(p)).collect(),
-            triangles: self.mesh.triangles.clone(),
-            tetrahedra: Vec::new(),
-        }
+        let n = self.input_vertices.min(q.len());
+        let mut mesh = self.mesh.with_positions(q[..n].iter().map(|&p| self.frame.to_input(p)).collect());
+        mesh.tetrahedra.clear();
+        mesh
+    }
+
+    /// The whole mesh at working positions `q` in the input frame, tetrahedra and all points
+    /// included (for volume outputs: `.vtu`, `.msh`).
+    pub fn volume_at(&self, q: &[DVec3]) -> Mesh {
+        self.mesh.with_positions(q.iter().map(|&p| self.frame.to_input(p)).collect())
     }
 
     /// Every position group that spins (see [`super::Spin`]), with its static targets resolved

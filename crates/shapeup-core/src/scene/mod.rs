@@ -418,8 +418,10 @@ impl Scene {
             }
         };
         let text = std::fs::read_to_string(path).map_err(|source| SceneError::Read { path: path.into(), source })?;
+        // A UTF-8 byte-order mark is not TOML or JSON (editors on Windows add it).
+        let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
         let base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-        Scene::parse(&text, format, path, base_dir)
+        Scene::parse(text, format, path, base_dir)
     }
 
     /// Parses scene text; `path` is only used in messages, `base_dir` resolves the mesh path.
