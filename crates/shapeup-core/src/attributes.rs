@@ -81,6 +81,14 @@ impl AttributeKind {
 }
 
 impl Attributes {
+    /// The same attributes as a file written from them holds them (OFF drops comment lines).
+    pub fn with_comments(self, comments: usize) -> Self {
+        match self {
+            Attributes::Off(a) => Attributes::Off(Box::new(a.with_comments(comments))),
+            other => other,
+        }
+    }
+
     /// Texture coordinates per corner, if the file has any.
     pub fn texcoords(&self, polygons: &Polygons) -> Option<TexCoords> {
         match self {

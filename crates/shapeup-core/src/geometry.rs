@@ -1,7 +1,7 @@
 //! Rest geometry: areas, volumes, cotan weights, normals, lumped masses and the working frame.
 //!
 //! Each routine is one small function whose doc states its formula (see the math reference,
-//! `shapeup-math.md`, "Notation"). [`RestGeometry`] bundles what the constraints need, computed
+//! `docs/math.md`, "Notation"). [`RestGeometry`] bundles what the constraints need, computed
 //! once from the rest positions.
 
 use crate::topology::Topology;

@@ -14,7 +14,7 @@
 //! 5. [`dynamics`] steps the same system in time (Projective Dynamics): inertia, gravity,
 //!    damping, external forces and grabs.
 //!
-//! Every formula follows the math reference (`shapeup-math.md`).
+//! Every formula follows the math reference (`docs/math.md`).
 //!
 //! # Example
 //! Pull one corner of a square of two triangles while the opposite corner stays put; edge

@@ -1,5 +1,5 @@
 //! End-to-end tests of the `shapeup` binary against the CLI and scene contract
-//! (`scenes-and-cli.md`): real processes, real files, outcomes read back with `shapeup_core`.
+//! (`docs/scenes-and-cli.md`): real processes, real files, outcomes read back with `shapeup_core`.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use glam::DVec3;
@@ -1250,4 +1250,94 @@ fn simulate_spinning_handle_turns_the_end_of_a_bar() {
     let out = simulate_in(None, &bad, &dir, &["--frames", "2"]);
     assert_eq!(out.code, Some(1), "{}", out.describe());
     assert!(out.stderr.contains("spin"), "{}", out.stderr);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Nothing lost: vertex count and order, warnings
+// ---------------------------------------------------------------------------------------------
+
+/// A 6 × 6 grid of quads in the plane z = 0 (x, y in [0, 1]) as OBJ, with vertices no face uses
+/// at the start, in the middle and at the end of the file; returns the text and the indices
+/// (0-based) of the unused vertices.
+fn grid_with_unused_vertices() -> (String, Vec<usize>) {
+    let n = 7;
+    let mut lines = vec!["v 9 9 9".to_owned()]; // unused, first
+    let mut index = vec![0usize; n * n];
+    let mut unused = vec![0];
+    for j in 0..n {
+        for i in 0..n {
+            if j == n / 2 && i == 0 {
+                unused.push(lines.len());
+                lines.push("v -5 -5 -5".to_owned()); // unused, in the middle
+            }
+            index[j * n + i] = lines.len();
+            lines.push(format!("v {} {} 0", i as f64 / (n - 1) as f64, j as f64 / (n - 1) as f64));
+        }
+    }
+    unused.push(lines.len());
+    lines.push("v 7 7 7".to_owned()); // unused, last
+    for j in 0..n - 1 {
+        for i in 0..n - 1 {
+            let c = [index[j * n + i], index[j * n + i + 1], index[(j + 1) * n + i + 1], index[(j + 1) * n + i]];
+            lines.push(format!("f {} {} {} {}", c[0] + 1, c[1] + 1, c[2] + 1, c[3] + 1));
+        }
+    }
+    (lines.join("\n") + "\n", unused)
+}
+
+const GRID_BODY: &str = r#"
+[[constraints]]
+type = "edge_spring"
+
+[[constraints]]
+type = "position"
+name = "left"
+box = { min = [-0.01, -0.01, -0.01], max = [0.01, 1.01, 0.01] }
+
+[[constraints]]
+type = "position"
+name = "right"
+box = { min = [0.99, -0.01, -0.01], max = [1.01, 1.01, 0.01] }
+translate = [0.3, 0.0, 0.5]
+"#;
+
+#[test]
+fn deform_keeps_unused_vertices_at_the_start_middle_and_end_in_every_format() {
+    let ws = Workspace::new();
+    let (text, unused) = grid_with_unused_vertices();
+    let mesh_path = write(&ws.path("grid.obj"), &text);
+    let rest = read(&mesh_path);
+    let scene = ws.scene("grid.toml", &toml_scene(&mesh_path, "", GRID_BODY));
+    for name in ["grid.obj", "grid.ply", "grid.off"] {
+        let (out, report, _) = deform_ok(&ws, &scene, name, &[]);
+        assert_eq!(out.num_vertices(), rest.num_vertices(), "{name}");
+        assert_eq!(out.polygons, rest.polygons, "{name}: quads stay quads");
+        for &v in &unused {
+            assert_eq!(out.positions[v], rest.positions[v], "{name}: unused vertex {v} moved");
+        }
+        let moved = out.positions.iter().zip(&rest.positions).filter(|(a, b)| (**a - **b).length() > 0.1).count();
+        assert!(moved > 5, "{name}: the right side moved");
+        assert!(report["warnings"].is_array(), "{name}: the report lists warnings");
+    }
+}
+
+#[test]
+fn deform_says_each_change_once_with_a_count() {
+    let ws = Workspace::new();
+    let (text, _) = grid_with_unused_vertices();
+    let mesh_path = write(&ws.path("grid.obj"), &text);
+    let scene = ws.scene("grid.toml", &toml_scene(&mesh_path, "", GRID_BODY));
+    let (_, report, out) = deform_ok(&ws, &scene, "grid.stl", &[]);
+    let warnings: Vec<&str> = out.stderr.lines().filter(|l| l.contains("warning")).collect();
+    let triangulated: Vec<&&str> = warnings.iter().filter(|l| l.contains("triangulated")).collect();
+    assert_eq!(triangulated.len(), 1, "once: {warnings:?}");
+    assert!(triangulated[0].contains("36 polygons") && triangulated[0].contains("grid.obj"), "{warnings:?}");
+    let stl: Vec<&&str> = warnings.iter().filter(|l| l.contains("grid.stl") && l.contains("STL")).collect();
+    assert!(stl.iter().any(|l| l.contains("vertices")), "{warnings:?}");
+    let kinds: Vec<&str> = report["warnings"].as_array().unwrap().iter().filter_map(|w| w["kind"].as_str()).collect();
+    assert!(kinds.contains(&"polygons_triangulated") && kinds.contains(&"vertices_not_kept"), "{kinds:?}");
+    let count = report["warnings"].as_array().unwrap().iter().find(|w| w["kind"] == "polygons_triangulated").unwrap()
+        ["count"]
+        .as_u64();
+    assert_eq!(count, Some(36));
 }

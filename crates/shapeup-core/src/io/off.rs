@@ -1,9 +1,14 @@
 //! Object File Format (`.off`).
 //!
-//! Read: a header `OFF` (or `COFF`, `NOFF`, `CNOFF`, `STOFF`, …: the extra per-vertex values
-//! those announce are ignored), counts `nv nf [ne]` (on the header line or the next), `nv` vertex
-//! lines `x y z …`, then `nf` face lines `k i₀ … i_{k−1} [colour…]` with 0-based indices. `#`
-//! starts a comment; blank lines are skipped. Binary OFF and the 4-D / n-D variants are refused.
+//! Read: a header `OFF` (or `COFF`, `NOFF`, `CNOFF`, `STOFF`, …), counts `nv nf [ne]` (on the
+//! header line or the next), `nv` vertex lines `x y z …`, then `nf` face lines
+//! `k i₀ … i_{k−1} [colour…]` with 0-based indices. `#` starts a comment; blank lines are
+//! skipped. Binary OFF and the 4-D / n-D variants are refused.
+//!
+//! Kept ([`OffAttributes`]): the keyword and, verbatim, the values after each vertex's x y z
+//! (normal, colour, texture coordinates, as the keyword's prefixes announce) and after each
+//! face's indices (a colour). Written back as OFF, only x y z change and `N` normals are
+//! recomputed; comment lines are not written (counted in a warning).
 
 use std::io::{self, BufRead, Write};
 use std::path::Path;
@@ -23,14 +28,18 @@ use crate::mesh::Mesh;
 pub fn read_off(reader: impl BufRead, path: &Path) -> Result<LoadedMesh, IoError> {
     let mut lines = Lines::new(reader);
     let parse_error = |line: usize, message: String| IoError::Parse { path: path.to_path_buf(), line, message };
+    let mut comments = 0;
     // The next non-blank line without its comment, split into tokens, or `None` at the end.
-    let next_tokens = |lines: &mut Lines<_>| -> Result<Option<(usize, Vec<String>)>, IoError> {
+    let mut next_tokens = |lines: &mut Lines<_>| -> Result<Option<(usize, Vec<String>)>, IoError> {
         loop {
             let Some((number, text)) =
                 lines.next_line().map_err(|source| IoError::Read { path: path.to_path_buf(), source })?
             else {
                 return Ok(None);
             };
+            if text.contains('#') {
+                comments += 1;
+            }
             let content = text.split('#').next().unwrap_or("");
             let tokens: Vec<String> = content.split_whitespace().map(str::to_owned).collect();
             if !tokens.is_empty() {
@@ -82,7 +91,9 @@ pub fn read_off(reader: impl BufRead, path: &Path) -> Result<LoadedMesh, IoError
         )
     };
 
+    let layout = VertexLayout::of(&keyword);
     let mut positions = bounded_vec(nv);
+    let mut vertex_extra: Vec<String> = bounded_vec(nv);
     for i in 0..nv {
         let (line, tokens) =
             next_tokens(&mut lines)?.ok_or_else(|| truncated(&lines, format!("found {i} of {nv} vertices")))?;
@@ -95,9 +106,11 @@ pub fn read_off(reader: impl BufRead, path: &Path) -> Result<LoadedMesh, IoError
                 parse_coordinate(token, &format!("vertex {i} {axis} coordinate")).map_err(|m| parse_error(line, m))?;
         }
         positions.push(DVec3::from_array(xyz));
+        vertex_extra.push(tokens[3..].join(" "));
     }
 
     let mut faces: Vec<Vec<u32>> = bounded_vec(nf);
+    let mut face_extra: Vec<String> = bounded_vec(nf);
     for f in 0..nf {
         let (line, tokens) =
             next_tokens(&mut lines)?.ok_or_else(|| truncated(&lines, format!("found {f} of {nf} faces")))?;
@@ -120,10 +133,39 @@ pub fn read_off(reader: impl BufRead, path: &Path) -> Result<LoadedMesh, IoError
                 .ok_or_else(|| parse_error(line, format!("face {f}: vertex index '{token}' is not in 0..{nv}")))?;
             face.push(index);
         }
-        // Whatever follows the indices (a colour) is ignored.
+        // Whatever follows the indices (a colour) is kept as it is.
+        face_extra.push(tokens.map(String::as_str).collect::<Vec<_>>().join(" "));
         faces.push(face);
     }
-    build_mesh(path, positions, faces.iter().map(Vec::as_slice).collect())
+    let mut loaded = build_mesh(path, positions, faces.iter().map(Vec::as_slice).collect())?;
+    let attributes = OffAttributes { keyword, layout, vertex_extra, face_extra, comments };
+    if !attributes.is_plain() {
+        loaded.mesh.attributes = crate::attributes::Attributes::Off(Box::new(attributes));
+    }
+    Ok(loaded)
+}
+
+/// What each vertex line holds after x y z, from the header keyword's prefixes (Geomview's
+/// order: `[ST][C][N]OFF`, per vertex `x y z [nx ny nz] [r g b [a]] [s t]`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct VertexLayout {
+    /// `N`: a normal follows the coordinates.
+    pub normal: bool,
+    /// `C`: a colour follows (3 or 4 values).
+    pub color: bool,
+    /// `ST`: texture coordinates come last.
+    pub texture: bool,
+}
+
+impl VertexLayout {
+    fn of(keyword: &str) -> Self {
+        let prefix = keyword.strip_suffix("OFF").unwrap_or("");
+        VertexLayout {
+            texture: prefix.starts_with("ST"),
+            color: prefix.contains('C'),
+            normal: prefix.ends_with('N'),
+        }
+    }
 }
 
 /// `OFF` with any of the optional prefixes `ST`, `C`, `N`, `4`, `n`… that only add per-vertex
@@ -136,29 +178,99 @@ fn is_off_keyword(keyword: &str) -> bool {
     prefix.is_empty()
 }
 
-/// Everything an OFF file holds besides positions and faces (see [`crate::attributes`]).
+/// Everything an OFF file holds besides positions and faces (see [`crate::attributes`]): the
+/// header keyword and, verbatim, the values after each vertex's x y z and after each face's
+/// indices (colours, normals, texture coordinates).
 #[derive(Debug, Clone, Default, PartialEq)]
-pub struct OffAttributes {}
+pub struct OffAttributes {
+    /// `OFF`, `COFF`, `NOFF`, `STCNOFF`, …
+    pub keyword: String,
+    /// What the vertex values hold.
+    pub layout: VertexLayout,
+    /// Per vertex, the tokens after x y z (joined by single spaces).
+    pub vertex_extra: Vec<String>,
+    /// Per face, the tokens after its indices (a colour), joined by single spaces.
+    pub face_extra: Vec<String>,
+    /// Lines with a `#` comment (not kept on output).
+    pub comments: usize,
+}
 
 impl OffAttributes {
-    /// Texture coordinates per corner.
-    pub fn texcoords(&self, _polygons: &crate::mesh::Polygons) -> Option<crate::attributes::TexCoords> {
-        None
+    /// The same with `comments` comment lines (what a file written from these holds: none).
+    pub fn with_comments(mut self, comments: usize) -> Self {
+        self.comments = comments;
+        self
     }
 
-    /// Per-vertex colours.
+    /// Whether there is nothing beyond a plain `OFF` (then the mesh carries no attributes).
+    fn is_plain(&self) -> bool {
+        self.keyword == "OFF"
+            && self.comments == 0
+            && self.vertex_extra.iter().all(String::is_empty)
+            && self.face_extra.iter().all(String::is_empty)
+    }
+
+    /// The numbers after x y z of vertex `i` (unparsable tokens as NaN).
+    fn vertex_values(&self, i: usize) -> Vec<f64> {
+        self.vertex_extra
+            .get(i)
+            .map(|e| e.split_whitespace().map(|t| t.parse().unwrap_or(f64::NAN)).collect())
+            .unwrap_or_default()
+    }
+
+    /// Texture coordinates per corner: each vertex's `s t` (`ST` prefix).
+    pub fn texcoords(&self, polygons: &crate::mesh::Polygons) -> Option<crate::attributes::TexCoords> {
+        if !self.layout.texture {
+            return None;
+        }
+        let values: Option<Vec<[f64; 2]>> = (0..self.vertex_extra.len())
+            .map(|i| {
+                let v = self.vertex_values(i);
+                (v.len() >= 2).then(|| [v[v.len() - 2], v[v.len() - 1]])
+            })
+            .collect();
+        Some(crate::attributes::TexCoords { values: values?, corners: polygons.indices().to_vec() })
+    }
+
+    /// Per-vertex colours (`C` prefix), integers over 1 taken as 0–255.
     pub fn vertex_colors(&self) -> Option<Vec<[f64; 3]>> {
-        None
+        if !self.layout.color {
+            return None;
+        }
+        let start = if self.layout.normal { 3 } else { 0 };
+        let colors: Option<Vec<[f64; 3]>> = (0..self.vertex_extra.len())
+            .map(|i| {
+                let v = self.vertex_values(i);
+                let c = v.get(start..start + 3)?;
+                let scale = if c.iter().any(|&x| x > 1.0) { 255.0 } else { 1.0 };
+                Some([c[0] / scale, c[1] / scale, c[2] / scale])
+            })
+            .collect();
+        colors
     }
 
-    /// Whether the vertices have normals (`NOFF`).
+    /// Whether the vertices have normals (`N` prefix).
     pub fn has_normals(&self) -> bool {
-        false
+        self.layout.normal
     }
 
     /// Every kind of attribute held.
     pub fn kinds(&self) -> Vec<crate::attributes::AttributeKind> {
-        Vec::new()
+        use crate::attributes::AttributeKind;
+        let mut kinds = Vec::new();
+        if self.layout.texture {
+            kinds.push(AttributeKind::TexCoords);
+        }
+        if self.layout.normal {
+            kinds.push(AttributeKind::Normals);
+        }
+        if self.layout.color {
+            kinds.push(AttributeKind::VertexColors);
+        }
+        if self.face_extra.iter().any(|e| !e.is_empty()) {
+            kinds.push(AttributeKind::Other("OFF face colours".into()));
+        }
+        kinds
     }
 }
 
@@ -168,19 +280,75 @@ impl OffAttributes {
 /// # Errors
 /// Any error of `w`.
 pub fn write_off(w: &mut dyn Write, mesh: &Mesh, warnings: &mut crate::warnings::Warnings) -> io::Result<()> {
-    super::report_dropped(mesh, &[], "OFF", warnings);
-    writeln!(w, "OFF\n{} {} 0", mesh.num_vertices(), mesh.num_polygons())?;
-    for p in &mesh.positions {
-        write_point(w, *p)?;
+    let own = match &mesh.attributes {
+        crate::attributes::Attributes::Off(a)
+            if a.vertex_extra.len() == mesh.num_vertices() && a.face_extra.len() == mesh.num_polygons() =>
+        {
+            Some(a.as_ref())
+        }
+        _ => {
+            super::report_dropped(mesh, &[], "OFF", warnings);
+            None
+        }
+    };
+    let keyword = own.map_or("OFF", |a| a.keyword.as_str());
+    writeln!(w, "{keyword}\n{} {} 0", mesh.num_vertices(), mesh.num_polygons())?;
+    let normals = match own {
+        Some(a) if a.layout.normal => {
+            let normals = crate::geometry::indexed_normals(
+                &mesh.positions,
+                &mesh.polygons,
+                mesh.polygons.indices(),
+                mesh.num_vertices(),
+            );
+            let count = normals.iter().filter(|n| n.is_some()).count();
+            warnings.add_many("normals_recomputed", "normals recomputed from the moved geometry", count, || {
+                "vertex 0".into()
+            });
+            normals
+        }
+        _ => Vec::new(),
+    };
+    if let Some(a) = own {
+        warnings.add_many("comments_dropped", "OFF comment lines not written", a.comments, String::new);
     }
-    for poly in mesh.polygons.iter() {
+    for (i, p) in mesh.positions.iter().enumerate() {
+        let extra = own.and_then(|a| a.vertex_extra.get(i)).map_or("", String::as_str);
+        match normals.get(i) {
+            // NOFF: the three values after x y z are the normal; the rest stays as read.
+            Some(normal) => {
+                let mut rest = extra.split_whitespace();
+                let old: Vec<&str> = rest.by_ref().take(3).collect();
+                write!(w, "{} {} {}", fmt_f64(p.x), fmt_f64(p.y), fmt_f64(p.z))?;
+                match normal {
+                    Some(n) => write!(w, " {} {} {}", fmt_f64(n.x), fmt_f64(n.y), fmt_f64(n.z))?,
+                    None => write!(w, " {}", old.join(" "))?,
+                }
+                for t in rest {
+                    write!(w, " {t}")?;
+                }
+                w.write_all(b"\n")?;
+            }
+            None if extra.is_empty() => write_point(w, *p)?,
+            None => writeln!(w, "{} {} {} {extra}", fmt_f64(p.x), fmt_f64(p.y), fmt_f64(p.z))?,
+        }
+    }
+    for (f, poly) in mesh.polygons.iter().enumerate() {
         write!(w, "{}", poly.len())?;
         for v in poly {
             write!(w, " {v}")?;
         }
-        w.write_all(b"\n")?;
+        match own.and_then(|a| a.face_extra.get(f)).filter(|e| !e.is_empty()) {
+            Some(extra) => writeln!(w, " {extra}")?,
+            None => w.write_all(b"\n")?,
+        }
     }
     Ok(())
+}
+
+/// The shortest decimal that reads back to `x`.
+fn fmt_f64(x: f64) -> String {
+    format!("{x:?}")
 }
 
 #[cfg(test)]

@@ -1,5 +1,5 @@
 //! Scene files: a mesh, solver settings and constraint groups, in TOML or JSON (same schema;
-//! see `scenes-and-cli.md`). Paths are relative to the scene file; unknown keys are errors that
+//! see `docs/scenes-and-cli.md`). Paths are relative to the scene file; unknown keys are errors that
 //! name the key.
 //!
 //! [`Scene`] is the parsed file (what the CLI and the editor edit and save); [`Scene::load`]
