@@ -194,6 +194,12 @@ impl Simulation {
         let h = self.params.time_step;
         // 1. Inertial target s = x + h v + h² a_ext, q starts at s.
         for (i, s) in self.target.iter_mut().enumerate() {
+            if self.masses[i] == 0.0 {
+                // No mass (a vertex in no element): no inertia and no gravity; it stays where it
+                // is unless a constraint moves it.
+                *s = self.positions[i];
+                continue;
+            }
             let mut a = self.params.gravity;
             if let Some(f) = &self.forces
                 && self.masses[i] > 0.0

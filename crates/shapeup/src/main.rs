@@ -52,21 +52,27 @@ enum Command {
         #[arg(long, value_name = "REPORT.json")]
         report: Option<PathBuf>,
     },
-    /// Projective Dynamics time steps of a scene (whatever its mode) from rest; writes the
-    /// surface of frame k (the state after k steps) to DIR/frame_000k.obj.
+    /// Projective Dynamics time steps of a scene (whatever its mode) from rest; writes frame k
+    /// (the state after k steps) to DIR/frame_000k.EXT: the input's surface (obj, ply, off,
+    /// stl) or the whole mesh with its tetrahedra (vtu, with velocities and DIR/frames.pvd for
+    /// ParaView; msh).
     Simulate {
         /// Scene file (.toml or .json).
         scene: PathBuf,
         /// Time steps to run (overrides the scene's steps).
         #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
         frames: u64,
-        /// Output directory for the OBJ sequence (created if missing).
+        /// Output directory for the frames (created if missing).
         #[arg(short, long, value_name = "DIR")]
         output: PathBuf,
         /// Write only frames that are multiples of K (and always the last).
         #[arg(long, default_value_t = 1, value_name = "K")]
         every: usize,
-        /// Write a JSON report (energy after each step, timings).
+        /// Frame format: obj, ply, off, stl, vtu or msh.
+        // A string checked by `simulate::run`, so that a bad name is one line of error.
+        #[arg(long, default_value = "obj", value_name = "FORMAT")]
+        format: String,
+        /// Write a JSON report (energy after each step, warnings, timings).
         #[arg(long, value_name = "REPORT.json")]
         report: Option<PathBuf>,
     },
@@ -141,11 +147,12 @@ fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Deform { scene, output, iterations, report } => deform(&scene, &output, iterations, report.as_deref()),
         Command::Energy { scene, positions } => energy(&scene, &positions),
-        Command::Simulate { scene, frames, output, every, report } => simulate::run(&simulate::SimulateArgs {
+        Command::Simulate { scene, frames, output, every, format, report } => simulate::run(&simulate::SimulateArgs {
             scene: &scene,
             frames: usize::try_from(frames).unwrap_or(usize::MAX),
             output: &output,
             every,
+            format: &format,
             report: report.as_deref(),
         }),
         #[cfg(feature = "gui")]
