@@ -344,6 +344,14 @@ impl Solver {
                 for group in &state.groups {
                     ids.push(system.add_group(build_group(rest, group)?)?);
                 }
+                // Vertices that only zero-area triangles use follow their edge, as in a scene.
+                let degenerate = shapeup_core::constraints::degenerate_attachments(
+                    &rest.geometry,
+                    system.groups().flat_map(|(_, g)| g.constraints.iter().map(|c| c.as_ref())),
+                );
+                if let Some(group) = degenerate.into_group() {
+                    system.add_group(group)?;
+                }
                 self.q = match &self.rest {
                     // Same positions in the input frame, seen in the new working frame.
                     Some(old) if !same_rest && self.q.len() == rest.mesh.num_vertices() => {

@@ -257,3 +257,64 @@ fn scene_groups_become_editor_groups() {
     let saved = doc.to_scene(SPOT);
     assert_eq!(saved.groups[2].options.get("height").and_then(|h| h.as_f64()), Some(-0.5));
 }
+
+#[test]
+fn export_keeps_every_vertex_the_polygons_and_the_texture_coordinates() {
+    // A 4 × 4 grid of textured quads with unused vertices first, in the middle and last.
+    let dir = tempfile::tempdir().unwrap();
+    let n = 5;
+    let mut text = String::from("# textured grid\nmtllib grid.mtl\nv 9 9 9\n");
+    let mut index = vec![0usize; n * n];
+    let mut v = 1;
+    for j in 0..n {
+        for i in 0..n {
+            if j == 2 && i == 0 {
+                text.push_str("v -5 -5 -5\n");
+                v += 1;
+            }
+            index[j * n + i] = v;
+            text.push_str(&format!("v {} {} 0\nvt {} {}\n", i as f64 / 4.0, j as f64 / 4.0, i as f64 / 4.0, j as f64 / 4.0));
+            v += 1;
+        }
+    }
+    text.push_str("v 7 7 7\nusemtl paper\n");
+    for j in 0..n - 1 {
+        for i in 0..n - 1 {
+            let c = [j * n + i, j * n + i + 1, (j + 1) * n + i + 1, (j + 1) * n + i];
+            let corner = |k: usize| format!("{}/{}", index[c[k]] + 1, c[k] + 1);
+            text.push_str(&format!("f {} {} {} {}\n", corner(0), corner(1), corner(2), corner(3)));
+        }
+    }
+    let input = dir.path().join("grid.obj");
+    std::fs::write(&input, &text).unwrap();
+
+    let mut doc = Document::open(&input, ShapeModel::EdgeSprings).unwrap();
+    let left: Vec<u32> = (0..n).map(|j| index[j * n] as u32).collect();
+    let right: Vec<u32> = (0..n).map(|j| index[j * n + n - 1] as u32).collect();
+    fix(&mut doc, &left);
+    let pulled = fix(&mut doc, &right);
+    doc.apply(Command::MoveHandle { handle: pulled, delta: DVec3::new(0.0, 0.0, 0.5) }).unwrap();
+    doc.solve(50).unwrap();
+
+    // What the editor's Export… does.
+    let output = dir.path().join("moved.obj");
+    shapeup_core::io::write_mesh(&output, &doc.current_mesh()).unwrap();
+    let written = std::fs::read_to_string(&output).unwrap();
+    let (a, b): (Vec<&str>, Vec<&str>) = (text.lines().collect(), written.lines().collect());
+    assert_eq!(a.len(), b.len(), "line for line");
+    let mut moved = 0;
+    for (x, y) in a.iter().zip(&b) {
+        if x.starts_with("v ") {
+            moved += usize::from(x != y);
+        } else {
+            assert_eq!(x, y, "only v lines change");
+        }
+    }
+    assert!(moved >= n, "the pulled side moved ({moved} v lines changed)");
+    let back = read_mesh(&output).unwrap().mesh;
+    assert_eq!(back.num_vertices(), doc.num_vertices());
+    for unused in [0, index[2 * n] - 1, v] {
+        assert_eq!(back.positions[unused], doc.rest_positions()[unused], "unused vertex {unused} stays put");
+    }
+    assert_eq!(back.polygons, doc.rest_mesh().polygons, "quads stay quads");
+}

@@ -1,7 +1,8 @@
 //! `shapeup`: the command-line tool.
 //!
 //! - `shapeup deform SCENE -o OUT` — static ShapeUp solve from the rest shape.
-//! - `shapeup simulate SCENE --frames N -o DIR` — Projective Dynamics, an OBJ per frame.
+//! - `shapeup simulate SCENE --frames N -o DIR` — Projective Dynamics, a mesh file per frame
+//!   (OBJ by default; `--format` ply, off, stl, vtu with a ParaView `.pvd`, msh).
 //! - `shapeup energy SCENE POSITIONS` — E of given positions under a scene's constraints.
 //! - `shapeup bench` — the standard benchmark scenarios, as a table.
 //!

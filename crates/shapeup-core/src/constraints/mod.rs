@@ -13,6 +13,7 @@ use glam::DVec3;
 use std::any::Any;
 use std::fmt::Debug;
 
+mod attachment;
 mod bending;
 mod edge_spring;
 mod floor;
@@ -22,6 +23,7 @@ mod smoothing;
 mod tet_strain;
 mod triangle_strain;
 
+pub use attachment::{DEGENERATE_FACES_GROUP, DegenerateAttachments, EdgeAttachment, degenerate_attachments};
 pub use bending::{Bending, BendingType};
 pub use edge_spring::{EdgeSpring, EdgeSpringType};
 pub use floor::{Floor, FloorType};

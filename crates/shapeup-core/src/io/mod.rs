@@ -2,12 +2,13 @@
 //!
 //! | format | read | write |
 //! |--------|------|-------|
-//! | Wavefront `.obj` | `v`, `f` (any polygon size, `i`, `i/t`, `i//n`, `i/t/n`, negative indices) | `v` + `f` |
-//! | Stanford `.ply` | ascii, binary little and big endian, any numeric types | binary little endian (default), big endian, ascii |
-//! | `.stl` | ascii and binary | binary |
-//! | `.off` | `OFF` (and `COFF`, `NOFF`, … whose extra values are ignored) | `OFF` |
+//! | Wavefront `.obj` | `v` (colours, `w`), `vt`, `vn`, `f` in every index form (negative too), and every other line kept | the file line for line with `v` moved and `vn` recomputed ([`obj`]); other meshes: `v`, `vt`, `vn`, `f` per polygon |
+//! | Stanford `.ply` | ascii, binary little and big endian, any numeric types; every element and property kept; faces and `tristrips` | every element and property with its type, in the file's (or a chosen) encoding ([`ply`]); other meshes: `double` x y z, normals, colours, polygons |
+//! | `.stl` | ascii and binary | binary (triangles only: vertex indices are not kept, a warning says so) |
+//! | `.off` | `OFF`, `COFF`, `NOFF`, `STOFF`…; per-vertex and per-face values kept | the keyword and values as read, `N` normals recomputed ([`off`]) |
 //! | Gmsh `.msh` | ASCII 4.1 and 2.2: 4-node tetrahedra, 3-node triangles (other elements skipped) | ASCII 4.1 |
 //! | TetGen `.node` + `.ele` | either path names the pair; 0- or 1-based, attributes and markers ignored | both files, 1-based |
+//! | VTK `.vtu` | — | polygons or tetrahedra, point data ([`vtu`]); `.pvd` time series |
 //!
 //! **Vertex order is preserved**: every reader returns the file's vertices, all of them (also
 //! those no face uses), in file order, so that vertex indices in scene files and selections stay
@@ -15,9 +16,13 @@
 //! coordinates into one vertex, numbered in order of first occurrence, so an STL file we wrote
 //! reads back with the same connectivity (but without unreferenced vertices, see [`stl`]).
 //!
-//! Polygons are fan-triangulated by [`Mesh::from_polygons`]; what that changed is returned in
-//! [`LoadedMesh::report`]. Only `.msh` and `.node`/`.ele` store tetrahedra; a mesh read from them
-//! has the boundary of its tetrahedra as triangles (see [`msh`], [`tetgen`]).
+//! **Nothing is lost**: faces stay polygons ([`Mesh::polygons`]; the solver uses their
+//! triangulation) and what a file carries besides positions and faces is kept in
+//! [`Mesh::attributes`](crate::attributes::Attributes). Every writer returns [`Warnings`] for
+//! what it recomputed (normals) or what its format cannot hold; readers return theirs in
+//! [`LoadedMesh::warnings`]. Only `.msh` and `.node`/`.ele` store tetrahedra; a mesh read from
+//! them has the boundary of its tetrahedra as triangles (see [`msh`], [`tetgen`]). A UTF-8
+//! byte-order mark at the start of a text file is skipped.
 //!
 //! Every reader is hand-written (the crates available reorder or drop vertices, or do not report
 //! where a file is broken); no input makes them panic, and counts from a header never size an

@@ -2,7 +2,7 @@
 //! resolve selections and build each group.
 
 use super::{GroupSpec, Scene, SceneError, SelectionSpec, Targets};
-use crate::constraints::{BuildContext, Params, Position, Selection, build_constraints};
+use crate::constraints::{BuildContext, Params, Position, Selection, build_constraints, degenerate_attachments};
 use crate::dynamics::{DynamicsParams, Simulation};
 use crate::geometry::{RestGeometry, WorkingFrame, lumped_masses_surface, lumped_masses_volume};
 use crate::io::read_mesh;
@@ -65,7 +65,7 @@ impl Scene {
     ///
     /// # Errors
     /// As [`Scene::load`], but for the mesh file itself.
-    pub fn build(&self, mesh: Mesh, warnings: Warnings, load_seconds: f64) -> Result<LoadedScene, SceneError> {
+    pub fn build(&self, mesh: Mesh, mut warnings: Warnings, load_seconds: f64) -> Result<LoadedScene, SceneError> {
         let t = Instant::now();
         let invalid = |entry: &str, message: String| SceneError::Invalid {
             path: self.file.clone(),
@@ -95,6 +95,26 @@ impl Scene {
             let entry = format!("constraints[{i}] (\"{}\")", spec.name);
             let group = build_group(spec, &mesh, &rest, &frame).map_err(|m| invalid(&entry, m))?;
             group_ids.push(system.add_group(group).map_err(|e| invalid(&entry, e.to_string()))?);
+        }
+        // Vertices that only zero-area triangles use follow their edge (math reference, "Edge cases").
+        let degenerate =
+            degenerate_attachments(&rest, system.groups().flat_map(|(_, g)| g.constraints.iter().map(|c| c.as_ref())));
+        let attached = degenerate.attached_vertices();
+        warnings.add_many(
+            "degenerate_vertices_attached",
+            "vertices that only degenerate (zero-area) triangles use, attached to their edge",
+            attached.len(),
+            || attached.first().map(|v| format!("vertex {v}")).unwrap_or_default(),
+        );
+        let stranded = &degenerate.stranded;
+        warnings.add_many(
+            "degenerate_vertices_stranded",
+            "vertices that only degenerate (zero-area) triangles use and no constraint reaches, kept at their rest position",
+            stranded.len(),
+            || stranded.first().map(|v| format!("vertex {v}")).unwrap_or_default(),
+        );
+        if let Some(group) = degenerate.into_group() {
+            system.add_group(group).map_err(|e| invalid("[mesh]", e.to_string()))?;
         }
         Ok(LoadedScene {
             scene: self.clone(),
