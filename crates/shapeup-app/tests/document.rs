@@ -273,7 +273,13 @@ fn export_keeps_every_vertex_the_polygons_and_the_texture_coordinates() {
                 v += 1;
             }
             index[j * n + i] = v;
-            text.push_str(&format!("v {} {} 0\nvt {} {}\n", i as f64 / 4.0, j as f64 / 4.0, i as f64 / 4.0, j as f64 / 4.0));
+            text.push_str(&format!(
+                "v {} {} 0\nvt {} {}\n",
+                i as f64 / 4.0,
+                j as f64 / 4.0,
+                i as f64 / 4.0,
+                j as f64 / 4.0
+            ));
             v += 1;
         }
     }

@@ -491,7 +491,8 @@ mod tests {
     #[test]
     fn concave_quad_is_cut_along_its_inner_diagonal() {
         // An arrowhead: corner 3 points inwards, so the fan from 0 (diagonal 0–2) would fold over.
-        let positions = vec![DVec3::ZERO, DVec3::new(2.0, 1.0, 0.0), DVec3::new(0.0, 2.0, 0.0), DVec3::new(0.5, 1.0, 0.0)];
+        let positions =
+            vec![DVec3::ZERO, DVec3::new(2.0, 1.0, 0.0), DVec3::new(0.0, 2.0, 0.0), DVec3::new(0.5, 1.0, 0.0)];
         let (mesh, _) = Mesh::from_polygons(positions.clone(), polys(&[&[0, 1, 2, 3]])).unwrap();
         let total: DVec3 = mesh.triangles.iter().map(|&t| area_vector(&positions, t)).sum();
         assert!((total.z - 1.5).abs() < 1e-12, "area {total}");
@@ -562,7 +563,8 @@ mod tests {
                     DVec3::new(r * a.cos(), r * a.sin(), 0.0)
                 })
                 .collect();
-            let area: f64 = (0..k).map(|i| positions[i].truncate().perp_dot(positions[(i + 1) % k].truncate())).sum::<f64>() / 2.0;
+            let area: f64 =
+                (0..k).map(|i| positions[i].truncate().perp_dot(positions[(i + 1) % k].truncate())).sum::<f64>() / 2.0;
             let poly: Vec<u32> = (0..k as u32).collect();
             let mut out = Vec::new();
             assert!(triangulate_polygon(&positions, &poly, &mut Vec::new(), &mut out));

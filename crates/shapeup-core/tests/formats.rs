@@ -140,7 +140,8 @@ fn stl_output_says_what_it_cannot_keep() {
 #[test]
 fn every_output_format_keeps_vertex_count_and_order() {
     // Unreferenced vertices at the start, in the middle and at the end.
-    let positions: Vec<DVec3> = (0..7).map(|i| DVec3::new(i as f64, (i * i) as f64 * 0.5, 1.0 / (i + 1) as f64)).collect();
+    let positions: Vec<DVec3> =
+        (0..7).map(|i| DVec3::new(i as f64, (i * i) as f64 * 0.5, 1.0 / (i + 1) as f64)).collect();
     let mesh = Mesh::new(positions.clone(), vec![[1, 2, 4], [2, 5, 4]]).unwrap();
     for name in ["m.obj", "m.ply", "m.off", "m.msh"] {
         let (_p, _t, back, _w) = write_read(&mesh, name);

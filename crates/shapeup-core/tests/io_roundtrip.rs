@@ -593,7 +593,10 @@ fn every_truncation_of_every_format_is_an_error_not_a_panic() {
         };
         let full = read(&bytes).unwrap().mesh;
         if format != WriteFormat::StlBinary {
-            assert_eq!((&full.positions, &full.polygons, &full.triangles), (&mesh.positions, &mesh.polygons, &mesh.triangles));
+            assert_eq!(
+                (&full.positions, &full.polygons, &full.triangles),
+                (&mesh.positions, &mesh.polygons, &mesh.triangles)
+            );
         }
         for len in 0..bytes.len() {
             if let Err(err) = read(&bytes[..len]) {

@@ -1336,8 +1336,8 @@ fn deform_says_each_change_once_with_a_count() {
     assert!(stl.iter().any(|l| l.contains("vertices")), "{warnings:?}");
     let kinds: Vec<&str> = report["warnings"].as_array().unwrap().iter().filter_map(|w| w["kind"].as_str()).collect();
     assert!(kinds.contains(&"polygons_triangulated") && kinds.contains(&"vertices_not_kept"), "{kinds:?}");
-    let count = report["warnings"].as_array().unwrap().iter().find(|w| w["kind"] == "polygons_triangulated").unwrap()
-        ["count"]
-        .as_u64();
+    let count =
+        report["warnings"].as_array().unwrap().iter().find(|w| w["kind"] == "polygons_triangulated").unwrap()["count"]
+            .as_u64();
     assert_eq!(count, Some(36));
 }

@@ -160,11 +160,7 @@ pub struct VertexLayout {
 impl VertexLayout {
     fn of(keyword: &str) -> Self {
         let prefix = keyword.strip_suffix("OFF").unwrap_or("");
-        VertexLayout {
-            texture: prefix.starts_with("ST"),
-            color: prefix.contains('C'),
-            normal: prefix.ends_with('N'),
-        }
+        VertexLayout { texture: prefix.starts_with("ST"), color: prefix.contains('C'), normal: prefix.ends_with('N') }
     }
 }
 

@@ -7,8 +7,8 @@ use crate::dynamics::{DynamicsParams, Simulation};
 use crate::geometry::{RestGeometry, WorkingFrame, lumped_masses_surface, lumped_masses_volume};
 use crate::io::read_mesh;
 use crate::mesh::Mesh;
-use crate::warnings::Warnings;
 use crate::solver::{ConstraintGroup, GroupId, SolveError, SolveReport, SolverParams, System};
+use crate::warnings::Warnings;
 use glam::DVec3;
 use std::time::Instant;
 
