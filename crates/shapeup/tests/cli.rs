@@ -8,7 +8,9 @@ use shapeup_core::io::{read_mesh, write_mesh};
 use shapeup_core::scene::{Scene, SelectionSpec};
 use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
-use std::process::Command;
+
+mod common;
+use common::{Output, shapeup_in};
 
 const SPOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/spot.obj");
 const COW: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/cow.obj");
@@ -19,50 +21,12 @@ const EXAMPLES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples");
 // Helpers
 // ---------------------------------------------------------------------------------------------
 
-/// What a finished `shapeup` process left behind.
-struct Output {
-    code: Option<i32>,
-    stdout: String,
-    stderr: String,
-}
-
-impl Output {
-    fn describe(&self) -> String {
-        format!("exit {:?}\n--- stdout ---\n{}\n--- stderr ---\n{}", self.code, self.stdout, self.stderr)
-    }
-
-    /// Panics (with the process output) unless it exited 0.
-    fn success(self) -> Output {
-        assert_eq!(self.code, Some(0), "expected success\n{}", self.describe());
-        assert!(!self.stderr.contains("panicked"), "{}", self.describe());
-        self
-    }
-}
-
 fn shapeup<I, S>(args: I) -> Output
 where
     I: IntoIterator<Item = S>,
     S: AsRef<OsStr>,
 {
     shapeup_in(None, args)
-}
-
-fn shapeup_in<I, S>(cwd: Option<&Path>, args: I) -> Output
-where
-    I: IntoIterator<Item = S>,
-    S: AsRef<OsStr>,
-{
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_shapeup"));
-    cmd.args(args);
-    if let Some(dir) = cwd {
-        cmd.current_dir(dir);
-    }
-    let out = cmd.output().expect("cannot run the shapeup binary");
-    Output {
-        code: out.status.code(),
-        stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
-        stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
-    }
 }
 
 /// `shapeup simulate SCENE -o DIR EXTRA…`, from `cwd` when given.

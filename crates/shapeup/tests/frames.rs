@@ -8,40 +8,17 @@ use shapeup_core::Mesh;
 use shapeup_core::io::read_mesh;
 use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
-use std::process::Command;
+
+mod common;
+use common::{Output, shapeup_in};
 
 const EXAMPLES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples");
 
-/// What a finished `shapeup` process left behind.
-struct Output {
-    code: Option<i32>,
-    stdout: String,
-    stderr: String,
-}
-
-impl Output {
-    fn describe(&self) -> String {
-        format!("exit {:?}\n--- stdout ---\n{}\n--- stderr ---\n{}", self.code, self.stdout, self.stderr)
-    }
-
-    fn success(self) -> Output {
-        assert_eq!(self.code, Some(0), "expected success\n{}", self.describe());
-        assert!(!self.stderr.contains("panicked"), "{}", self.describe());
-        self
-    }
-}
-
 /// `shapeup simulate SCENE -o DIR EXTRA…`.
 fn simulate<S: AsRef<OsStr>>(scene: &Path, dir: &Path, extra: &[S]) -> Output {
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_shapeup"));
-    cmd.args([OsStr::new("simulate"), scene.as_os_str(), OsStr::new("-o"), dir.as_os_str()]);
-    cmd.args(extra);
-    let out = cmd.output().expect("cannot run the shapeup binary");
-    Output {
-        code: out.status.code(),
-        stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
-        stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
-    }
+    let mut args: Vec<&OsStr> = vec![OsStr::new("simulate"), scene.as_os_str(), OsStr::new("-o"), dir.as_os_str()];
+    args.extend(extra.iter().map(AsRef::as_ref));
+    shapeup_in(None, args)
 }
 
 fn read(path: &Path) -> Mesh {

@@ -300,6 +300,24 @@ pub(crate) fn report_dropped(mesh: &Mesh, kept: &[AttributeKind], format: &str, 
     }
 }
 
+/// Smooth per-vertex normals of `mesh` at its positions ([`crate::geometry::indexed_normals`]
+/// indexed by vertex; `None` for a vertex no polygon uses or whose normal vanishes), counted in
+/// `warnings` as recomputed (what every writer that stores vertex normals reports).
+pub(crate) fn recompute_vertex_normals(mesh: &Mesh, warnings: &mut Warnings) -> Vec<Option<glam::DVec3>> {
+    let normals =
+        crate::geometry::indexed_normals(&mesh.positions, &mesh.polygons, mesh.polygons.indices(), mesh.num_vertices());
+    let mut recomputed = normals.iter().enumerate().filter(|(_, n)| n.is_some());
+    if let Some((first, _)) = recomputed.next() {
+        warnings.add_many(
+            "normals_recomputed",
+            "normals recomputed from the moved geometry",
+            1 + recomputed.count(),
+            || format!("vertex {first}"),
+        );
+    }
+    normals
+}
+
 /// Counts, in `warnings`, the polygons with more than 3 corners that a triangles-only format
 /// (`format`) writes as their triangles.
 pub(crate) fn report_polygons_split(mesh: &Mesh, format: &str, warnings: &mut Warnings) {

@@ -290,19 +290,7 @@ pub fn write_off(w: &mut dyn Write, mesh: &Mesh, warnings: &mut crate::warnings:
     let keyword = own.map_or("OFF", |a| a.keyword.as_str());
     writeln!(w, "{keyword}\n{} {} 0", mesh.num_vertices(), mesh.num_polygons())?;
     let normals = match own {
-        Some(a) if a.layout.normal => {
-            let normals = crate::geometry::indexed_normals(
-                &mesh.positions,
-                &mesh.polygons,
-                mesh.polygons.indices(),
-                mesh.num_vertices(),
-            );
-            let count = normals.iter().filter(|n| n.is_some()).count();
-            warnings.add_many("normals_recomputed", "normals recomputed from the moved geometry", count, || {
-                "vertex 0".into()
-            });
-            normals
-        }
+        Some(a) if a.layout.normal => super::recompute_vertex_normals(mesh, warnings),
         _ => Vec::new(),
     };
     if let Some(a) = own {

@@ -1120,24 +1120,7 @@ fn write_own(
     let (vertex_element, xyz) = own.plan.vertex;
     let normal_properties = own.normal_properties();
     let normals = match normal_properties {
-        Some(_) => {
-            let normals = crate::geometry::indexed_normals(
-                &mesh.positions,
-                &mesh.polygons,
-                mesh.polygons.indices(),
-                mesh.num_vertices(),
-            );
-            let mut recomputed = normals.iter().enumerate().filter(|(_, n)| n.is_some());
-            if let Some((first, _)) = recomputed.next() {
-                warnings.add_many(
-                    "normals_recomputed",
-                    "normals recomputed from the moved geometry",
-                    1 + recomputed.count(),
-                    || format!("vertex {first}"),
-                );
-            }
-            normals
-        }
+        Some(_) => super::recompute_vertex_normals(mesh, warnings),
         None => Vec::new(),
     };
     let mut rounded = 0;
@@ -1214,10 +1197,9 @@ fn write_generic(w: &mut dyn Write, mesh: &Mesh, encoding: PlyEncoding, warnings
     }
     let attributes = &mesh.attributes;
     let mut kept = Vec::new();
-    let normals = attributes.has_normals().then(|| {
+    if attributes.has_normals() {
         kept.push(AttributeKind::Normals);
-        crate::geometry::indexed_normals(&mesh.positions, &mesh.polygons, mesh.polygons.indices(), n)
-    });
+    }
     let colors = attributes.vertex_colors().filter(|c| c.len() == n);
     if colors.is_some() {
         kept.push(AttributeKind::VertexColors);
@@ -1229,17 +1211,7 @@ fn write_generic(w: &mut dyn Write, mesh: &Mesh, encoding: PlyEncoding, warnings
         kept.push(AttributeKind::TexCoords);
     }
     report_dropped(mesh, &kept, "PLY", warnings);
-    if let Some(normals) = &normals {
-        let mut recomputed = normals.iter().enumerate().filter(|(_, n)| n.is_some());
-        if let Some((first, _)) = recomputed.next() {
-            warnings.add_many(
-                "normals_recomputed",
-                "normals recomputed from the moved geometry",
-                1 + recomputed.count(),
-                || format!("vertex {first}"),
-            );
-        }
-    }
+    let normals = attributes.has_normals().then(|| super::recompute_vertex_normals(mesh, warnings));
     let colors: Option<Vec<[f64; 3]>> = colors.map(|colors| {
         let mut rounded = colors.iter().enumerate().filter(|(_, c)| {
             c.iter().any(|&c| {
