@@ -11,7 +11,7 @@
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
 use shapeup_core::bench::{Scenario, load_scenario};
-use shapeup_core::io::{read_mesh, write_atomic, write_mesh};
+use shapeup_core::io::{PlyEncoding, WriteFormat, read_mesh, write_atomic, write_mesh_with};
 use shapeup_core::scene::Scene;
 use shapeup_core::solver::{Factorization, SolverParams};
 use std::io::Write;
@@ -49,9 +49,13 @@ enum Command {
         /// Total local-global iterations (default: the scene's steps × iterations).
         #[arg(long, value_name = "N")]
         iterations: Option<usize>,
-        /// Write a JSON report (energies per iteration, timings).
+        /// Write a JSON report (energies per iteration, timings, warnings).
         #[arg(long, value_name = "REPORT.json")]
         report: Option<PathBuf>,
+        /// PLY output encoding: ascii, binary_little_endian or binary_big_endian (default: the
+        /// input's when it is a PLY file, else binary_little_endian).
+        #[arg(long, value_name = "ENCODING", value_parser = parse_ply_encoding)]
+        ply_encoding: Option<PlyEncoding>,
     },
     /// Projective Dynamics time steps of a scene (whatever its mode) from rest; writes frame k
     /// (the state after k steps) to DIR/frame_000k.EXT: the input's surface (obj, ply, off,
@@ -146,7 +150,9 @@ fn run(cli: Cli) -> Result<()> {
             .map_err(|e| anyhow::anyhow!("cannot start the thread pool: {e}"))?;
     }
     match cli.command {
-        Command::Deform { scene, output, iterations, report } => deform(&scene, &output, iterations, report.as_deref()),
+        Command::Deform { scene, output, iterations, report, ply_encoding } => {
+            deform(&scene, &output, iterations, report.as_deref(), ply_encoding)
+        }
         Command::Energy { scene, positions } => energy(&scene, &positions),
         Command::Simulate { scene, frames, output, every, format, report } => simulate::run(&simulate::SimulateArgs {
             scene: &scene,
@@ -175,7 +181,13 @@ fn check_output_extension(path: &Path, allowed: &[&str]) -> Result<()> {
     }
 }
 
-fn deform(scene_path: &Path, output: &Path, iterations: Option<usize>, report_path: Option<&Path>) -> Result<()> {
+fn deform(
+    scene_path: &Path,
+    output: &Path,
+    iterations: Option<usize>,
+    report_path: Option<&Path>,
+    ply_encoding: Option<PlyEncoding>,
+) -> Result<()> {
     let start = Instant::now();
     check_output_extension(output, &["obj", "ply", "off", "stl", "vtu", "msh"])?;
     if let Some(r) = report_path {
@@ -184,9 +196,21 @@ fn deform(scene_path: &Path, output: &Path, iterations: Option<usize>, report_pa
     let scene = Scene::from_file(scene_path)?;
     let mut loaded = scene.load()?;
     let (q, solve) = loaded.solve_static(iterations)?;
-    let mesh = loaded.mesh_at(&q);
+    let mut mesh = loaded.mesh_at(&q);
     let mut warnings = loaded.warnings.clone();
-    warnings.extend(write_mesh(output, &mesh)?);
+    let format = match WriteFormat::from_path(output)? {
+        WriteFormat::Ply(_) => WriteFormat::Ply(ply_encoding),
+        other => other,
+    };
+    if !matches!(format, WriteFormat::Msh | WriteFormat::Vtu | WriteFormat::TetGen) {
+        // A surface the scene tetrahedralized comes back as that surface: the input's vertices
+        // (TetGen's points come after them) and faces.
+        mesh.positions.truncate(loaded.input_vertices);
+        if loaded.input_vertices < loaded.mesh.num_vertices() {
+            mesh.tetrahedra.clear();
+        }
+    }
+    warnings.extend(write_mesh_with(output, &mesh, format)?);
     let total = start.elapsed().as_secs_f64();
     if let Some(path) = report_path {
         let groups: Vec<_> = loaded
@@ -342,6 +366,15 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
     let (w, h) = s.split_once('x').ok_or_else(bad)?;
     let (w, h) = (w.parse::<u32>().map_err(|_| bad())?, h.parse::<u32>().map_err(|_| bad())?);
     if (1..=8192).contains(&w) && (1..=8192).contains(&h) { Ok((w, h)) } else { Err(bad()) }
+}
+
+fn parse_ply_encoding(s: &str) -> Result<PlyEncoding, String> {
+    match s {
+        "ascii" => Ok(PlyEncoding::Ascii),
+        "binary_little_endian" => Ok(PlyEncoding::BinaryLittleEndian),
+        "binary_big_endian" => Ok(PlyEncoding::BinaryBigEndian),
+        _ => Err(format!("unknown PLY encoding \"{s}\" (ascii, binary_little_endian, binary_big_endian)")),
+    }
 }
 
 fn parse_factorization(s: &str) -> Result<Factorization, String> {

@@ -1305,3 +1305,52 @@ fn deform_says_each_change_once_with_a_count() {
             .as_u64();
     assert_eq!(count, Some(36));
 }
+
+#[test]
+fn bad_texture_and_normal_indices_name_the_file_and_line() {
+    let ws = Workspace::new();
+    for (name, text, needles) in [
+        ("vt.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/2 3/1\n", vec!["vt.obj", "line 5"]),
+        ("vn.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//-2 3//1\n", vec!["vn.obj", "line 5"]),
+        ("mixed.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2 3/1\n", vec!["mixed.obj", "line 5"]),
+    ] {
+        let mesh = write(&ws.path(name), text);
+        let scene = ws.scene(&format!("{name}.toml"), &toml_scene(&mesh, "", SHAPE_AND_HANDLE));
+        ws.deform_fails(&scene, &needles);
+    }
+}
+
+#[test]
+fn ply_encoding_can_be_chosen() {
+    let ws = Workspace::new();
+    let scene = ws.scene("spot.toml", &toml_scene(Path::new(SPOT), "", &handle_body(1.0)));
+    let (binary, _, _) = deform_ok(&ws, &scene, "spot.ply", &[]);
+    let (ascii, _, _) = deform_ok(&ws, &scene, "ascii.ply", &["--ply-encoding", "ascii"]);
+    let head = std::fs::read(ws.out("ascii.ply")).unwrap();
+    assert!(head.starts_with(b"ply\nformat ascii 1.0\n"), "{:?}", String::from_utf8_lossy(&head[..40]));
+    assert_eq!(ascii.positions, binary.positions, "the same numbers in either encoding");
+    // A usage error (clap's own message, and a hint to --help): nothing is written.
+    let o = ws.out("x.ply");
+    let out = shapeup([
+        OsStr::new("deform"),
+        scene.as_os_str(),
+        "-o".as_ref(),
+        o.as_os_str(),
+        "--ply-encoding".as_ref(),
+        "utf8".as_ref(),
+    ]);
+    assert_eq!(out.code, Some(2), "{}", out.describe());
+    assert!(out.stderr.contains("unknown PLY encoding \"utf8\"") && !o.exists(), "{}", out.describe());
+}
+
+#[test]
+fn a_tetrahedralized_surface_comes_back_as_the_input_surface() {
+    let ws = Workspace::new();
+    let rest = spot();
+    let scene = ws.scene("spot.toml", &toml_scene(Path::new(SPOT), "tetrahedralize = true", &handle_body(1.0)));
+    let (obj, _, out) = deform_ok(&ws, &scene, "spot.obj", &[]);
+    assert_eq!(obj.num_vertices(), rest.num_vertices(), "TetGen's points are not written\n{}", out.describe());
+    assert_eq!(obj.polygons, rest.polygons);
+    let (msh, _, _) = deform_ok(&ws, &scene, "spot.msh", &[]);
+    assert!(msh.num_tetrahedra() > 0 && msh.num_vertices() > rest.num_vertices(), "a volume output keeps them");
+}

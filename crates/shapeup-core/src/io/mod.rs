@@ -267,6 +267,14 @@ pub fn write_mesh_with(path: &Path, mesh: &Mesh, format: WriteFormat) -> Result<
     mesh.validate().map_err(|source| IoError::Mesh { path: path.to_path_buf(), source })?;
     let mut warnings = Warnings::new();
     let warn = &mut warnings;
+    if !mesh.tetrahedra.is_empty() && !matches!(format, WriteFormat::Msh | WriteFormat::TetGen | WriteFormat::Vtu) {
+        warn.add_many(
+            "tetrahedra_not_written",
+            "tetrahedra not written: this format stores surfaces (use .vtu or .msh to keep them)",
+            mesh.num_tetrahedra(),
+            || "tetrahedron 0".into(),
+        );
+    }
     match format {
         WriteFormat::Obj => write_atomic(path, |w| obj::write_obj(w, mesh, warn))?,
         WriteFormat::Ply(encoding) => write_atomic(path, |w| ply::write_ply(w, mesh, encoding, warn))?,
