@@ -150,3 +150,19 @@ fn every_output_format_keeps_vertex_count_and_order() {
     }
     let _ = Path::new("");
 }
+
+#[test]
+fn malformed_off_values_name_the_line() {
+    for (text, line, needle) in [
+        ("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2 junk\n", "line 6", "junk"),
+        ("NOFF\n3 1 0\n0 0 0 0 0\n1 0 0 0 0 1\n0 1 0 0 0 1\n3 0 1 2\n", "line 3", "normal"),
+        ("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 1 2\n", "line 7", "after the last face"),
+        ("COFF\n3 1 0\n0 0 0 red\n1 0 0\n0 1 0\n3 0 1 2\n", "line 3", "red"),
+    ] {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("bad.off");
+        fs::write(&path, text).unwrap();
+        let err = read_mesh(&path).unwrap_err().to_string();
+        assert!(err.contains("bad.off") && err.contains(line) && err.contains(needle), "{text:?}: {err}");
+    }
+}

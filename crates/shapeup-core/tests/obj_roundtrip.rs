@@ -106,7 +106,7 @@ fn assert_same_lines(input: &[u8], output: &[u8]) {
             assert_eq!(rest.trim_end_matches('\r'), "", "line {}: {ys:?}", k + 1);
             assert_eq!(x.ends_with(b"\r"), y.ends_with(b"\r"), "line {}: line ending", k + 1);
         } else {
-            assert_eq!(xs, ys, "line {} differs", k + 1);
+            assert_eq!(x, y, "line {} differs: {xs:?} vs {ys:?}", k + 1);
         }
     }
     assert!(v_lines > 0, "no v lines compared");
@@ -126,7 +126,7 @@ fn round_trip_file(path: &str) -> (Mesh, Vec<u8>, Warnings) {
     assert_same_mesh(&mesh, &back);
     // Written again, the file does not change any more (recomputed normals are a fixed point).
     let (again, _) = write(&back);
-    assert_eq!(String::from_utf8_lossy(&again), String::from_utf8_lossy(&output));
+    assert!(again == output, "{:?}", String::from_utf8_lossy(&again));
     (mesh, output, warnings)
 }
 
@@ -325,6 +325,42 @@ fn lf_file_without_final_newline_keeps_both() {
         "v 0.0 0.0 0.0 1\nv 1.0 0.0 0.0 0.5\nv 0.0 1.0 0.0 2\n\n# w, not colours\nf 1 2 3"
     );
     assert!(warnings.is_empty());
+}
+
+#[test]
+fn non_utf8_text_comes_back_byte_for_byte() {
+    // Latin-1 `é` (0xE9, not UTF-8) in comments, a material, a group, after a v line's z and in a
+    // vn line no face uses (kept as it is).
+    let input: &[u8] = b"# mod\xe8le caf\xe9\nmtllib mat\xe9riaux.mtl\nv 0 0 0\nv 1 2 3 # caf\xe9\nv 0 1 0\n\
+                         vn 0 0 1 # \xe9\ng t\xeate\nusemtl mat\xe9riau\nf 1 2 3\n\xe9trange \xff\n";
+    let mesh = read("latin1.obj", input);
+    assert_eq!(mesh.positions[1], DVec3::new(1.0, 2.0, 3.0));
+    let a = obj(&mesh);
+    assert_eq!(a.lines[3], ObjLine::Vertex { index: 1, rest: b" # caf\xe9".to_vec() });
+    assert_eq!(a.lines[7], ObjLine::Other(b"usemtl mat\xe9riau".to_vec()));
+    assert!(a.groups_and_materials);
+
+    let (out, warnings) = write(&mesh);
+    let expected: &[u8] = b"# mod\xe8le caf\xe9\nmtllib mat\xe9riaux.mtl\nv 0.0 0.0 0.0\nv 1.0 2.0 3.0 # caf\xe9\n\
+                            v 0.0 1.0 0.0\nvn 0 0 1 # \xe9\ng t\xeate\nusemtl mat\xe9riau\nf 1 2 3\n\xe9trange \xff\n";
+    assert_eq!(String::from_utf8_lossy(&out), String::from_utf8_lossy(expected));
+    assert!(out == expected, "the bytes that are not UTF-8 changed");
+    assert!(warnings.is_empty(), "{warnings:?}");
+    assert_same_lines(input, &out);
+
+    // Moved, only that vertex's numbers change.
+    let mut moved = mesh.positions.clone();
+    moved[1] = DVec3::new(-4.0, 0.5, 2.0);
+    let (out2, _) = write(&mesh.with_positions(moved));
+    let (lines, lines2) = (physical_lines(&out), physical_lines(&out2));
+    assert_eq!(lines.len(), lines2.len());
+    for (k, (x, y)) in lines.iter().zip(&lines2).enumerate() {
+        if k == 3 {
+            assert_eq!(*y, b"v -4.0 0.5 2.0 # caf\xe9");
+        } else {
+            assert_eq!(x, y, "line {}", k + 1);
+        }
+    }
 }
 
 #[test]

@@ -653,6 +653,68 @@ fn list_lengths_that_disagree_with_the_data_are_errors_with_their_position() {
     malformed("cut.ply", &bytes[..bytes.len() - 2], &["byte offset", "element 'face' 1 of 2"]);
 }
 
+/// A binary little-endian file of 4 float vertices and faces given as raw `uchar int` lists.
+fn four_vertex_binary(faces: usize, data: &[&[u32]]) -> Vec<u8> {
+    let mut out = format!(
+        "ply\nformat binary_little_endian 1.0\nelement vertex 4\nproperty float x\nproperty float y\n\
+         property float z\nelement face {faces}\nproperty list uchar int vertex_indices\nend_header\n"
+    )
+    .into_bytes();
+    for v in [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]] {
+        v.iter().for_each(|c| out.extend_from_slice(&c.to_le_bytes()));
+    }
+    for face in data {
+        out.push(face[0] as u8);
+        face[1..].iter().for_each(|v| out.extend_from_slice(&v.to_le_bytes()));
+    }
+    out
+}
+
+#[test]
+fn data_after_the_last_element_is_an_error() {
+    // Face 0 claims 4 indices but holds 3: it swallows face 1's bytes, which must not pass.
+    let swallowing = four_vertex_binary(2, &[&[4, 0, 1, 2], &[3, 0, 2, 3]]);
+    malformed("swallow.ply", &swallowing, &["byte offset"]);
+    // The header declares one face fewer than the data holds.
+    let bytes = four_vertex_binary(1, &[&[3, 0, 1, 2], &[3, 0, 2, 3]]);
+    let face_1 = bytes.len() - 13;
+    let err = malformed(
+        "extra.ply",
+        &bytes,
+        &[&format!("byte offset {face_1}"), "13 bytes after the last element", "disagree with the data"],
+    );
+    assert!(matches!(err, IoError::Binary { offset, .. } if offset as usize == face_1), "{err}");
+    // The same file with the right count reads.
+    read("right.ply", &four_vertex_binary(2, &[&[3, 0, 1, 2], &[3, 0, 2, 3]]));
+
+    let file = triangle_file(&[&[0.0, 1.0, 2.0]]);
+    let text = String::from_utf8(encode(&file, PlyEncoding::Ascii)).unwrap();
+    // Blank lines at the end are fine; a line with content is not.
+    read("blank.ply", format!("{text}\n  \n").as_bytes());
+    let err = malformed(
+        "extra.ply",
+        format!("{text}\n3 0 2 1 0\n").as_bytes(),
+        &["line 16", "content after the last element", "'3 0 2 1 0'"],
+    );
+    assert!(matches!(err, IoError::Parse { line: 16, .. }), "{err}");
+}
+
+#[test]
+fn faces_with_fewer_than_three_indices_are_errors() {
+    for k in 0..3 {
+        let short: Vec<f64> = (0..k).map(f64::from).collect();
+        let file = triangle_file(&[&[0.0, 1.0, 2.0], &short]);
+        let expected = format!("face 1 has {k} vertex indices, expected at least 3");
+        let err = malformed("short.ply", &encode(&file, PlyEncoding::Ascii), &["line 15", &expected]);
+        assert!(matches!(err, IoError::Parse { line: 15, .. }), "{err}");
+        for encoding in [PlyEncoding::BinaryLittleEndian, PlyEncoding::BinaryBigEndian] {
+            let face_1 = header_of(&file, encoding).len() + 3 * 12 + (1 + 12 + 1);
+            let err = malformed("short.ply", &encode(&file, encoding), &[&format!("byte offset {face_1}"), &expected]);
+            assert!(matches!(err, IoError::Binary { .. }), "{err}");
+        }
+    }
+}
+
 #[test]
 fn an_index_out_of_range_names_the_line_or_byte_offset_and_face() {
     let file = triangle_file(&[&[0.0, 1.0, 2.0], &[0.0, 9.0, 1.0]]);

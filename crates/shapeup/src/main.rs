@@ -181,6 +181,15 @@ fn check_output_extension(path: &Path, allowed: &[&str]) -> Result<()> {
     }
 }
 
+/// Fails early (before any work, so that nothing is written) when the folder `path` goes in
+/// does not exist.
+pub(crate) fn check_parent_dir(path: &Path) -> Result<()> {
+    match path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        Some(dir) if !dir.is_dir() => bail!("{}: the folder {} does not exist", path.display(), dir.display()),
+        _ => Ok(()),
+    }
+}
+
 fn deform(
     scene_path: &Path,
     output: &Path,
@@ -190,8 +199,10 @@ fn deform(
 ) -> Result<()> {
     let start = Instant::now();
     check_output_extension(output, &["obj", "ply", "off", "stl", "vtu", "msh"])?;
+    check_parent_dir(output)?;
     if let Some(r) = report_path {
         check_output_extension(r, &["json"])?;
+        check_parent_dir(r)?;
     }
     let scene = Scene::from_file(scene_path)?;
     let mut loaded = scene.load()?;

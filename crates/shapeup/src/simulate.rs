@@ -110,7 +110,15 @@ impl FrameWriter<'_> {
     fn write(&mut self, k: usize, simulation: &Simulation) -> Result<()> {
         let path = frame_path(self.dir, k, self.last, self.format);
         let q = simulation.positions();
-        let mut mesh = if self.format.is_volume() { self.loaded.volume_at(q) } else { self.loaded.surface_at(q) };
+        // A mesh read with tetrahedra keeps them where the format can; a surface format then
+        // writes their boundary and says so. A tetrahedralized surface comes back as the surface.
+        let read_with_tetrahedra =
+            self.loaded.mesh.num_tetrahedra() > 0 && self.loaded.input_vertices == self.loaded.mesh.num_vertices();
+        let mut mesh = if self.format.is_volume() || read_with_tetrahedra {
+            self.loaded.volume_at(q)
+        } else {
+            self.loaded.surface_at(q)
+        };
         // Vertices the solver leaves alone (in no element, no constraint) stay where the input
         // has them, bit for bit: the round trip through the working frame may change the last bit.
         let system = simulation.system();
@@ -172,6 +180,9 @@ pub fn run(args: &SimulateArgs<'_>) -> Result<()> {
     {
         bail!("{}: the report must be a .json file", r.display());
     }
+    if let Some(r) = args.report {
+        crate::check_parent_dir(r)?;
+    }
     let scene = Scene::from_file(args.scene)?;
     let mut loaded = scene.load()?;
     let mut simulation = loaded.start_simulation()?;
@@ -195,7 +206,8 @@ pub fn run(args: &SimulateArgs<'_>) -> Result<()> {
     } else {
         ProgressBar::hidden()
     };
-    let (mut energies, mut local, mut global, mut setup) = (Vec::with_capacity(args.frames), 0.0, 0.0, 0.0);
+    let (mut energies, mut local, mut global, mut setup) =
+        (Vec::with_capacity(args.frames.min(1 << 20)), 0.0, 0.0, 0.0);
     let h = simulation.params().time_step;
     let spinning = loaded.spinning_handles()?;
     let mut steps = || -> Result<()> {

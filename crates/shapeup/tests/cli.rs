@@ -1354,3 +1354,36 @@ fn a_tetrahedralized_surface_comes_back_as_the_input_surface() {
     let (msh, _, _) = deform_ok(&ws, &scene, "spot.msh", &[]);
     assert!(msh.num_tetrahedra() > 0 && msh.num_vertices() > rest.num_vertices(), "a volume output keeps them");
 }
+
+#[test]
+fn a_report_in_a_missing_folder_fails_before_anything_is_written() {
+    let ws = Workspace::new();
+    let scene = ws.scene("spot.toml", &toml_scene(Path::new(SPOT), "", SHAPE_AND_HANDLE));
+    let (o, r) = (ws.out("result.obj"), ws.out("missing/report.json"));
+    ws.expect_failure(
+        &[OsStr::new("deform"), scene.as_os_str(), "-o".as_ref(), o.as_os_str(), "--report".as_ref(), r.as_os_str()],
+        &["missing", "does not exist"],
+    );
+    let dir = ws.out("frames");
+    ws.expect_failure(
+        &[
+            OsStr::new("simulate"),
+            Path::new(EXAMPLES).join("cloth-drape.toml").as_os_str(),
+            "--frames".as_ref(),
+            "2".as_ref(),
+            "-o".as_ref(),
+            dir.as_os_str(),
+            "--report".as_ref(),
+            r.as_os_str(),
+        ],
+        &["missing", "does not exist"],
+    );
+}
+
+#[test]
+fn an_energy_that_overflows_is_an_error_not_infinity() {
+    let ws = Workspace::new();
+    let body = "[[constraints]]\ntype = \"edge_spring\"\n[[constraints]]\ntype = \"position\"\nvertices = [0]\n\
+                [[constraints]]\ntype = \"position\"\nvertices = [1]\ntranslate = [1e200, 0, 0]\n";
+    ws.spot_scene_fails(body, &["not a finite number"]);
+}

@@ -293,18 +293,18 @@ pub fn write_mesh_with(path: &Path, mesh: &Mesh, format: WriteFormat) -> Result<
     Ok(warnings.for_file(path))
 }
 
-/// Counts, in `warnings`, each kind of `mesh`'s attributes that a writer of `format` does not
-/// keep (`kept`), and the polygons it has to split when it stores triangles only.
+/// Names, in one warning, every kind of `mesh`'s attributes that a writer of `format` does not
+/// keep (`kept`).
 pub(crate) fn report_dropped(mesh: &Mesh, kept: &[AttributeKind], format: &str, warnings: &mut Warnings) {
-    for kind in mesh.attributes.kinds() {
-        if !kept.contains(&kind) {
-            let what = kind.describe();
-            warnings.add(
-                "attributes_dropped",
-                &format!("kinds of attribute that {format} cannot hold, dropped"),
-                || what.clone(),
-            );
-        }
+    let dropped: Vec<String> =
+        mesh.attributes.kinds().into_iter().filter(|k| !kept.contains(k)).map(|k| k.describe()).collect();
+    if let Some(first) = dropped.first().cloned() {
+        warnings.add_many(
+            "attributes_dropped",
+            &format!("kinds of attribute not written to {format} ({})", dropped.join(", ")),
+            dropped.len(),
+            || first,
+        );
     }
 }
 

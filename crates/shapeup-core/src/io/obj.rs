@@ -18,8 +18,10 @@
 //! (comments, blank lines, `vt`, `f`, `o`, `g`, `s`, `mtllib`, `usemtl`, `l`, `p`, unknown
 //! directives) verbatim — with the parsed texture coordinates, normals, per-corner `vt` and `vn`
 //! indices, colours, the line-ending style (that of the first line), whether the file ends with a
-//! newline and whether it starts with a byte-order mark. Text that is not UTF-8 is kept with
-//! U+FFFD replacement characters.
+//! newline and whether it starts with a byte-order mark. Lines are kept as the file's bytes, so
+//! text that is not UTF-8 (Latin-1 comments, group and material names of older files) comes back
+//! unchanged and `usemtl` names still match the `.mtl` file; only numbers, indices and keywords
+//! are parsed, and those are ASCII.
 //!
 //! **Written back** as OBJ the file comes out line for line, byte for byte, except that each `v`
 //! line becomes `v x y z` (the new position, shortest exact decimals) followed by its original
@@ -65,7 +67,7 @@ pub fn read_obj(reader: impl BufRead, path: &Path) -> Result<LoadedMesh, IoError
     loop {
         // One logical line: physical lines joined by `\n` while one ends in `\` (before trailing
         // blanks), numbered by its first line.
-        let mut raw = String::new();
+        let mut raw: Vec<u8> = Vec::new();
         let mut first_line = 0;
         let mut at_end = false;
         loop {
@@ -78,10 +80,10 @@ pub fn read_obj(reader: impl BufRead, path: &Path) -> Result<LoadedMesh, IoError
                     if first_line == 0 {
                         first_line = number;
                     } else {
-                        raw.push('\n');
+                        raw.push(b'\n');
                     }
-                    raw.push_str(text);
-                    if !text.trim_end().ends_with('\\') {
+                    raw.extend_from_slice(text);
+                    if !text_view(text, &mut String::new()).trim_end().ends_with('\\') {
                         break;
                     }
                 }
@@ -90,8 +92,11 @@ pub fn read_obj(reader: impl BufRead, path: &Path) -> Result<LoadedMesh, IoError
         if first_line == 0 {
             break;
         }
-        let spans = token_spans(&raw);
-        let tokens: Vec<&str> = spans.iter().map(|r| &raw[r.clone()]).collect();
+        // Parsed through a view with the same byte offsets (see `text_view`), kept as bytes.
+        let mut replaced = String::new();
+        let view = text_view(&raw, &mut replaced);
+        let spans = token_spans(view);
+        let tokens: Vec<&str> = spans.iter().map(|r| &view[r.clone()]).collect();
         let error = |message: String| parse_error(first_line, message);
         match tokens.first().copied() {
             Some("v") => {
@@ -108,7 +113,7 @@ pub fn read_obj(reader: impl BufRead, path: &Path) -> Result<LoadedMesh, IoError
                 };
                 let index = count_u32(positions.len(), "vertices").map_err(error)?;
                 // The rest after z, verbatim (spans[3] exists: parse_values found x y z).
-                let rest = spans.get(3).map_or(String::new(), |z| raw[z.end..].to_owned());
+                let rest = spans.get(3).map_or(Vec::new(), |z| raw[z.end..].to_vec());
                 attributes.lines.push(ObjLine::Vertex { index, rest });
                 positions.push(DVec3::new(xyz[0], xyz[1], xyz[2]));
                 colors.push(color);
@@ -217,12 +222,11 @@ pub fn read_obj(reader: impl BufRead, path: &Path) -> Result<LoadedMesh, IoError
     Ok(loaded)
 }
 
-/// Physical lines of a file as text without their endings, remembering what the writer needs to
+/// Physical lines of a file as bytes without their endings, remembering what the writer needs to
 /// reproduce the file: a byte-order mark, the ending style and whether the last line has one.
 struct RawLines<R> {
     reader: R,
     bytes: Vec<u8>,
-    text: String,
     number: usize,
     bom: bool,
     /// Whether the first line ending is `\r\n` (`None` until a line ending was read).
@@ -232,11 +236,11 @@ struct RawLines<R> {
 
 impl<R: BufRead> RawLines<R> {
     fn new(reader: R) -> Self {
-        Self { reader, bytes: Vec::new(), text: String::new(), number: 0, bom: false, crlf: None, final_newline: false }
+        Self { reader, bytes: Vec::new(), number: 0, bom: false, crlf: None, final_newline: false }
     }
 
-    /// The next line's 1-based number and text, or `None` at the end of the file.
-    fn next_line(&mut self) -> io::Result<Option<(usize, &str)>> {
+    /// The next line's 1-based number and bytes, or `None` at the end of the file.
+    fn next_line(&mut self) -> io::Result<Option<(usize, &[u8])>> {
         self.bytes.clear();
         if self.reader.read_until(b'\n', &mut self.bytes)? == 0 {
             return Ok(None);
@@ -255,9 +259,25 @@ impl<R: BufRead> RawLines<R> {
             }
             self.crlf.get_or_insert(cr);
         }
-        self.text.clear();
-        self.text.push_str(&String::from_utf8_lossy(&self.bytes));
-        Ok(Some((self.number, &self.text)))
+        Ok(Some((self.number, &self.bytes)))
+    }
+}
+
+/// `bytes` as text to parse: themselves when they are UTF-8, else a copy in `replaced` with each
+/// byte that is not part of a UTF-8 character replaced by `?`. Either way byte offsets are those
+/// of `bytes` (so a token's range is also its range in the file's line), and the keywords,
+/// numbers and indices that are parsed (ASCII) are unaffected.
+fn text_view<'a>(bytes: &'a [u8], replaced: &'a mut String) -> &'a str {
+    match std::str::from_utf8(bytes) {
+        Ok(text) => text,
+        Err(_) => {
+            replaced.clear();
+            for chunk in bytes.utf8_chunks() {
+                replaced.push_str(chunk.valid());
+                replaced.extend(std::iter::repeat_n('?', chunk.invalid().len()));
+            }
+            replaced
+        }
     }
 }
 
@@ -386,7 +406,11 @@ fn fingerprint(polygons: &Polygons) -> u64 {
 }
 
 /// One logical line of an OBJ file (physical lines joined by `\` continuations are one line, its
-/// text holding `\n` between them).
+/// text holding `\n` between them; line endings are not part of it).
+///
+/// Text is the file's bytes, verbatim: they need not be UTF-8 (older files often have Latin-1
+/// comments, group and material names), and are written back unchanged. Use
+/// [`String::from_utf8_lossy`] to show them.
 #[derive(Debug, Clone, PartialEq)]
 pub enum ObjLine {
     /// A `v` line.
@@ -394,18 +418,18 @@ pub enum ObjLine {
         /// The vertex it defines (0-based).
         index: u32,
         /// Everything after the z coordinate, verbatim: `w`, a colour, blanks, a comment.
-        rest: String,
+        rest: Vec<u8>,
     },
     /// A `vn` line.
     Normal {
         /// The normal it defines (0-based, as `vn` indices count from 1).
         index: u32,
         /// The whole line, verbatim (written back when the normal is not recomputed).
-        text: String,
+        text: Vec<u8>,
     },
     /// Any other line, verbatim: comments, blank lines, `vt`, `f`, `o`, `g`, `s`, `mtllib`,
     /// `usemtl`, `l`, `p`, unknown directives.
-    Other(String),
+    Other(Vec<u8>),
 }
 
 /// Everything an OBJ file holds besides positions and faces (see [`crate::attributes`] and the
@@ -545,15 +569,18 @@ pub fn write_obj(w: &mut dyn Write, mesh: &Mesh, warnings: &mut Warnings) -> io:
     write_new(w, mesh, same_faces, warnings)
 }
 
-/// Writes text that may span physical lines (`\n` inside) with the file's line ending.
-fn write_text(w: &mut dyn Write, text: &str, newline: &[u8]) -> io::Result<()> {
-    for (k, part) in text.split('\n').enumerate() {
+/// Writes a kept line's bytes, which may span physical lines (`\n` inside), with the file's line
+/// ending; returns how many physical lines they span.
+fn write_text(w: &mut dyn Write, text: &[u8], newline: &[u8]) -> io::Result<usize> {
+    let mut count = 0;
+    for (k, part) in text.split(|&b| b == b'\n').enumerate() {
         if k > 0 {
             w.write_all(newline)?;
         }
-        w.write_all(part.as_bytes())?;
+        w.write_all(part)?;
+        count += 1;
     }
-    Ok(())
+    Ok(count)
 }
 
 /// Writes `x y z` (without a line ending), each as [`write_f64`] does.
@@ -588,8 +615,7 @@ fn write_lines(w: &mut dyn Write, mesh: &Mesh, obj: &ObjAttributes, warnings: &m
                 let p = mesh.positions.get(*index as usize).copied().unwrap_or_default();
                 w.write_all(b"v ")?;
                 write_xyz(w, p)?;
-                write_text(w, rest, newline)?;
-                line_number += 1 + rest.matches('\n').count();
+                line_number += write_text(w, rest, newline)?;
             }
             ObjLine::Normal { index, text } => match normals.get(*index as usize).copied().flatten() {
                 Some(n) => {
@@ -601,23 +627,16 @@ fn write_lines(w: &mut dyn Write, mesh: &Mesh, obj: &ObjAttributes, warnings: &m
                     write_xyz(w, n)?;
                     line_number += 1;
                 }
-                None => {
-                    write_text(w, text, newline)?;
-                    line_number += 1 + text.matches('\n').count();
-                }
+                None => line_number += write_text(w, text, newline)?,
             },
-            ObjLine::Other(text) => {
-                write_text(w, text, newline)?;
-                line_number += 1 + text.matches('\n').count();
-            }
+            ObjLine::Other(text) => line_number += write_text(w, text, newline)?,
         }
     }
     if obj.final_newline {
         w.write_all(newline)?;
     }
-    warnings.add_many("normals_recomputed", "normals recomputed from the deformed geometry", recomputed, || {
-        first_recomputed
-    });
+    warnings
+        .add_many("normals_recomputed", "normals recomputed from the moved geometry", recomputed, || first_recomputed);
     Ok(())
 }
 
@@ -662,12 +681,9 @@ fn write_new(w: &mut dyn Write, mesh: &Mesh, same_faces: bool, warnings: &mut Wa
             }
         }
         let vt_lines = texcoords.as_ref().map_or(0, |t| t.values.len());
-        warnings.add_many(
-            "normals_recomputed",
-            "normals recomputed from the deformed geometry",
-            written as usize,
-            || format!("vn 1 (line {})", 2 + n + vt_lines),
-        );
+        warnings.add_many("normals_recomputed", "normals recomputed from the moved geometry", written as usize, || {
+            format!("vn 1 (line {})", 2 + n + vt_lines)
+        });
     }
     for (face, poly) in polygons.iter().enumerate() {
         let range = polygons.corner_range(face);
@@ -762,6 +778,16 @@ mod tests {
         let raw = "f a\\b \\\\  ";
         let tokens: Vec<&str> = token_spans(raw).into_iter().map(|r| &raw[r]).collect();
         assert_eq!(tokens, ["f", "a\\b", "\\"], "only a backslash ending its line continues it");
+    }
+
+    #[test]
+    fn text_view_keeps_byte_offsets() {
+        let mut replaced = String::new();
+        assert_eq!(text_view("v 1 é".as_bytes(), &mut replaced), "v 1 é");
+        let bytes = b"g caf\xe9 \xff\xfe x";
+        let view = text_view(bytes, &mut replaced);
+        assert_eq!(view, "g caf? ?? x");
+        assert_eq!(view.len(), bytes.len());
     }
 
     #[test]

@@ -106,7 +106,17 @@ pub fn read_off(reader: impl BufRead, path: &Path) -> Result<LoadedMesh, IoError
                 parse_coordinate(token, &format!("vertex {i} {axis} coordinate")).map_err(|m| parse_error(line, m))?;
         }
         positions.push(DVec3::from_array(xyz));
-        vertex_extra.push(tokens[3..].join(" "));
+        let extra = &tokens[3..];
+        if let Some(bad) = extra.iter().find(|t| t.parse::<f64>().is_err()) {
+            return Err(parse_error(line, format!("vertex {i}: '{bad}' after the coordinates is not a number")));
+        }
+        if layout.normal && extra.len() < 3 {
+            return Err(parse_error(
+                line,
+                format!("vertex {i} has {} values after x y z, but {keyword} needs a normal (3)", extra.len()),
+            ));
+        }
+        vertex_extra.push(extra.join(" "));
     }
 
     let mut faces: Vec<Vec<u32>> = bounded_vec(nf);
@@ -134,8 +144,18 @@ pub fn read_off(reader: impl BufRead, path: &Path) -> Result<LoadedMesh, IoError
             face.push(index);
         }
         // Whatever follows the indices (a colour) is kept as it is.
-        face_extra.push(tokens.map(String::as_str).collect::<Vec<_>>().join(" "));
+        let extra: Vec<&str> = tokens.map(String::as_str).collect();
+        if let Some(bad) = extra.iter().find(|t| t.parse::<f64>().is_err()) {
+            return Err(parse_error(line, format!("face {f}: '{bad}' after the vertex indices is not a colour value")));
+        }
+        face_extra.push(extra.join(" "));
         faces.push(face);
+    }
+    if let Some((line, _)) = next_tokens(&mut lines)? {
+        return Err(parse_error(
+            line,
+            format!("content after the last face (the counts line {counts_line} says {nv} vertices and {nf} faces)"),
+        ));
     }
     let mut loaded = build_mesh(path, positions, faces.iter().map(Vec::as_slice).collect())?;
     let attributes = OffAttributes { keyword, layout, vertex_extra, face_extra, comments };

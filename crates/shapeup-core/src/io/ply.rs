@@ -625,8 +625,10 @@ struct Header {
 /// [`IoError::Parse`] with the line for a malformed header (no `ply`/`format`/`end_header`,
 /// unknown type or keyword, no `vertex` element with `x y z`) or malformed ascii data (too few
 /// or too many values on an instance's line, a value not of its type, a vertex index out of
-/// range, a strip with fewer than 3 indices); [`IoError::Binary`] with the byte offset and
-/// element index for truncated binary data and the same index and strip errors;
+/// range, a face with fewer than 3 indices, a strip with fewer than 3 indices, a non-blank line
+/// after the last element); [`IoError::Binary`] with the byte offset and element index for
+/// truncated binary data and the same face, index and strip errors, or with the offset of any
+/// bytes after the last element;
 /// [`IoError::Invalid`] for zero vertices; [`IoError::Mesh`] for a non-finite coordinate;
 /// [`IoError::Read`] if reading fails.
 pub fn read_ply(reader: impl BufRead, path: &Path) -> Result<LoadedMesh, IoError> {
@@ -838,8 +840,8 @@ struct Checks<'a> {
 }
 
 impl Checks<'_> {
-    /// What is wrong with instance `i` of element `e` (just read): a face or strip index that is
-    /// no vertex, a strip too short.
+    /// What is wrong with instance `i` of element `e` (just read): a face of fewer than 3
+    /// indices, a face or strip index that is no vertex, a strip too short.
     fn instance(&self, e: usize, element: &PlyElement, i: usize) -> Result<(), String> {
         let n = self.num_vertices;
         let name = &element.name;
@@ -847,6 +849,10 @@ impl Checks<'_> {
         let out_of_range =
             |v: f64| format!("{name} {i} refers to vertex {v}, but the file has {n} vertices (valid: 0..{n})");
         if let Some((_, p)) = self.plan.face.filter(|(fe, _)| *fe == e) {
+            let k = list(p).len();
+            if k < 3 {
+                return Err(format!("{name} {i} has {k} vertex indices, expected at least 3"));
+            }
             for &v in list(p) {
                 if !(v >= 0.0 && v.fract() == 0.0) {
                     return Err(format!(
@@ -915,6 +921,18 @@ fn read_ascii_body<R: BufRead>(
                 checks.instance(e, element, i).map_err(|m| parse_error(line, m))?;
                 break;
             }
+        }
+    }
+    // Content after the last instance means the header's counts disagree with the data.
+    while let Some((line, text)) =
+        lines.next_line().map_err(|source| IoError::Read { path: path.to_path_buf(), source })?
+    {
+        if !text.trim().is_empty() {
+            let shown: String = text.trim().chars().take(40).collect();
+            return Err(parse_error(
+                line,
+                format!("content after the last element: '{shown}' (the header's counts disagree with the data)"),
+            ));
         }
     }
     Ok(())
@@ -1034,6 +1052,27 @@ fn read_binary_body<R: Read>(
             }
             checks.instance(e, element, i).map_err(|m| error(start, m))?;
         }
+    }
+    // One byte more shows trailing data; the rest is only counted, never held.
+    let read_error = |source| IoError::Read { path: path.to_path_buf(), source };
+    let mut byte = [0u8; 1];
+    let extra = loop {
+        match body.reader.read(&mut byte) {
+            Ok(n) => break n,
+            Err(err) if err.kind() == io::ErrorKind::Interrupted => {}
+            Err(err) => return Err(read_error(err)),
+        }
+    };
+    if extra > 0 {
+        let rest = io::copy(&mut body.reader, &mut io::sink()).map_err(read_error)?;
+        return Err(IoError::Binary {
+            path: path.to_path_buf(),
+            offset: body.offset,
+            message: format!(
+                "{} bytes after the last element (the header's counts or a list length disagree with the data)",
+                rest + 1
+            ),
+        });
     }
     Ok(())
 }

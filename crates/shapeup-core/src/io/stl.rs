@@ -253,7 +253,7 @@ pub fn write_stl_binary(w: &mut dyn Write, mesh: &Mesh, warnings: &mut crate::wa
         "vertices_not_kept",
         "vertices not kept as such: STL stores separate triangles, so the output's vertex count and order are not the input's (use OBJ, PLY or OFF to keep them)",
         mesh.num_vertices(),
-        || format!("{} triangles written", mesh.num_triangles()),
+        String::new,
     );
     let count = u32::try_from(mesh.num_triangles())
         .map_err(|_| io::Error::new(io::ErrorKind::InvalidInput, "binary STL holds at most u32::MAX triangles"))?;

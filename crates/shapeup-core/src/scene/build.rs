@@ -116,6 +116,9 @@ impl Scene {
         if let Some(group) = degenerate.into_group() {
             system.add_group(group).map_err(|e| invalid("[mesh]", e.to_string()))?;
         }
+        // Name the mesh file (or, for a generated mesh, the scene) in what building found.
+        let source = if self.mesh.generate.is_some() { self.file.clone() } else { self.mesh_path() };
+        let warnings = warnings.for_file(&source);
         Ok(LoadedScene {
             scene: self.clone(),
             mesh,
@@ -224,7 +227,8 @@ impl LoadedScene {
     /// # Errors
     /// [`SceneError::Solve`] for a singular system.
     pub fn solve_static(&mut self, iterations: Option<usize>) -> Result<(Vec<DVec3>, SolveReport), SceneError> {
-        let iterations = iterations.unwrap_or(self.scene.solver.iterations * self.scene.solver.steps);
+        // steps × iterations beyond usize is far more than anyone can wait for: saturate.
+        let iterations = iterations.unwrap_or(self.scene.solver.iterations.saturating_mul(self.scene.solver.steps));
         let mut q = self.rest.positions.clone();
         let report = self
             .system

@@ -103,6 +103,11 @@ pub enum SolveError {
     /// The solve produced NaN or infinity.
     #[error("the solve produced non-finite positions (the system is numerically singular); check the weights")]
     NonFinite,
+    /// The energy overflowed (targets, forces or coordinates too large for f64).
+    #[error(
+        "the energy is not a finite number (targets, gravity or coordinates too large); check the translations, targets and gravity"
+    )]
+    NonFiniteEnergy,
     /// A negative or non-finite multiplier.
     #[error("group \"{name}\": weight must be a finite number ≥ 0, found {value}")]
     BadWeight {
@@ -479,6 +484,9 @@ impl System {
         self.project(q);
         report.local_seconds += t.elapsed().as_secs_f64();
         let mut previous = self.energy_of_projections(q);
+        if !previous.is_finite() {
+            return Err(SolveError::NonFiniteEnergy);
+        }
         for _ in 0..iterations {
             // Each pass: global step from the last projections, then the local step at the new
             // q, whose projections give E(q) and feed the next global step.
@@ -489,6 +497,9 @@ impl System {
             self.project(q);
             report.local_seconds += t.elapsed().as_secs_f64();
             let energy = self.energy_of_projections(q);
+            if !energy.is_finite() {
+                return Err(SolveError::NonFiniteEnergy);
+            }
             report.energies.push(energy);
             // Relative change |E_k − E_{k−1}| / E_{k−1}.
             let converged = tolerance > 0.0 && (previous - energy).abs() < tolerance * previous.abs();
