@@ -345,13 +345,7 @@ impl Solver {
                     ids.push(system.add_group(build_group(rest, group)?)?);
                 }
                 // Vertices that only zero-area triangles use follow their edge, as in a scene.
-                let degenerate = shapeup_core::constraints::degenerate_attachments(
-                    &rest.geometry,
-                    system.groups().flat_map(|(_, g)| g.constraints.iter().map(|c| c.as_ref())),
-                );
-                if let Some(group) = degenerate.into_group() {
-                    system.add_group(group)?;
-                }
+                shapeup_core::constraints::attach_degenerate_vertices(&mut system, &rest.geometry)?;
                 self.q = match &self.rest {
                     // Same positions in the input frame, seen in the new working frame.
                     Some(old) if !same_rest && self.q.len() == rest.mesh.num_vertices() => {

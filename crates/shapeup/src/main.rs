@@ -207,20 +207,13 @@ fn deform(
     let scene = Scene::from_file(scene_path)?;
     let mut loaded = scene.load()?;
     let (q, solve) = loaded.solve_static(iterations)?;
-    let mut mesh = loaded.mesh_at(&q);
     let mut warnings = loaded.warnings.clone();
     let format = match WriteFormat::from_path(output)? {
         WriteFormat::Ply(_) => WriteFormat::Ply(ply_encoding),
         other => other,
     };
-    if !matches!(format, WriteFormat::Msh | WriteFormat::Vtu | WriteFormat::TetGen) {
-        // A surface the scene tetrahedralized comes back as that surface: the input's vertices
-        // (TetGen's points come after them) and faces.
-        mesh.positions.truncate(loaded.input_vertices);
-        if loaded.input_vertices < loaded.mesh.num_vertices() {
-            mesh.tetrahedra.clear();
-        }
-    }
+    let volume = matches!(format, WriteFormat::Msh | WriteFormat::Vtu | WriteFormat::TetGen);
+    let mesh = loaded.output_mesh(&q, volume, |v| loaded.system.is_solved(v));
     warnings.extend(write_mesh_with(output, &mesh, format)?);
     let total = start.elapsed().as_secs_f64();
     if let Some(path) = report_path {

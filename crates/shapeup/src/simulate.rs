@@ -109,24 +109,8 @@ impl FrameWriter<'_> {
     /// Writes frame `k` (the state of `simulation` after k steps), atomically.
     fn write(&mut self, k: usize, simulation: &Simulation) -> Result<()> {
         let path = frame_path(self.dir, k, self.last, self.format);
-        let q = simulation.positions();
-        // A mesh read with tetrahedra keeps them where the format can; a surface format then
-        // writes their boundary and says so. A tetrahedralized surface comes back as the surface.
-        let read_with_tetrahedra =
-            self.loaded.mesh.num_tetrahedra() > 0 && self.loaded.input_vertices == self.loaded.mesh.num_vertices();
-        let mut mesh = if self.format.is_volume() || read_with_tetrahedra {
-            self.loaded.volume_at(q)
-        } else {
-            self.loaded.surface_at(q)
-        };
-        // Vertices the solver leaves alone (in no element, no constraint) stay where the input
-        // has them, bit for bit: the round trip through the working frame may change the last bit.
         let system = simulation.system();
-        for (v, (p, &input)) in mesh.positions.iter_mut().zip(&self.loaded.mesh.positions).enumerate() {
-            if !system.is_solved(v) {
-                *p = input;
-            }
-        }
+        let mesh = self.loaded.output_mesh(simulation.positions(), self.format.is_volume(), |v| system.is_solved(v));
         let warnings = if self.format == FrameFormat::Vtu {
             self.write_vtu(&path, &mesh, simulation)?
         } else {

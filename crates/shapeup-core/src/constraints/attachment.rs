@@ -12,7 +12,7 @@
 
 use super::{Constraint, RowSink};
 use crate::geometry::{RestGeometry, is_degenerate_triangle};
-use crate::solver::ConstraintGroup;
+use crate::solver::{ConstraintGroup, SolveError, System};
 use glam::DVec3;
 
 /// Name of the group that holds the attachments.
@@ -119,6 +119,28 @@ impl DegenerateAttachments {
             ConstraintGroup::new(DEGENERATE_FACES_GROUP, 1.0, constraints)
         })
     }
+}
+
+/// Adds to `system`, after its own groups, the attachments of the vertices of `rest` that only
+/// degenerate triangles use ([`degenerate_attachments`] of every constraint it holds so far), as
+/// the group [`DEGENERATE_FACES_GROUP`]. Returns the attached vertices and the stranded ones
+/// (each sorted), for the caller to report. What scenes and the editor both do after building
+/// their groups.
+///
+/// # Errors
+/// As [`System::add_group`].
+pub fn attach_degenerate_vertices(
+    system: &mut System,
+    rest: &RestGeometry,
+) -> Result<(Vec<u32>, Vec<u32>), SolveError> {
+    let found =
+        degenerate_attachments(rest, system.groups().flat_map(|(_, g)| g.constraints.iter().map(|c| c.as_ref())));
+    let attached = found.attached_vertices();
+    let stranded = found.stranded.clone();
+    if let Some(group) = found.into_group() {
+        system.add_group(group)?;
+    }
+    Ok((attached, stranded))
 }
 
 /// The attachments of the vertices that only degenerate triangles use, given the constraints

@@ -23,7 +23,9 @@ mod smoothing;
 mod tet_strain;
 mod triangle_strain;
 
-pub use attachment::{DEGENERATE_FACES_GROUP, DegenerateAttachments, EdgeAttachment, degenerate_attachments};
+pub use attachment::{
+    DEGENERATE_FACES_GROUP, DegenerateAttachments, EdgeAttachment, attach_degenerate_vertices, degenerate_attachments,
+};
 pub use bending::{Bending, BendingType};
 pub use edge_spring::{EdgeSpring, EdgeSpringType};
 pub use floor::{Floor, FloorType};

@@ -460,14 +460,20 @@ pub(crate) fn write_f64(w: &mut dyn Write, x: f64) -> io::Result<()> {
     write!(w, "{x:?}")
 }
 
-/// Writes `x y z` and a newline, each coordinate as [`write_f64`] does (every text writer's
-/// vertex line, after its own prefix).
-pub(crate) fn write_point(w: &mut dyn Write, p: glam::DVec3) -> io::Result<()> {
+/// Writes `x y z`, each coordinate as [`write_f64`] does (a vertex or normal, before whatever
+/// else its line holds).
+pub(crate) fn write_xyz(w: &mut dyn Write, p: glam::DVec3) -> io::Result<()> {
     write_f64(w, p.x)?;
     w.write_all(b" ")?;
     write_f64(w, p.y)?;
     w.write_all(b" ")?;
-    write_f64(w, p.z)?;
+    write_f64(w, p.z)
+}
+
+/// Writes `x y z` and a newline ([`write_xyz`]): every text writer's vertex line, after its
+/// own prefix.
+pub(crate) fn write_point(w: &mut dyn Write, p: glam::DVec3) -> io::Result<()> {
+    write_xyz(w, p)?;
     w.write_all(b"\n")
 }
 

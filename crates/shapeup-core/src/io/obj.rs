@@ -39,7 +39,7 @@ use std::path::Path;
 
 use glam::DVec3;
 
-use super::{IoError, LoadedMesh, UTF8_BOM, build_mesh, parse_coordinate, report_dropped, write_f64};
+use super::{IoError, LoadedMesh, UTF8_BOM, build_mesh, parse_coordinate, report_dropped, write_f64, write_xyz};
 use crate::attributes::{AttributeKind, Attributes, NO_INDEX, TexCoords};
 use crate::geometry::indexed_normals;
 use crate::mesh::{Mesh, Polygons};
@@ -581,15 +581,6 @@ fn write_text(w: &mut dyn Write, text: &[u8], newline: &[u8]) -> io::Result<usiz
         count += 1;
     }
     Ok(count)
-}
-
-/// Writes `x y z` (without a line ending), each as [`write_f64`] does.
-fn write_xyz(w: &mut dyn Write, p: DVec3) -> io::Result<()> {
-    write_f64(w, p.x)?;
-    w.write_all(b" ")?;
-    write_f64(w, p.y)?;
-    w.write_all(b" ")?;
-    write_f64(w, p.z)
 }
 
 /// The file's lines with the mesh's positions and recomputed normals.

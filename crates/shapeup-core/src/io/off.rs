@@ -15,7 +15,7 @@ use std::path::Path;
 
 use glam::DVec3;
 
-use super::{IoError, Lines, LoadedMesh, bounded_vec, build_mesh, parse_coordinate, write_point};
+use super::{IoError, Lines, LoadedMesh, bounded_vec, build_mesh, parse_coordinate, write_xyz};
 use crate::mesh::Mesh;
 
 /// Reads an OFF file from `reader`; `path` only names it in errors.
@@ -318,24 +318,23 @@ pub fn write_off(w: &mut dyn Write, mesh: &Mesh, warnings: &mut crate::warnings:
     }
     for (i, p) in mesh.positions.iter().enumerate() {
         let extra = own.and_then(|a| a.vertex_extra.get(i)).map_or("", String::as_str);
-        match normals.get(i) {
+        write_xyz(w, *p)?;
+        let mut rest = extra.split_whitespace();
+        if let Some(normal) = normals.get(i) {
             // NOFF: the three values after x y z are the normal; the rest stays as read.
-            Some(normal) => {
-                let mut rest = extra.split_whitespace();
-                let old: Vec<&str> = rest.by_ref().take(3).collect();
-                write!(w, "{} {} {}", fmt_f64(p.x), fmt_f64(p.y), fmt_f64(p.z))?;
-                match normal {
-                    Some(n) => write!(w, " {} {} {}", fmt_f64(n.x), fmt_f64(n.y), fmt_f64(n.z))?,
-                    None => write!(w, " {}", old.join(" "))?,
+            let old: Vec<&str> = rest.by_ref().take(3).collect();
+            match normal {
+                Some(n) => {
+                    w.write_all(b" ")?;
+                    write_xyz(w, *n)?;
                 }
-                for t in rest {
-                    write!(w, " {t}")?;
-                }
-                w.write_all(b"\n")?;
+                None => write!(w, " {}", old.join(" "))?,
             }
-            None if extra.is_empty() => write_point(w, *p)?,
-            None => writeln!(w, "{} {} {} {extra}", fmt_f64(p.x), fmt_f64(p.y), fmt_f64(p.z))?,
         }
+        for t in rest {
+            write!(w, " {t}")?;
+        }
+        w.write_all(b"\n")?;
     }
     for (f, poly) in mesh.polygons.iter().enumerate() {
         write!(w, "{}", poly.len())?;
@@ -348,11 +347,6 @@ pub fn write_off(w: &mut dyn Write, mesh: &Mesh, warnings: &mut crate::warnings:
         }
     }
     Ok(())
-}
-
-/// The shortest decimal that reads back to `x`.
-fn fmt_f64(x: f64) -> String {
-    format!("{x:?}")
 }
 
 #[cfg(test)]

@@ -2,7 +2,7 @@
 //! resolve selections and build each group.
 
 use super::{GroupSpec, Scene, SceneError, SelectionSpec, Targets};
-use crate::constraints::{BuildContext, Params, Position, Selection, build_constraints, degenerate_attachments};
+use crate::constraints::{BuildContext, Params, Position, Selection, attach_degenerate_vertices, build_constraints};
 use crate::dynamics::{DynamicsParams, Simulation};
 use crate::geometry::{RestGeometry, WorkingFrame, lumped_masses_surface, lumped_masses_volume};
 use crate::io::read_mesh;
@@ -97,25 +97,20 @@ impl Scene {
             group_ids.push(system.add_group(group).map_err(|e| invalid(&entry, e.to_string()))?);
         }
         // Vertices that only zero-area triangles use follow their edge (math reference, "Edge cases").
-        let degenerate =
-            degenerate_attachments(&rest, system.groups().flat_map(|(_, g)| g.constraints.iter().map(|c| c.as_ref())));
-        let attached = degenerate.attached_vertices();
+        let (attached, stranded) =
+            attach_degenerate_vertices(&mut system, &rest).map_err(|e| invalid("[mesh]", e.to_string()))?;
         warnings.add_many(
             "degenerate_vertices_attached",
             "vertices that only degenerate (zero-area) triangles use, attached to their edge",
             attached.len(),
             || attached.first().map(|v| format!("vertex {v}")).unwrap_or_default(),
         );
-        let stranded = &degenerate.stranded;
         warnings.add_many(
             "degenerate_vertices_stranded",
             "vertices that only degenerate (zero-area) triangles use and no constraint reaches, kept at their rest position",
             stranded.len(),
             || stranded.first().map(|v| format!("vertex {v}")).unwrap_or_default(),
         );
-        if let Some(group) = degenerate.into_group() {
-            system.add_group(group).map_err(|e| invalid("[mesh]", e.to_string()))?;
-        }
         // Name the mesh file (or, for a generated mesh, the scene) in what building found.
         let source = if self.mesh.generate.is_some() { self.file.clone() } else { self.mesh_path() };
         let warnings = warnings.for_file(&source);
@@ -247,16 +242,35 @@ impl LoadedScene {
         positions.iter().map(|&p| self.frame.to_working(p)).collect()
     }
 
-    /// The input mesh (faces, attributes) with its positions replaced by `q` (working frame)
-    /// mapped back; vertices that no constraint touches keep their input positions bit for bit.
+    /// The input mesh (faces, attributes, tetrahedra) with its positions replaced by `q`
+    /// (working frame) mapped back; vertices that no constraint touches keep their input
+    /// positions bit for bit. [`LoadedScene::output_mesh`] for a volume format.
     pub fn mesh_at(&self, q: &[DVec3]) -> Mesh {
-        let positions = q
+        self.output_mesh(q, true, |v| self.system.is_solved(v))
+    }
+
+    /// What an output of the scene at working positions `q` holds, in the input frame: the
+    /// whole mesh when `volume` (a format that stores tetrahedra: `.msh`, `.vtu`) or when the
+    /// mesh was read with tetrahedra (a surface format then writes their boundary and says
+    /// so); for a surface the scene tetrahedralized, that surface: every input vertex in file
+    /// order, its faces and attributes, without TetGen's points (which come after the input's
+    /// vertices), so outputs line up with the input file. Vertices `is_solved` says no
+    /// constraint touches keep their input positions bit for bit (the round trip through the
+    /// working frame may change the last bit).
+    pub fn output_mesh(&self, q: &[DVec3], volume: bool, is_solved: impl Fn(usize) -> bool) -> Mesh {
+        let surface_only = !volume && self.input_vertices < self.mesh.num_vertices();
+        let n = if surface_only { self.input_vertices.min(q.len()) } else { q.len() };
+        let positions = q[..n]
             .iter()
             .zip(&self.mesh.positions)
             .enumerate()
-            .map(|(v, (&p, &input))| if self.system.is_solved(v) { self.frame.to_input(p) } else { input })
+            .map(|(v, (&p, &input))| if is_solved(v) { self.frame.to_input(p) } else { input })
             .collect();
-        self.mesh.with_positions(positions)
+        let mut mesh = self.mesh.with_positions(positions);
+        if surface_only {
+            mesh.tetrahedra.clear();
+        }
+        mesh
     }
 
     /// Lumped masses m_i (working frame): ρ Σ|V_T|/4 on a tetrahedral mesh, else ρ Σ A_t/3
@@ -307,23 +321,6 @@ impl LoadedScene {
         let system =
             std::mem::replace(&mut self.system, System::new(self.mesh.num_vertices(), SolverParams::default()));
         Simulation::new(system, self.masses(), self.rest.positions.clone(), params).map_err(|e| invalid(e.to_string()))
-    }
-
-    /// The input mesh at working positions `q`, mapped back to the input frame: every input
-    /// vertex in file order (also those no face uses), its faces and attributes; no
-    /// tetrahedra. After `tetrahedralize`, TetGen's added points (which come after the input's
-    /// vertices) are left out, so frames line up with the input file.
-    pub fn surface_at(&self, q: &[DVec3]) -> Mesh {
-        let n = self.input_vertices.min(q.len());
-        let mut mesh = self.mesh.with_positions(q[..n].iter().map(|&p| self.frame.to_input(p)).collect());
-        mesh.tetrahedra.clear();
-        mesh
-    }
-
-    /// The whole mesh at working positions `q` in the input frame, tetrahedra and all points
-    /// included (for volume outputs: `.vtu`, `.msh`).
-    pub fn volume_at(&self, q: &[DVec3]) -> Mesh {
-        self.mesh.with_positions(q.iter().map(|&p| self.frame.to_input(p)).collect())
     }
 
     /// Every position group that spins (see [`super::Spin`]), with its static targets resolved
