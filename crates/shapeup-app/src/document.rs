@@ -179,8 +179,12 @@ pub struct EditState {
     pub shape_model: Option<ShapeModel>,
     /// Every group, in system (and scene) order.
     pub groups: Vec<Group>,
-    /// Local-global iterations per solve request.
+    /// The most local-global iterations one convergence runs after a change (the scene's
+    /// `[solver] iterations`).
     pub iterations: usize,
+    /// Convergence stops when the relative energy change of an iteration is at most this
+    /// (the scene's `[solver] tolerance`).
+    pub tolerance: f64,
 }
 
 impl PartialEq for EditState {
@@ -189,6 +193,7 @@ impl PartialEq for EditState {
             && self.shape_model == other.shape_model
             && self.groups == other.groups
             && self.iterations == other.iterations
+            && self.tolerance.to_bits() == other.tolerance.to_bits()
     }
 }
 
@@ -464,6 +469,7 @@ impl Document {
                 shape_model: None,
                 groups: Vec::new(),
                 iterations: solver_settings.iterations.max(1),
+                tolerance: solver_settings.tolerance,
             },
             solver: Solver::new(),
             epoch_start: Arc::new(positions.clone()),
@@ -641,9 +647,14 @@ impl Document {
         self.state.shape_model
     }
 
-    /// Iterations per solve request.
+    /// The most iterations one convergence runs ([`EditState::iterations`]).
     pub fn iterations(&self) -> usize {
         self.state.iterations
+    }
+
+    /// The convergence tolerance on the relative energy change ([`EditState::tolerance`]).
+    pub fn tolerance(&self) -> f64 {
+        self.state.tolerance
     }
 
     /// Number of vertices.

@@ -17,6 +17,7 @@
 pub mod camera;
 pub mod command;
 pub mod document;
+pub mod gizmo;
 pub mod picking;
 pub mod simulation;
 pub mod worker;

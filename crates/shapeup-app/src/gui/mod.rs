@@ -2,6 +2,8 @@
 
 pub mod app;
 pub mod dialogs;
+pub mod dynamics_panel;
+pub mod gizmo;
 pub mod headless;
 pub mod renderer;
 

@@ -1,0 +1,1 @@
+//! The handle gizmo model (placeholder, being written).

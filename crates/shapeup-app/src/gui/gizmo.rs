@@ -1,0 +1,1 @@
+//! The handle gizmo in the viewport (placeholder, being written).
