@@ -20,8 +20,8 @@ pub enum SelectMode {
 /// One editor action.
 ///
 /// Commands that change the constraints (handles, groups, weights, shape model, rest shape,
-/// iterations) are undoable; selection changes, [`Command::ResetShape`], [`Command::Undo`] and
-/// [`Command::Redo`] are not ([`Command::is_undoable`]).
+/// iterations, tolerance) or the shape ([`Command::ResetShape`]) are undoable; selection
+/// changes, [`Command::Undo`] and [`Command::Redo`] are not ([`Command::is_undoable`]).
 #[derive(Debug, Clone, PartialEq)]
 #[must_use]
 pub enum Command {
@@ -36,9 +36,19 @@ pub enum Command {
     ClearSelection,
     /// Combines the mesh's boundary vertices with the selection.
     SelectBoundary(SelectMode),
+    /// Combines the connected piece holding `vertex` with the selection.
+    SelectPiece {
+        /// A vertex of the piece (out of range: nothing).
+        vertex: u32,
+        /// How it combines with the current selection.
+        mode: SelectMode,
+    },
     /// A new handle (position group, g = 1) on the selected vertices, at their current
-    /// positions.
+    /// positions; the selection is emptied.
     FixSelection,
+    /// One soft handle (g = [`FREE_PIECE_WEIGHT`](crate::document::FREE_PIECE_WEIGHT)) on
+    /// every vertex of the pieces no handle holds, at rest, listed as one group "free pieces".
+    PinFreePieces,
     /// Translates a handle's targets by `delta` (input frame).
     MoveHandle {
         /// The handle.
@@ -85,8 +95,10 @@ pub enum Command {
     ResetShape,
     /// The current shape becomes the rest shape: every group is rebuilt on it.
     MakeRest,
-    /// Local-global iterations per solve request (≥ 1).
+    /// The most local-global iterations one convergence runs (≥ 1).
     SetIterations(usize),
+    /// The convergence tolerance on the relative energy change (> 0).
+    SetTolerance(f64),
     /// Undoes the last undoable command (or drag).
     Undo,
     /// Redoes the last undone step.
@@ -101,9 +113,22 @@ impl Command {
             Command::Select { .. }
                 | Command::ClearSelection
                 | Command::SelectBoundary(_)
-                | Command::ResetShape
+                | Command::SelectPiece { .. }
                 | Command::Undo
                 | Command::Redo
+        )
+    }
+
+    /// Whether applying it can change what the solver computes (constraints, targets, weights,
+    /// rest shape, the shape itself, convergence settings): the editor converges again after it.
+    pub fn changes_solve(&self) -> bool {
+        !matches!(
+            self,
+            Command::Select { .. }
+                | Command::ClearSelection
+                | Command::SelectBoundary(_)
+                | Command::SelectPiece { .. }
+                | Command::RenameHandle { .. }
         )
     }
 }

@@ -32,6 +32,18 @@ pub const WEIGHT_RANGE: (f64, f64) = (1e-4, 1e4);
 /// Undo steps kept; older ones are dropped.
 pub const UNDO_LIMIT: usize = 200;
 
+/// The editor's default convergence tolerance on the relative energy change of an iteration,
+/// used when a scene sets none (`tolerance = 0`).
+pub const DEFAULT_TOLERANCE: f64 = 1e-6;
+
+/// The editor's default cap on the iterations of one convergence, used when a scene sets no
+/// tolerance (its `iterations` were then a fixed count, not a cap).
+pub const DEFAULT_MAX_ITERATIONS: usize = 10_000;
+
+/// The multiplier of the soft handle [`Command::PinFreePieces`] makes: enough to make the
+/// system non-singular, small enough not to fight the shape model.
+pub const FREE_PIECE_WEIGHT: f64 = 1e-2;
+
 /// A group's identity in a [`Document`]: stable while the group exists, never reused.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct GroupKey(pub u32);
@@ -218,6 +230,15 @@ impl EditState {
     }
 }
 
+/// What [`Document::save_scene_with_mesh`] wrote besides the scene.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SavedScene {
+    /// The rest mesh written beside the scene, if the rest shape had to be saved.
+    pub rest_mesh: Option<PathBuf>,
+    /// What the rest mesh's format could not keep, said once each.
+    pub warnings: Vec<String>,
+}
+
 /// An editor error: one line, meant for the status bar.
 #[derive(Debug, Clone, PartialEq)]
 pub enum EditorError {
@@ -383,8 +404,17 @@ impl Solver {
     /// # Errors
     /// [`EditorError::NoHandles`] before any sync, [`EditorError::Solve`] for a singular system.
     pub fn solve(&mut self, iterations: usize) -> Result<SolveReport, EditorError> {
+        self.solve_to(iterations, 0.0)
+    }
+
+    /// Runs at most `iterations` local-global iterations from the current positions, stopping
+    /// after the first whose relative energy change is at most `tolerance` (> 0).
+    ///
+    /// # Errors
+    /// As [`Solver::solve`].
+    pub fn solve_to(&mut self, iterations: usize, tolerance: f64) -> Result<SolveReport, EditorError> {
         let system = self.system.as_mut().ok_or(EditorError::NoHandles)?;
-        Ok(system.solve(&mut self.q, iterations, 0.0)?)
+        Ok(system.solve(&mut self.q, iterations, tolerance)?)
     }
 
     /// The current positions in the input frame; vertices no constraint touches keep their rest
@@ -410,6 +440,85 @@ impl Solver {
     }
 }
 
+/// One undo step: the edit state and the shape on screen before the change, so that undo
+/// brings back what was seen (also after Reset shape, Make rest shape or a dynamics run).
+#[derive(Debug, Clone)]
+struct Snapshot {
+    state: EditState,
+    positions: Arc<Vec<DVec3>>,
+}
+
+/// The connected pieces of a mesh: vertices joined by triangle edges (a vertex no triangle
+/// uses is a piece of its own, but is never solved and so never counted as free).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Pieces {
+    /// Piece of each vertex, numbered 0.. in order of each piece's first vertex.
+    pub of_vertex: Vec<u32>,
+    /// Number of pieces that have triangles.
+    pub count: usize,
+    /// Whether each piece has triangles.
+    used: Vec<bool>,
+}
+
+impl Pieces {
+    /// The pieces of `n` vertices joined by `triangles` (union–find over the triangles' edges;
+    /// a few lines, not worth a graph crate).
+    pub fn new(n: usize, triangles: &[[u32; 3]]) -> Pieces {
+        fn root(parent: &mut [u32], mut v: u32) -> u32 {
+            while parent[v as usize] != v {
+                let up = parent[parent[v as usize] as usize];
+                parent[v as usize] = up;
+                v = up;
+            }
+            v
+        }
+        let mut parent: Vec<u32> = (0..n as u32).collect();
+        let mut in_triangle = vec![false; n];
+        for t in triangles {
+            for &v in t {
+                in_triangle[v as usize] = true;
+            }
+            for (a, b) in [(t[0], t[1]), (t[1], t[2])] {
+                let (ra, rb) = (root(&mut parent, a), root(&mut parent, b));
+                if ra != rb {
+                    parent[ra.max(rb) as usize] = ra.min(rb);
+                }
+            }
+        }
+        let mut label = vec![u32::MAX; n];
+        let mut of_vertex = vec![0; n];
+        let mut used = Vec::new();
+        for v in 0..n {
+            let r = root(&mut parent, v as u32) as usize;
+            if label[r] == u32::MAX {
+                label[r] = used.len() as u32;
+                used.push(false);
+            }
+            of_vertex[v] = label[r];
+            used[label[r] as usize] |= in_triangle[v];
+        }
+        let count = used.iter().filter(|u| **u).count();
+        Pieces { of_vertex, count, used }
+    }
+
+    /// The vertices of the piece that holds vertex `v`, ascending (empty when out of range).
+    pub fn piece_of(&self, v: u32) -> Vec<u32> {
+        let Some(&piece) = self.of_vertex.get(v as usize) else { return Vec::new() };
+        (0..self.of_vertex.len() as u32).filter(|&u| self.of_vertex[u as usize] == piece).collect()
+    }
+
+    /// Pieces with triangles none of whose vertices is in `pinned`.
+    pub fn free(&self, pinned: &[bool]) -> Vec<u32> {
+        let mut held = vec![false; self.used.len()];
+        for (v, &p) in pinned.iter().enumerate() {
+            if p && let Some(&piece) = self.of_vertex.get(v) {
+                held[piece as usize] = true;
+            }
+        }
+        (0..self.used.len() as u32).filter(|&p| self.used[p as usize] && !held[p as usize]).collect()
+    }
+}
+
 /// The editor's document: the constraint state with its undo history, the selection and the
 /// current shape.
 #[derive(Debug)]
@@ -423,8 +532,17 @@ pub struct Document {
     /// Where the current epoch started (input frame), for the worker.
     epoch_start: Arc<Vec<DVec3>>,
     selection: Vec<bool>,
-    undo: Vec<EditState>,
-    redo: Vec<EditState>,
+    undo: Vec<Snapshot>,
+    redo: Vec<Snapshot>,
+    /// Connected piece of each vertex (vertices no triangle uses: their own piece).
+    pieces: Arc<Pieces>,
+    /// Changed since opened or last saved.
+    modified: bool,
+    /// The rest shape as opened: when the state's differs (Make rest shape), saving a scene
+    /// writes the rest mesh beside it.
+    opened_rest: Arc<Rest>,
+    /// The mesh file the document was read from (`None`: made in memory or generated).
+    source: Option<PathBuf>,
     /// `Some(recorded)` during a drag: whether its undo step was recorded yet.
     drag: Option<bool>,
     next_key: u32,
@@ -457,7 +575,9 @@ impl Document {
     /// [`EditorError::Load`] naming the file, or as [`Document::new`].
     pub fn open(path: &Path, model: ShapeModel) -> Result<Document, EditorError> {
         let loaded = read_mesh(path).map_err(|e| EditorError::Load(e.to_string()))?;
-        Document::new(loaded.mesh, model)
+        let mut document = Document::new(loaded.mesh, model)?;
+        document.source = Some(path.to_path_buf());
+        Ok(document)
     }
 
     fn empty(rest: Arc<Rest>, solver_settings: SolverSettings) -> Document {
@@ -465,11 +585,16 @@ impl Document {
         let positions = rest.mesh.positions.clone();
         Document {
             state: EditState {
-                rest,
+                rest: Arc::clone(&rest),
                 shape_model: None,
                 groups: Vec::new(),
-                iterations: solver_settings.iterations.max(1),
-                tolerance: solver_settings.tolerance,
+                // A scene without a tolerance ran a fixed count; the editor converges instead.
+                iterations: if solver_settings.tolerance > 0.0 {
+                    solver_settings.iterations.saturating_mul(solver_settings.steps).max(1)
+                } else {
+                    DEFAULT_MAX_ITERATIONS
+                },
+                tolerance: if solver_settings.tolerance > 0.0 { solver_settings.tolerance } else { DEFAULT_TOLERANCE },
             },
             solver: Solver::new(),
             epoch_start: Arc::new(positions.clone()),
@@ -478,6 +603,10 @@ impl Document {
             selection: vec![false; n],
             undo: Vec::new(),
             redo: Vec::new(),
+            pieces: Arc::new(Pieces::new(n, &rest.mesh.triangles)),
+            modified: false,
+            opened_rest: Arc::clone(&rest),
+            source: None,
             drag: None,
             next_key: 0,
             solver_settings,
@@ -516,7 +645,9 @@ impl Document {
     /// tetrahedralized scene; [`EditorError::Constraint`] for a group that cannot be built.
     pub fn from_scene(scene: &Scene) -> Result<Document, EditorError> {
         let loaded = scene.read_mesh().map_err(|e| EditorError::Load(e.to_string()))?;
-        Document::from_scene_with_mesh(scene, loaded.mesh)
+        let mut document = Document::from_scene_with_mesh(scene, loaded.mesh)?;
+        document.source = scene.mesh.generate.is_none().then(|| scene.mesh_path());
+        Ok(document)
     }
 
     /// [`Document::from_scene`] on an already loaded mesh.
@@ -603,7 +734,13 @@ impl Document {
                 normalize: self.state.rest.normalize,
                 tetrahedralize: false,
             },
-            solver: SolverSettings { iterations: self.state.iterations, ..self.solver_settings },
+            // One run of up to `iterations` to the tolerance: what the editor converges with.
+            solver: SolverSettings {
+                iterations: self.state.iterations,
+                steps: 1,
+                tolerance: self.state.tolerance,
+                ..self.solver_settings
+            },
             groups,
             base_dir: PathBuf::new(),
             file: PathBuf::new(),
@@ -618,6 +755,41 @@ impl Document {
         let text = self.to_scene(mesh_path).to_toml_string();
         shapeup_core::io::write_atomic(scene_path, |w| w.write_all(text.as_bytes()))
             .map_err(|e| EditorError::Save(e.to_string()))
+    }
+
+    /// Saves what replays the shape on screen: a scene at `scene_path` whose mesh is the file
+    /// the document was opened from (absolute path) or, when the rest shape changed (Make rest
+    /// shape) or the mesh has no file, the rest mesh written beside the scene as
+    /// `STEM.rest.EXT` (the opened format when it is OBJ, PLY or OFF, else OBJ). Clears
+    /// [`Document::is_modified`].
+    ///
+    /// # Errors
+    /// [`EditorError::Save`] naming the file that cannot be written.
+    pub fn save_scene_with_mesh(&mut self, scene_path: &Path) -> Result<SavedScene, EditorError> {
+        let save_error = |e: String| EditorError::Save(e);
+        let source = self.source.as_ref().filter(|_| Arc::ptr_eq(&self.state.rest, &self.opened_rest));
+        let (mesh_path, rest_mesh, warnings) = match source {
+            Some(source) => (std::fs::canonicalize(source).unwrap_or_else(|_| source.clone()), None, Vec::new()),
+            None => {
+                let ext = self
+                    .source
+                    .as_ref()
+                    .and_then(|p| p.extension())
+                    .and_then(|e| e.to_str())
+                    .map(str::to_ascii_lowercase)
+                    .filter(|e| matches!(e.as_str(), "obj" | "ply" | "off"))
+                    .unwrap_or_else(|| "obj".into());
+                let stem = scene_path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+                let name = format!("{stem}.rest.{ext}");
+                let rest_path = scene_path.with_file_name(&name);
+                let warnings = shapeup_core::io::write_mesh(&rest_path, &self.state.rest.mesh)
+                    .map_err(|e| save_error(e.to_string()))?;
+                (PathBuf::from(name), Some(rest_path), warnings.iter().map(ToString::to_string).collect())
+            }
+        };
+        self.save_scene(scene_path, mesh_path)?;
+        self.modified = false;
+        Ok(SavedScene { rest_mesh, warnings })
     }
 
     // ---- Reading the document ----
@@ -758,9 +930,16 @@ impl Document {
             Command::Select { vertices, mode } => self.select(&vertices, mode),
             Command::ClearSelection => self.clear_selection(),
             Command::SelectBoundary(mode) => self.select_boundary(mode),
+            Command::SelectPiece { vertex, mode } => {
+                let piece = self.pieces.piece_of(vertex);
+                self.select(&piece, mode);
+            }
             Command::ResetShape => {
                 let rest = self.state.rest.mesh.positions.clone();
-                self.set_shape(rest);
+                if rest != self.positions {
+                    self.record(self.state.clone());
+                    self.set_shape(rest);
+                }
             }
             Command::Undo => {
                 self.undo();
@@ -771,6 +950,7 @@ impl Document {
             command => {
                 let mut next = self.state.clone();
                 let make_rest = command == Command::MakeRest;
+                let fixes = command == Command::FixSelection;
                 self.edit(&mut next, command)?;
                 if next == self.state {
                     return Ok(());
@@ -782,9 +962,20 @@ impl Document {
                     let positions = self.state.rest.mesh.positions.clone();
                     self.set_shape(positions);
                 }
+                if fixes {
+                    // Fixed vertices show as a handle, not as a selection.
+                    self.clear_selection();
+                }
             }
         }
         Ok(())
+    }
+
+    /// Records an undo step for the current state and shape, e.g. before a dynamics run moves
+    /// the shape: undo then brings the shape back.
+    pub fn checkpoint(&mut self) {
+        self.end_drag();
+        self.record(self.state.clone());
     }
 
     /// Sets the current shape (input frame) and starts a new epoch.
@@ -795,17 +986,22 @@ impl Document {
         self.positions = positions;
     }
 
-    /// Records the state before an undoable change.
+    /// Records the state before an undoable change, with the shape on screen now.
     fn record(&mut self, previous: EditState) {
         self.redo.clear();
+        self.modified = true;
         match self.drag {
             Some(true) => return,
             Some(false) => self.drag = Some(true),
             None => {}
         }
-        self.undo.push(previous);
-        if self.undo.len() > UNDO_LIMIT {
-            self.undo.remove(0);
+        self.undo.push(Snapshot { state: previous, positions: Arc::new(self.positions.clone()) });
+        // Each step holds a copy of the shape: keep at most about 512 MiB of them.
+        let per_step = (self.positions.len() * std::mem::size_of::<DVec3>()).max(1);
+        let limit = UNDO_LIMIT.min((512 << 20) / per_step).max(10);
+        if self.undo.len() > limit {
+            let excess = self.undo.len() - limit;
+            self.undo.drain(..excess);
         }
     }
 
@@ -901,7 +1097,46 @@ impl Document {
                 }
                 state.iterations = n;
             }
+            Command::SetTolerance(tolerance) => {
+                if !(tolerance.is_finite() && tolerance > 0.0) {
+                    return Err(EditorError::BadValue(format!(
+                        "tolerance must be a positive number, found {tolerance}"
+                    )));
+                }
+                state.tolerance = tolerance;
+            }
+            Command::PinFreePieces => {
+                let mut pinned = vec![false; self.positions.len()];
+                for group in state.groups.iter().filter(|g| g.role == GroupRole::Handle) {
+                    for &v in group.vertices().unwrap_or(&[]) {
+                        pinned[v as usize] = true;
+                    }
+                }
+                let mut free = vec![false; self.pieces.of_vertex.len()];
+                for piece in self.pieces.free(&pinned) {
+                    free[piece as usize] = true;
+                }
+                let vertices: Vec<u32> = (0..self.positions.len() as u32)
+                    .filter(|&v| free[self.pieces.of_vertex[v as usize] as usize])
+                    .collect();
+                if vertices.is_empty() {
+                    return Ok(());
+                }
+                let name = unique_name(state, "free pieces");
+                let targets = vertices.iter().map(|&v| state.rest.mesh.positions[v as usize]).collect();
+                state.groups.push(Group {
+                    key: self.new_key(),
+                    name,
+                    role: GroupRole::Handle,
+                    kind: "position".into(),
+                    weight: FREE_PIECE_WEIGHT,
+                    vertices: Some(vertices),
+                    targets,
+                    source: None,
+                });
+            }
             Command::Select { .. }
+            | Command::SelectPiece { .. }
             | Command::ClearSelection
             | Command::SelectBoundary(_)
             | Command::ResetShape
@@ -931,8 +1166,8 @@ impl Document {
         !self.redo.is_empty()
     }
 
-    /// Undoes the last step; `false` if there was none. The shape keeps its current positions
-    /// (the next solve follows the restored handles).
+    /// Undoes the last step; `false` if there was none. The shape goes back to what was on
+    /// screen before the step (the next solve converges from there).
     pub fn undo(&mut self) -> bool {
         self.end_drag();
         self.step_history(true)
@@ -946,17 +1181,33 @@ impl Document {
 
     fn step_history(&mut self, back: bool) -> bool {
         let (from, to) = if back { (&mut self.undo, &mut self.redo) } else { (&mut self.redo, &mut self.undo) };
-        let Some(state) = from.pop() else { return false };
-        if self.solver.sync(&state).is_err() {
+        let Some(snapshot) = from.pop() else { return false };
+        if self.solver.sync(&snapshot.state).is_err() {
             // Every recorded state was built once, so this does not happen; keep the history.
-            from.push(state);
+            from.push(snapshot);
             return false;
         }
-        to.push(std::mem::replace(&mut self.state, state));
+        let current = Arc::new(self.positions.clone());
+        to.push(Snapshot { state: std::mem::replace(&mut self.state, snapshot.state), positions: current });
+        // Back to the shape that was on screen (a new epoch: the next solve starts there).
+        self.set_shape(Arc::unwrap_or_clone(snapshot.positions));
+        self.modified = true;
         true
     }
 
     // ---- Solving ----
+
+    /// Converges synchronously from the current positions: iterates until the relative energy
+    /// change of an iteration is at most [`Document::tolerance`], at most
+    /// [`Document::iterations`] times (what the editor's worker does in the background, and
+    /// what `shapeup deform` does from the rest shape with a saved scene). On error the shape
+    /// stays as it was.
+    ///
+    /// # Errors
+    /// As [`Document::solve`].
+    pub fn converge(&mut self) -> Result<SolveReport, EditorError> {
+        self.solve_to(self.state.iterations, self.state.tolerance)
+    }
 
     /// Runs `iterations` local-global iterations synchronously from the current positions
     /// (tests and simple front ends; the app uses the [`worker`](crate::worker)).
@@ -965,13 +1216,51 @@ impl Document {
     /// [`EditorError::NoHandles`] without a handle (nothing changes), [`EditorError::Solve`]
     /// for a singular system.
     pub fn solve(&mut self, iterations: usize) -> Result<SolveReport, EditorError> {
+        self.solve_to(iterations, 0.0)
+    }
+
+    fn solve_to(&mut self, iterations: usize, tolerance: f64) -> Result<SolveReport, EditorError> {
         if !self.state.has_handles() {
             return Err(EditorError::NoHandles);
         }
         self.solver.sync(&self.state)?;
-        let report = self.solver.solve(iterations)?;
-        self.positions = self.solver.positions();
-        Ok(report)
+        match self.solver.solve_to(iterations, tolerance) {
+            Ok(report) => {
+                self.positions = self.solver.positions();
+                Ok(report)
+            }
+            Err(e) => {
+                // A failed solve leaves the last good shape, not a half-solved one.
+                self.solver.set_positions(&self.positions);
+                Err(e)
+            }
+        }
+    }
+
+    /// The connected pieces of the mesh.
+    pub fn pieces(&self) -> &Pieces {
+        &self.pieces
+    }
+
+    /// How many pieces (with triangles) have no handle vertex: each makes the system singular.
+    pub fn num_free_pieces(&self) -> usize {
+        let mut pinned = vec![false; self.positions.len()];
+        for handle in self.handles() {
+            for &v in handle.vertices().unwrap_or(&[]) {
+                pinned[v as usize] = true;
+            }
+        }
+        self.pieces.free(&pinned).len()
+    }
+
+    /// Whether the document changed since it was opened or last saved as a scene.
+    pub fn is_modified(&self) -> bool {
+        self.modified
+    }
+
+    /// The mesh file the document was read from, if any.
+    pub fn source(&self) -> Option<&Path> {
+        self.source.as_deref()
     }
 
     /// E of the current shape per group, in the order of [`Document::groups`].

@@ -1,53 +1,209 @@
 //! Dynamic mode in the editor: a Projective Dynamics simulation of the document's constraints
-//! (shape model, handles as pins, smoothing) stepping on its own thread.
+//! (shape model or tetrahedral strain, handles as pins, smoothing) stepping on its own thread.
 //!
 //! [`SimulationRunner::start`] turns the document into a dynamic scene (optionally with gravity,
 //! a floor just below the shape and TetGen tetrahedra) and starts from the current shape at
-//! rest. The UI polls the newest positions ([`SimulationRunner::poll`], never blocking), pulls
-//! vertices with [`SimulationRunner::grab`] (no refactorization) and pauses or resumes it; a
-//! change of the document's constraints means a new runner.
+//! rest. The UI polls the newest positions ([`SimulationRunner::poll`], never blocking), holds
+//! vertices at the cursor with [`SimulationRunner::grab`], pauses or resumes it, and changes
+//! gravity, stiffness, time step, damping and grab strength on the fly
+//! ([`SimulationRunner::update_settings`]); a change of the document's constraints, of the
+//! model, the floor or the tetrahedra means a new runner.
 
-use crate::document::{Document, EditorError};
+use crate::document::{Document, EditorError, GroupRole};
 use glam::DVec3;
 use serde_json::{Map, Value};
-use shapeup_core::scene::{GroupSpec, Mode, SelectionSpec, Targets};
+use shapeup_core::dynamics::{DynamicsError, DynamicsParams, Simulation};
+use shapeup_core::geometry::WorkingFrame;
+use shapeup_core::mesh::Mesh;
+use shapeup_core::scene::{GroupSpec, Mode, SelectionSpec, SolverSettings, Targets};
+use std::collections::{HashMap, VecDeque};
 use std::sync::{Arc, Condvar, Mutex, PoisonError};
 use std::thread::JoinHandle;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
-/// What the simulation adds to the document's constraints.
+/// What keeps the body's shape in dynamic mode.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum DynamicsModel {
+    /// The document's own shape-model groups (edge springs, strain + bending, iso one-rings).
+    #[default]
+    Document,
+    /// One `tet_strain` group over every tetrahedron instead of the document's shape-model
+    /// groups (handles, smoothing and other groups stay): a solid that keeps its volume.
+    /// Needs tetrahedra (Tetrahedralize, or a tetrahedral mesh).
+    TetStrain,
+}
+
+impl DynamicsModel {
+    /// Every model, in menu order.
+    pub const ALL: [DynamicsModel; 2] = [DynamicsModel::Document, DynamicsModel::TetStrain];
+
+    /// Name for menus (the panel's radio buttons).
+    pub fn label(self) -> &'static str {
+        match self {
+            DynamicsModel::Document => "Document's shape model",
+            DynamicsModel::TetStrain => "Tet strain",
+        }
+    }
+}
+
+/// The default grab strength: the grabbed vertices close 95 % of their gap to the cursor in
+/// every solver iteration (see [`shapeup_core::dynamics::Simulation::hold`]), so they follow it
+/// closely while the rest of the body still pulls back a little.
+pub const DEFAULT_GRAB_STRENGTH: f64 = 0.95;
+
+/// What the simulation adds to the document's constraints, and how it steps.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SimulationSettings {
-    /// Gravity (0, −9.81, 0) in the mesh's units per s², or none.
+    /// Gravity (the scene default, (0, −9.81, 0) in the mesh's units per s²), or none.
     pub gravity: bool,
     /// A floor just below the current shape (all vertices, the floor type's default multiplier).
     pub floor: bool,
-    /// Fill the closed surface with tetrahedra (TetGen; needs the `tetgen` feature).
+    /// Fill the closed surface with tetrahedra (TetGen; needs the `tetgen` feature, see
+    /// [`tetrahedralize_available`]).
     pub tetrahedralize: bool,
-    /// Velocity damping d ∈ [0, 1).
+    /// What keeps the shape (default: the document's shape model).
+    pub model: DynamicsModel,
+    /// Stiffness k of every constraint against inertia (the scene's `[solver] stiffness`; default
+    /// the scene default, 100).
+    pub stiffness: f64,
+    /// Time step h in seconds (the scene's `[solver] time_step`; default the scene default, 1/60).
+    pub time_step: f64,
+    /// Velocity damping d ∈ [0, 1) (default 0.02: a little, so that bodies come to rest).
     pub damping: f64,
+    /// How firmly a grab holds the grabbed vertices at the cursor, in (0, 1] (default
+    /// [`DEFAULT_GRAB_STRENGTH`]; 1 pins them to it).
+    pub grab_strength: f64,
 }
 
 impl Default for SimulationSettings {
     fn default() -> Self {
-        SimulationSettings { gravity: true, floor: true, tetrahedralize: false, damping: 0.02 }
+        let scene = SolverSettings::default();
+        SimulationSettings {
+            gravity: true,
+            floor: true,
+            tetrahedralize: false,
+            model: DynamicsModel::Document,
+            stiffness: scene.stiffness,
+            time_step: scene.time_step,
+            damping: 0.02,
+            grab_strength: DEFAULT_GRAB_STRENGTH,
+        }
     }
 }
 
-/// How strongly a grab pulls (fraction of the distance closed per step).
-pub const GRAB_STRENGTH: f64 = 0.3;
+impl SimulationSettings {
+    /// Whether going from `self` to `other` needs a new runner (another model, floor or
+    /// tetrahedralization); everything else [`SimulationRunner::update_settings`] applies live.
+    pub fn needs_restart(&self, other: &SimulationSettings) -> bool {
+        (self.floor, self.tetrahedralize, self.model) != (other.floor, other.tetrahedralize, other.model)
+    }
+
+    /// Checks the numbers, naming the first bad one.
+    ///
+    /// # Errors
+    /// A one-line message.
+    pub fn validate(&self) -> Result<(), String> {
+        DynamicsParams {
+            time_step: self.time_step,
+            stiffness: self.stiffness,
+            damping: self.damping,
+            ..DynamicsParams::default()
+        }
+        .validate()?;
+        if !(self.grab_strength > 0.0 && self.grab_strength <= 1.0) {
+            return Err(format!("grab strength must be in (0, 1], found {}", self.grab_strength));
+        }
+        Ok(())
+    }
+
+    /// The time-stepping settings in the working frame of scale `scale` (gravity scales with
+    /// lengths), keeping `base`'s iterations and tolerance.
+    fn params(&self, base: &DynamicsParams, scale: f64) -> DynamicsParams {
+        let gravity =
+            if self.gravity { DVec3::from_array(SolverSettings::default().gravity) * scale } else { DVec3::ZERO };
+        DynamicsParams { time_step: self.time_step, stiffness: self.stiffness, damping: self.damping, gravity, ..*base }
+    }
+}
+
+/// Whether Tetrahedralize can be ticked for `document`.
+///
+/// # Errors
+/// The reason, one line for a tooltip: this build has no TetGen (cargo feature `tetgen`), the
+/// mesh already has tetrahedra, it has no triangles, or the surface is not closed (every edge
+/// must be shared by exactly two triangles).
+pub fn tetrahedralize_available(document: &Document) -> Result<(), String> {
+    if !cfg!(feature = "tetgen") {
+        return Err("this build has no TetGen (cargo feature `tetgen`, AGPL-3.0)".into());
+    }
+    if document.rest_mesh().num_tetrahedra() > 0 {
+        return Err("the mesh already has tetrahedra".into());
+    }
+    closed_surface(document.triangles())
+}
+
+/// Ok when every edge of `triangles` is shared by exactly two of them.
+fn closed_surface(triangles: &[[u32; 3]]) -> Result<(), String> {
+    if triangles.is_empty() {
+        return Err("the mesh has no triangles".into());
+    }
+    let mut uses: HashMap<(u32, u32), u32> = HashMap::with_capacity(3 * triangles.len() / 2);
+    for t in triangles {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            *uses.entry((a.min(b), a.max(b))).or_insert(0) += 1;
+        }
+    }
+    let mut bad: Vec<((u32, u32), u32)> = uses.into_iter().filter(|&(_, n)| n != 2).collect();
+    if bad.is_empty() {
+        return Ok(());
+    }
+    bad.sort_unstable();
+    let border = bad.iter().filter(|&&(_, n)| n == 1).count();
+    let ((a, b), _) = bad[0];
+    Err(if border == bad.len() {
+        format!("the surface is open: {border} edges belong to one triangle only (e.g. vertices {a}–{b})")
+    } else {
+        format!(
+            "the surface is not closed: {} edges are not shared by exactly two triangles (e.g. vertices {a}–{b})",
+            bad.len()
+        )
+    })
+}
+
+/// A runner's timings and state, for the panel.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct SimulationStats {
+    /// Time steps since the start or the last restart.
+    pub steps: u64,
+    /// Steps taken in the last second (0 while paused).
+    pub steps_per_second: f64,
+    /// Milliseconds of the last step (all of it: inertia, iterations, any refactorization).
+    pub step_ms: f64,
+    /// Milliseconds of the last step's local steps (projections).
+    pub local_ms: f64,
+    /// Milliseconds of the last step's global steps (triangular solves).
+    pub global_ms: f64,
+    /// The error that stopped the stepping, or that a setting or grab caused, if any.
+    pub error: Option<String>,
+}
 
 #[derive(Default)]
 struct Shared {
     running: bool,
     shutdown: bool,
     reset: bool,
+    /// Vertices and targets (input frame) to hold; `grab_changed` says the thread must look.
     grab: Option<(Vec<u32>, Vec<DVec3>)>,
+    grab_changed: bool,
+    /// The settings the simulation runs with (live ones applied by the thread when
+    /// `params_changed`).
+    settings: SimulationSettings,
+    params_changed: bool,
     /// Newest positions (input frame), taken by `poll`.
     latest: Option<Vec<DVec3>>,
-    steps: u64,
-    step_ms: f64,
-    error: Option<String>,
+    /// When the steps of the last second ended.
+    recent: VecDeque<Instant>,
+    stats: SimulationStats,
 }
 
 #[derive(Default)]
@@ -75,59 +231,43 @@ impl SimulationRunner {
     /// on the simulation thread after each step (e.g. to wake the UI).
     ///
     /// # Errors
-    /// [`EditorError::Simulation`] when the dynamic system cannot be built (e.g. tetrahedralization
-    /// of an open surface, or a build without TetGen).
+    /// [`EditorError::Simulation`] with one line when the dynamic system cannot be built: bad
+    /// settings, a surface TetGen cannot fill (open, or a build without TetGen), the tet strain
+    /// model without tetrahedra, or a singular system.
     pub fn start(
         document: &Document,
         settings: SimulationSettings,
         notify: impl Fn() + Send + 'static,
     ) -> Result<SimulationRunner, EditorError> {
-        let mut scene = document.to_scene("");
-        scene.solver.mode = Mode::Dynamic;
-        scene.solver.gravity = if settings.gravity { [0.0, -9.81, 0.0] } else { [0.0; 3] };
-        scene.solver.damping = settings.damping;
-        scene.mesh.tetrahedralize = settings.tetrahedralize;
-        if settings.floor {
-            // Just below the current shape (the floor type's default is below the rest shape).
-            let lowest = document.positions().iter().map(|p| p.y).fold(f64::INFINITY, f64::min);
-            let (lo, hi) = document.rest_mesh().bounding_box();
-            let mut options = Map::new();
-            options.insert("height".into(), Value::from(lowest - 0.01 * (hi - lo).length()));
-            scene.groups.push(GroupSpec {
-                kind: "floor".into(),
-                name: "floor".into(),
-                weight: shapeup_core::constraints::constraint_type("floor")
-                    .map_err(|e| EditorError::Simulation(e.to_string()))?
-                    .default_multiplier(),
-                selection: SelectionSpec::All,
-                targets: Targets::default(),
-                options,
-            });
-        }
-        let solve_error = EditorError::Simulation;
-        let mut loaded = scene
-            .build(document.rest_mesh().clone(), shapeup_core::warnings::Warnings::new(), 0.0)
-            .map_err(|e| solve_error(e.to_string()))?;
-        let mut simulation = loaded.start_simulation().map_err(|e| solve_error(e.to_string()))?;
-        // Start from the current shape at rest (vertices TetGen added start at their rest place).
-        let mut start = loaded.rest.positions.clone();
-        for (q, &p) in start.iter_mut().zip(document.positions()) {
-            *q = loaded.frame.to_working(p);
-        }
-        let zero = vec![DVec3::ZERO; start.len()];
-        simulation.set_state(&start, &zero).map_err(|e| solve_error(e.to_string()))?;
-        let initial = (start.clone(), zero);
+        let fail = EditorError::Simulation;
+        settings.validate().map_err(fail)?;
+        let mesh = simulated_mesh(document, &settings)?;
         let surface_vertices = document.num_vertices();
+        // The current shape; points TetGen added follow it.
+        let mut start = mesh.positions.clone();
+        start.iter_mut().zip(document.positions()).for_each(|(q, p)| *q = *p);
+        follow_surface(&mut start, &mesh.positions, surface_vertices, &mesh.tetrahedra);
+        let (scene, floor) = dynamic_scene(document, &settings, &mesh, &start)?;
+        let mut loaded =
+            scene.build(mesh, shapeup_core::warnings::Warnings::new(), 0.0).map_err(|e| fail(scene_error(&e)))?;
+        let mut simulation = loaded.start_simulation().map_err(|e| fail(scene_error(&e)))?;
         let frame = loaded.frame;
+        let floor = floor.map(|y| frame.to_working(DVec3::new(0.0, y, 0.0)).y);
+        let start: Vec<DVec3> = start.iter().map(|&p| frame.to_working(p)).collect();
+        let zero = vec![DVec3::ZERO; start.len()];
+        simulation.set_state(&start, &zero).map_err(|e| fail(e.to_string()))?;
+        let initial = (start, zero);
+        let base = *simulation.params();
         let channel = Arc::new(Channel::default());
+        channel.state.lock().unwrap_or_else(PoisonError::into_inner).settings = settings;
         let thread_channel = Arc::clone(&channel);
         let thread = std::thread::Builder::new()
             .name("shapeup-simulation".into())
             .spawn(move || {
                 loop {
-                    let grab = {
+                    let (grab, settings, strength) = {
                         let mut state = thread_channel.state.lock().unwrap_or_else(PoisonError::into_inner);
-                        while !state.shutdown && !state.running && !state.reset {
+                        while !state.shutdown && !state.running && !state.reset && !state.params_changed {
                             state = thread_channel.wake.wait(state).unwrap_or_else(PoisonError::into_inner);
                         }
                         if state.shutdown {
@@ -137,34 +277,68 @@ impl SimulationRunner {
                             // Checked: same lengths as the simulation's.
                             let _ = simulation.set_state(&initial.0, &initial.1);
                             state.latest = Some(to_input(&frame, &initial.0[..surface_vertices]));
-                            state.steps = 0;
+                            state.recent.clear();
+                            state.stats = SimulationStats::default();
                             drop(state);
                             notify();
                             continue;
                         }
-                        state.grab.clone()
+                        let settings = std::mem::take(&mut state.params_changed).then_some(state.settings);
+                        let strength = state.settings.grab_strength;
+                        let grab = std::mem::take(&mut state.grab_changed).then(|| state.grab.clone());
+                        (grab, settings, strength)
                     };
-                    let grabbed = match grab {
-                        Some((vertices, targets)) => {
-                            let working = targets.iter().map(|&t| frame.to_working(t)).collect();
-                            simulation.grab(vertices, working, GRAB_STRENGTH).is_ok()
-                        }
-                        None => false,
-                    };
-                    if !grabbed {
-                        simulation.release();
+                    let mut problem = None;
+                    if let Some(settings) = settings
+                        && let Err(e) = simulation.set_params(settings.params(&base, frame.scale))
+                    {
+                        problem = Some(e.to_string());
                     }
-                    let t = Instant::now();
-                    let outcome = simulation.step();
+                    match grab {
+                        Some(Some((vertices, targets))) => {
+                            let working = targets.iter().map(|&t| frame.to_working(t)).collect();
+                            if let Err(e) = simulation.hold(vertices, working, strength) {
+                                problem = Some(e.to_string());
+                            }
+                        }
+                        Some(None) => simulation.release(),
+                        None => {}
+                    }
+                    let running = {
+                        let mut state = thread_channel.state.lock().unwrap_or_else(PoisonError::into_inner);
+                        if problem.is_some() {
+                            state.stats.error = problem;
+                        }
+                        state.running
+                    };
+                    if !running {
+                        // Only settings changed while paused.
+                        continue;
+                    }
+                    let outcome = simulation.step().map_err(|e| e.to_string()).and_then(|report| {
+                        if let Some(floor) = floor {
+                            collide(&mut simulation, floor).map_err(|e| e.to_string())?;
+                        }
+                        Ok(report)
+                    });
                     let mut state = thread_channel.state.lock().unwrap_or_else(PoisonError::into_inner);
                     match outcome {
-                        Ok(_) => {
+                        Ok(report) => {
                             state.latest = Some(to_input(&frame, &simulation.positions()[..surface_vertices]));
-                            state.steps += 1;
-                            state.step_ms = 1e3 * t.elapsed().as_secs_f64();
+                            let now = Instant::now();
+                            state.recent.push_back(now);
+                            while state.recent.front().is_some_and(|&t| now.duration_since(t) > Duration::from_secs(1))
+                            {
+                                state.recent.pop_front();
+                            }
+                            let stats = &mut state.stats;
+                            stats.steps += 1;
+                            stats.step_ms = 1e3 * report.total_seconds;
+                            stats.local_ms = 1e3 * report.local_seconds;
+                            stats.global_ms = 1e3 * report.global_seconds;
                         }
                         Err(e) => {
-                            state.error = Some(e.to_string());
+                            state.stats.error = Some(e);
                             state.running = false;
                         }
                     }
@@ -172,7 +346,7 @@ impl SimulationRunner {
                     notify();
                 }
             })
-            .map_err(|e| solve_error(format!("cannot start the simulation thread: {e}")))?;
+            .map_err(|e| fail(format!("cannot start the simulation thread: {e}")))?;
         Ok(SimulationRunner { channel, thread: Some(thread), num_tetrahedra: loaded.mesh.num_tetrahedra() })
     }
 
@@ -193,19 +367,27 @@ impl SimulationRunner {
         self.with_state(|s| s.running)
     }
 
-    /// Back to the shape it started from, at rest (stays running or paused).
+    /// Back to the shape it started from, at rest (stays running or paused); clears the stats
+    /// and the error.
     pub fn reset(&self) {
         self.with_state(|s| s.reset = true);
     }
 
-    /// Pulls `vertices` towards `targets` (input frame) from the next step on.
+    /// Holds `vertices` at `targets` (input frame) from the next step on, with the settings'
+    /// grab strength; call it again as the cursor moves (same vertices: no refactorization).
     pub fn grab(&self, vertices: Vec<u32>, targets: Vec<DVec3>) {
-        self.with_state(|s| s.grab = Some((vertices, targets)));
+        self.with_state(|s| {
+            s.grab = Some((vertices, targets));
+            s.grab_changed = true;
+        });
     }
 
     /// Lets go.
     pub fn release(&self) {
-        self.with_state(|s| s.grab = None);
+        self.with_state(|s| {
+            s.grab = None;
+            s.grab_changed = true;
+        });
     }
 
     /// The newest positions of the document's vertices (input frame) since the last poll.
@@ -213,13 +395,230 @@ impl SimulationRunner {
         self.with_state(|s| s.latest.take())
     }
 
-    /// Steps taken, milliseconds of the last step, and the error that stopped it, if any.
-    pub fn stats(&self) -> (u64, f64, Option<String>) {
-        self.with_state(|s| (s.steps, s.step_ms, s.error.clone()))
+    /// Steps, steps per second over the last second, the last step's timings, and the error.
+    pub fn stats(&self) -> SimulationStats {
+        self.with_state(|s| {
+            let now = Instant::now();
+            let recent = s.recent.iter().filter(|&&t| now.duration_since(t) <= Duration::from_secs(1)).count();
+            SimulationStats { steps_per_second: recent as f64, ..s.stats.clone() }
+        })
+    }
+
+    /// The settings it runs with.
+    pub fn settings(&self) -> SimulationSettings {
+        self.with_state(|s| s.settings)
+    }
+
+    /// Takes over new settings: gravity, stiffness, time step, damping and grab strength apply
+    /// from the next step (a new stiffness or time step refactors once). Returns `false`, and
+    /// changes nothing, when they need a new runner ([`SimulationSettings::needs_restart`]).
+    /// Invalid numbers show as the stats' error.
+    pub fn update_settings(&self, settings: &SimulationSettings) -> bool {
+        self.with_state(|s| {
+            if s.settings.needs_restart(settings) {
+                return false;
+            }
+            if s.settings != *settings {
+                if s.settings.grab_strength != settings.grab_strength && s.grab.is_some() {
+                    s.grab_changed = true;
+                }
+                s.settings = *settings;
+                s.params_changed = true;
+            }
+            true
+        })
     }
 }
 
-fn to_input(frame: &shapeup_core::geometry::WorkingFrame, q: &[DVec3]) -> Vec<DVec3> {
+/// The document's rest mesh, filled with tetrahedra when asked.
+fn simulated_mesh(document: &Document, settings: &SimulationSettings) -> Result<Mesh, EditorError> {
+    let mesh = document.rest_mesh().clone();
+    if !settings.tetrahedralize || mesh.num_tetrahedra() > 0 {
+        return Ok(mesh);
+    }
+    let name = document.source().map_or_else(|| "the mesh".to_string(), |p| p.display().to_string());
+    let refuse = |why: String| EditorError::Simulation(format!("TetGen could not tetrahedralize {name}: {why}"));
+    // TetGen's own message for an open surface is cryptic: check first.
+    closed_surface(document.triangles()).map_err(refuse)?;
+    tetrahedralize(&mesh).map_err(refuse)
+}
+
+#[cfg(feature = "tetgen")]
+fn tetrahedralize(mesh: &Mesh) -> Result<Mesh, String> {
+    use shapeup_core::tetrahedralize::TetrahedralizeError;
+    shapeup_core::tetrahedralize::tetrahedralize(mesh, None).map_err(|e| match e {
+        // Closed already (checked before): what is left is mostly a surface crossing itself.
+        TetrahedralizeError::TetGen(why) => {
+            format!("the surface may intersect itself or repeat faces (TetGen: {why})")
+        }
+        TetrahedralizeError::BadInput(why) => why,
+    })
+}
+
+#[cfg(not(feature = "tetgen"))]
+fn tetrahedralize(_mesh: &Mesh) -> Result<Mesh, String> {
+    Err("this build has no TetGen (cargo feature `tetgen`)".into())
+}
+
+/// The document as a dynamic scene on `mesh` (the rest mesh, maybe with tetrahedra) that
+/// starts at `start` (input frame), and the floor's height (input frame), if any.
+fn dynamic_scene(
+    document: &Document,
+    settings: &SimulationSettings,
+    mesh: &Mesh,
+    start: &[DVec3],
+) -> Result<(shapeup_core::scene::Scene, Option<f64>), EditorError> {
+    let fail = EditorError::Simulation;
+    let mut scene = document.to_scene("");
+    let defaults = SolverSettings::default();
+    scene.solver = SolverSettings {
+        mode: Mode::Dynamic,
+        // The document's iteration cap and tolerance are for converging static solves.
+        iterations: defaults.iterations,
+        steps: 1,
+        tolerance: 0.0,
+        time_step: settings.time_step,
+        gravity: if settings.gravity { defaults.gravity } else { [0.0; 3] },
+        stiffness: settings.stiffness,
+        damping: settings.damping,
+        ..scene.solver
+    };
+    // `mesh` already holds any tetrahedra.
+    scene.mesh.tetrahedralize = false;
+    let default_weight = |kind: &str| {
+        shapeup_core::constraints::constraint_type(kind)
+            .map(|t| t.default_multiplier())
+            .map_err(|e| fail(e.to_string()))
+    };
+    if settings.model == DynamicsModel::TetStrain {
+        if mesh.num_tetrahedra() == 0 {
+            return Err(fail("the tet strain model needs tetrahedra: tick Tetrahedralize".into()));
+        }
+        // `to_scene` writes the groups in the document's order.
+        let roles = document.groups().iter().map(|g| g.role);
+        scene.groups =
+            scene.groups.drain(..).zip(roles).filter(|(_, role)| *role != GroupRole::Shape).map(|(g, _)| g).collect();
+        scene.groups.insert(
+            0,
+            GroupSpec {
+                kind: "tet_strain".into(),
+                name: "tet_strain".into(),
+                weight: default_weight("tet_strain")?,
+                selection: SelectionSpec::All,
+                targets: Targets::default(),
+                options: Map::new(),
+            },
+        );
+    }
+    if !settings.floor {
+        return Ok((scene, None));
+    }
+    // Just below the current shape (the floor type's default is below the rest shape), and
+    // over the vertices near it only: an inactive floor term still holds its vertices where
+    // they are in every iteration, so over the whole body it keeps the shape model from
+    // acting (Spot sank to 60 % of its height with tet strain and went flat with edge
+    // springs). The others are kept above it by `collide`.
+    let mut used = vec![false; start.len()];
+    mesh.triangles.iter().flatten().chain(mesh.tetrahedra.iter().flatten()).for_each(|&v| used[v as usize] = true);
+    let lowest = start.iter().zip(&used).filter(|(_, u)| **u).map(|(p, _)| p.y).fold(f64::INFINITY, f64::min);
+    let (lo, hi) = document.rest_mesh().bounding_box();
+    let diagonal = (hi - lo).length();
+    let height = lowest - FLOOR_GAP * diagonal;
+    let near: Vec<usize> =
+        (0..start.len()).filter(|&v| used[v] && start[v].y <= lowest + FLOOR_BAND * diagonal).collect();
+    let mut options = Map::new();
+    options.insert("height".into(), Value::from(height));
+    scene.groups.push(GroupSpec {
+        kind: "floor".into(),
+        name: "floor".into(),
+        weight: default_weight("floor")?,
+        selection: SelectionSpec::Vertices(near),
+        targets: Targets::default(),
+        options,
+    });
+    Ok((scene, Some(height)))
+}
+
+/// The floor lies this fraction of the rest mesh's diagonal below the lowest vertex.
+const FLOOR_GAP: f64 = 0.01;
+
+/// The floor constraint covers the vertices up to this fraction of the rest mesh's diagonal
+/// above the lowest one (Spot: its hooves; it stands at 98 % of its height with tet strain).
+const FLOOR_BAND: f64 = 0.05;
+
+/// Puts the vertices that went below the floor (working frame) back on it, without downward
+/// speed and with half their sliding speed (friction). A collision, after the step: what
+/// keeps the vertices the floor constraint does not cover above it.
+fn collide(simulation: &mut Simulation, floor: f64) -> Result<(), DynamicsError> {
+    let below = |(p, m): (&DVec3, &f64)| p.y < floor && *m > 0.0;
+    if !simulation.positions().iter().zip(simulation.masses()).any(below) {
+        return Ok(());
+    }
+    let mut x = simulation.positions().to_vec();
+    let mut v = simulation.velocities().to_vec();
+    for ((x, v), m) in x.iter_mut().zip(&mut v).zip(simulation.masses()) {
+        if below((x, m)) {
+            x.y = floor;
+            *v = DVec3::new(0.5 * v.x, v.y.max(0.0), 0.5 * v.z);
+        }
+    }
+    simulation.set_state(&x, &v)
+}
+
+/// One line for a scene error: the editor's scene has no file, so drop the empty path in front.
+fn scene_error(e: &shapeup_core::scene::SceneError) -> String {
+    let text = e.to_string();
+    text.strip_prefix(": ").map(str::to_string).unwrap_or(text)
+}
+
+/// Moves the points TetGen added (after the first `surface` vertices) with the surface: the
+/// document may be deformed, and interior points left at their rest places would start the
+/// body inverted. Their displacements are made harmonic over the tetrahedra's edges
+/// (Gauss–Seidel from the mean surface displacement).
+fn follow_surface(q: &mut [DVec3], rest: &[DVec3], surface: usize, tetrahedra: &[[u32; 4]]) {
+    let n = q.len();
+    if n <= surface || tetrahedra.is_empty() {
+        return;
+    }
+    let moved: Vec<DVec3> = q[..surface].iter().zip(rest).map(|(a, b)| *a - *b).collect();
+    let largest = moved.iter().map(|d| d.length()).fold(0.0, f64::max);
+    if largest == 0.0 {
+        return;
+    }
+    let mut neighbours = vec![Vec::new(); n - surface];
+    for t in tetrahedra {
+        for (i, &a) in t.iter().enumerate() {
+            for &b in &t[i + 1..] {
+                let (a, b) = (a as usize, b as usize);
+                if a >= surface {
+                    neighbours[a - surface].push(b);
+                }
+                if b >= surface {
+                    neighbours[b - surface].push(a);
+                }
+            }
+        }
+    }
+    let mean = moved.iter().copied().sum::<DVec3>() / surface as f64;
+    let mut d: Vec<DVec3> = moved;
+    d.resize(n, mean);
+    for _ in 0..500 {
+        let mut change: f64 = 0.0;
+        for (i, list) in neighbours.iter().enumerate().filter(|(_, l)| !l.is_empty()) {
+            let next = list.iter().map(|&j| d[j]).sum::<DVec3>() / list.len() as f64;
+            change = change.max((next - d[surface + i]).length());
+            d[surface + i] = next;
+        }
+        if change < 1e-4 * largest {
+            break;
+        }
+    }
+    for ((q, r), d) in q.iter_mut().zip(rest).zip(&d).skip(surface) {
+        *q = *r + *d;
+    }
+}
+
+fn to_input(frame: &WorkingFrame, q: &[DVec3]) -> Vec<DVec3> {
     q.iter().map(|&p| frame.to_input(p)).collect()
 }
 

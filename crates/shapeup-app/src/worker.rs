@@ -1,25 +1,41 @@
-//! A background solver thread, so that the UI never waits for a solve.
+//! A background solver thread that converges the shape while the UI stays responsive.
 //!
 //! The UI sends the newest [`SolveRequest`] (the document's editable state: handle targets,
-//! weights, groups, plus iterations) with [`SolverWorker::request`]; a request that arrives
-//! while the worker is busy replaces any pending one, so stale targets are never solved. The
-//! worker keeps its own [`Solver`] and warm-starts every solve from its last positions; it
-//! rebuilds the system only when the groups or the rest shape changed. Results come back
-//! through [`SolverWorker::poll`], which never blocks.
+//! weights, groups, the iteration cap and the tolerance) with [`SolverWorker::request`]. The
+//! worker keeps its own [`Solver`] and iterates from its current positions in chunks, posting a
+//! [`SolveResult`] after each, until
+//! - the relative energy change of an iteration is at most the request's tolerance (or E = 0),
+//! - the request's iteration cap is reached,
+//! - a newer request arrives: it takes over at once, from the current positions (a request that
+//!   arrives while a chunk runs replaces any pending one, so stale targets are never solved),
+//! - or the worker shuts down.
+//!
+//! Then it sleeps until the next request. A chunk lasts about [`WorkerParams::chunk_budget`]
+//! (from the measured time per iteration), so a newer request waits about that long at most;
+//! the first chunk after a request fits [`WorkerParams::first_chunk_budget`] (at least one
+//! iteration), so the shape answers each drag event quickly. The system is rebuilt only when the groups or the
+//! rest shape changed. Results come back through [`SolverWorker::poll`], which never blocks; a
+//! result not taken yet absorbs the next chunk of the same request, so results never pile up
+//! (a hidden window that does not poll holds one shape, not one per chunk).
 
-use crate::document::{Document, EditState, EditorError, Solver};
+use crate::document::{Document, EditState, EditorError, Rest, Solver};
 use glam::DVec3;
-use std::sync::mpsc::{Receiver, Sender, TryRecvError, channel};
-use std::sync::{Arc, Condvar, Mutex, PoisonError};
+use shapeup_core::solver::{SolveError, SolveReport};
+use std::fmt;
+use std::sync::{Arc, Condvar, Mutex, MutexGuard, PoisonError};
 use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
 
 /// What to solve.
 #[derive(Debug, Clone)]
 pub struct SolveRequest {
     /// The editable state: groups with their weights and handle targets, rest shape.
     pub state: EditState,
-    /// Local-global iterations to run.
+    /// The most local-global iterations the convergence after this request may run.
     pub iterations: usize,
+    /// Convergence is reached when the relative energy change of an iteration,
+    /// |E_k − E_{k−1}| / E_{k−1}, is at most this (or E = 0); 0 runs to the cap.
+    pub tolerance: f64,
     /// The document's shape epoch: when it differs from the worker's, the worker restarts
     /// from `start` (after a reset or a new rest shape).
     pub epoch: u64,
@@ -28,36 +44,48 @@ pub struct SolveRequest {
 }
 
 impl SolveRequest {
-    /// A request for the document's current state and iteration count.
+    /// A request for the document's current state, iteration cap and tolerance.
     pub fn from_document(document: &Document) -> Self {
         SolveRequest {
             state: document.state().clone(),
             iterations: document.iterations(),
+            tolerance: document.tolerance(),
             epoch: document.epoch(),
             start: Arc::clone(document.epoch_start()),
         }
     }
 }
 
-/// What a solve produced.
+/// One or more chunks of a convergence (consecutive ones merge until polled): the shape after
+/// them and how far the convergence is.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SolveResult {
     /// The sequence number [`SolverWorker::request`] returned for the request solved.
     pub seq: u64,
     /// The request's epoch (see [`Document::accept_positions`]).
     pub epoch: u64,
-    /// Positions after the solve (input frame); the previous ones when `error` is set (empty
+    /// Positions after the last chunk (input frame); the last good ones when `error` is set (empty
     /// if the worker never built a system).
     pub positions: Vec<DVec3>,
-    /// Milliseconds in local steps.
+    /// Iterations run since the request began, this chunk included.
+    pub iterations: usize,
+    /// The tolerance was reached (then `finished` too).
+    pub converged: bool,
+    /// Nothing more comes for this request: converged, at the iteration cap, or failed.
+    pub finished: bool,
+    /// |E_k − E_{k−1}| / E_{k−1} of the last iteration; `None` when unknown (the first
+    /// iteration after a request has no previous energy).
+    pub relative_change: Option<f64>,
+    /// Milliseconds in local steps (these chunks).
     pub local_ms: f64,
-    /// Milliseconds in global steps.
+    /// Milliseconds in global steps (these chunks).
     pub global_ms: f64,
-    /// Milliseconds rebuilding and factoring.
+    /// Milliseconds rebuilding and factoring (these chunks).
     pub setup_ms: f64,
-    /// E after each iteration.
+    /// E after each iteration of these chunks (the last `energy.len()` of `iterations`).
     pub energy: Vec<f64>,
-    /// Why nothing was solved (no handles, a singular system, a group that cannot be built).
+    /// Why nothing was solved (no handles, a singular system, a group that cannot be built, a
+    /// non-finite energy).
     pub error: Option<EditorError>,
 }
 
@@ -67,12 +95,88 @@ impl SolveResult {
     pub fn apply_to(&self, document: &mut Document) -> bool {
         self.error.is_none() && document.accept_positions(self.epoch, &self.positions)
     }
+
+    /// E after the last iteration.
+    pub fn last_energy(&self) -> Option<f64> {
+        self.energy.last().copied()
+    }
+
+    /// Milliseconds per local-global iteration in these chunks (setup excluded).
+    pub fn ms_per_iteration(&self) -> Option<f64> {
+        (!self.energy.is_empty()).then(|| (self.local_ms + self.global_ms) / self.energy.len() as f64)
+    }
+
+    /// One line for the status bar, e.g. "converged: 153 iterations, E 1.234e-3" (same as
+    /// its `Display`).
+    pub fn status(&self) -> String {
+        self.to_string()
+    }
+
+    /// Takes in the next chunk of the same request, which the UI did not see apart.
+    fn absorb(&mut self, next: SolveResult) {
+        self.positions = next.positions;
+        self.iterations = next.iterations;
+        self.converged = next.converged;
+        self.finished = next.finished;
+        self.relative_change = next.relative_change;
+        self.local_ms += next.local_ms;
+        self.global_ms += next.global_ms;
+        self.setup_ms += next.setup_ms;
+        self.energy.extend(next.energy);
+        self.error = next.error;
+    }
+}
+
+impl fmt::Display for SolveResult {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if let Some(error) = &self.error {
+            return write!(f, "solve failed: {error}");
+        }
+        let n = self.iterations;
+        let noun = if n == 1 { "iteration" } else { "iterations" };
+        if self.converged {
+            write!(f, "converged: {n} {noun}")?;
+        } else if self.finished {
+            write!(f, "stopped at the {n}-iteration cap")?;
+        } else {
+            write!(f, "solving… {n} {noun}")?;
+        }
+        match self.last_energy() {
+            Some(e) => write!(f, ", E {e:.3e}"),
+            None => Ok(()),
+        }
+    }
+}
+
+/// How the worker sizes its chunks.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct WorkerParams {
+    /// Wall time a chunk aims at, about a frame: the longest a newer request waits and the
+    /// interval between results.
+    pub chunk_budget: Duration,
+    /// Wall time the first chunk after a request aims at (at least one iteration), so that the
+    /// first update after a drag event comes fast.
+    pub first_chunk_budget: Duration,
+}
+
+/// [`WorkerParams::chunk_budget`] by default: about two frames at 60 Hz.
+pub const DEFAULT_CHUNK_BUDGET: Duration = Duration::from_millis(30);
+
+/// [`WorkerParams::first_chunk_budget`] by default.
+pub const DEFAULT_FIRST_CHUNK_BUDGET: Duration = Duration::from_millis(10);
+
+impl Default for WorkerParams {
+    fn default() -> Self {
+        WorkerParams { chunk_budget: DEFAULT_CHUNK_BUDGET, first_chunk_budget: DEFAULT_FIRST_CHUNK_BUDGET }
+    }
 }
 
 /// The request slot shared with the thread.
 #[derive(Default)]
 struct Pending {
     request: Option<(u64, SolveRequest)>,
+    /// The thread is converging a request (cleared before its finished result is sent).
+    converging: bool,
     shutdown: bool,
 }
 
@@ -80,13 +184,33 @@ struct Pending {
 struct Shared {
     pending: Mutex<Pending>,
     wake: Condvar,
+    /// Results not polled yet, oldest first, at most one per request.
+    results: Mutex<Vec<SolveResult>>,
+}
+
+impl Shared {
+    fn lock(&self) -> MutexGuard<'_, Pending> {
+        self.pending.lock().unwrap_or_else(PoisonError::into_inner)
+    }
+
+    fn results(&self) -> MutexGuard<'_, Vec<SolveResult>> {
+        self.results.lock().unwrap_or_else(PoisonError::into_inner)
+    }
+
+    /// Queues a result, merged into the one of the same request the UI has not taken yet.
+    fn post(&self, result: SolveResult) {
+        let mut results = self.results();
+        match results.last_mut() {
+            Some(last) if last.seq == result.seq => last.absorb(result),
+            _ => results.push(result),
+        }
+    }
 }
 
 /// A solver on its own thread; dropping it stops and joins the thread.
 #[derive(Debug)]
 pub struct SolverWorker {
     shared: Arc<Shared>,
-    results: Receiver<SolveResult>,
     thread: Option<JoinHandle<()>>,
     next_seq: u64,
 }
@@ -103,55 +227,69 @@ impl SolverWorker {
     /// # Errors
     /// The OS refused to start a thread.
     pub fn spawn() -> std::io::Result<SolverWorker> {
-        Self::spawn_with_notify(|| {})
+        Self::spawn_with(WorkerParams::default(), || {})
     }
 
-    /// Starts the thread; `notify` is called (on the solver thread) after each result is sent,
-    /// e.g. to wake the UI so that it polls without redrawing continuously.
+    /// Starts the thread; `notify` is called (on the solver thread) after each chunk's result is
+    /// queued, e.g. to wake the UI so that it polls without redrawing continuously.
     ///
     /// # Errors
     /// The OS refused to start a thread.
     pub fn spawn_with_notify(notify: impl Fn() + Send + 'static) -> std::io::Result<SolverWorker> {
+        Self::spawn_with(WorkerParams::default(), notify)
+    }
+
+    /// [`SolverWorker::spawn_with_notify`] with chosen chunk budgets.
+    ///
+    /// # Errors
+    /// The OS refused to start a thread.
+    pub fn spawn_with(params: WorkerParams, notify: impl Fn() + Send + 'static) -> std::io::Result<SolverWorker> {
         let shared = Arc::new(Shared::default());
-        let (sender, results) = channel();
         let thread_shared = Arc::clone(&shared);
         let thread = std::thread::Builder::new()
             .name("shapeup-solver".into())
-            .spawn(move || run(&thread_shared, &sender, &notify))?;
-        Ok(SolverWorker { shared, results, thread: Some(thread), next_seq: 0 })
+            .spawn(move || run(&thread_shared, &notify, params))?;
+        Ok(SolverWorker { shared, thread: Some(thread), next_seq: 0 })
     }
 
-    /// Queues a request, replacing any pending one not started yet; returns its sequence
-    /// number (increasing from 1).
+    /// Queues a request, replacing any pending one not started yet; the convergence under way
+    /// switches to it after its current chunk. Returns its sequence number (increasing from 1).
     pub fn request(&mut self, request: SolveRequest) -> u64 {
         self.next_seq += 1;
-        let mut pending = self.shared.pending.lock().unwrap_or_else(PoisonError::into_inner);
+        let mut pending = self.shared.lock();
         pending.request = Some((self.next_seq, request));
         self.shared.wake.notify_one();
         self.next_seq
     }
 
-    /// The newest result that arrived since the last poll (older ones are dropped), without
-    /// blocking.
+    /// The newest result that arrived since the last poll (those of older requests are
+    /// dropped), without blocking. It holds every chunk of its request since the last poll.
     pub fn poll(&mut self) -> Option<SolveResult> {
-        let mut newest = None;
-        loop {
-            match self.results.try_recv() {
-                Ok(result) => newest = Some(result),
-                Err(TryRecvError::Empty | TryRecvError::Disconnected) => return newest,
-            }
-        }
+        self.poll_all().pop()
+    }
+
+    /// The results that arrived since the last poll, oldest first, one per request (its chunks
+    /// merged), without blocking (e.g. to plot the energy of every iteration).
+    pub fn poll_all(&mut self) -> Vec<SolveResult> {
+        std::mem::take(&mut *self.shared.results())
     }
 
     /// Whether a request is queued and not started yet.
     pub fn is_pending(&self) -> bool {
-        self.shared.pending.lock().unwrap_or_else(PoisonError::into_inner).request.is_some()
+        self.shared.lock().request.is_some()
     }
 
-    /// Stops the thread after its current solve and waits for it (also done on drop).
+    /// Whether a request is queued or being converged: more results will come. Once false, the
+    /// finished result of the newest request is there to poll.
+    pub fn is_busy(&self) -> bool {
+        let pending = self.shared.lock();
+        pending.request.is_some() || pending.converging
+    }
+
+    /// Stops the thread after its current chunk and waits for it (also done on drop).
     pub fn shutdown(&mut self) {
         {
-            let mut pending = self.shared.pending.lock().unwrap_or_else(PoisonError::into_inner);
+            let mut pending = self.shared.lock();
             pending.shutdown = true;
             pending.request = None;
             self.shared.wake.notify_one();
@@ -169,65 +307,200 @@ impl Drop for SolverWorker {
     }
 }
 
-/// The thread: waits for the newest request, solves it, sends the result.
-fn run(shared: &Shared, results: &Sender<SolveResult>, notify: &dyn Fn()) {
-    let mut solver = Solver::new();
-    let mut epoch = None;
+/// The thread: takes the newest request, converges it chunk by chunk, posts each result; sleeps
+/// on the condvar when nothing is left to do.
+fn run(shared: &Shared, notify: &dyn Fn(), params: WorkerParams) {
+    let mut worker = Converger::new(params);
+    let mut job: Option<Job> = None;
     loop {
-        let (seq, request) = {
-            let mut pending = shared.pending.lock().unwrap_or_else(PoisonError::into_inner);
+        {
+            let mut pending = shared.lock();
             loop {
                 if pending.shutdown {
                     return;
                 }
-                if let Some(request) = pending.request.take() {
-                    break request;
+                // The newest target wins at once, continuing from the current positions.
+                if let Some((seq, request)) = pending.request.take() {
+                    job = Some(Job::new(seq, request));
+                    pending.converging = true;
+                    break;
+                }
+                if job.is_some() {
+                    break;
                 }
                 pending = shared.wake.wait(pending).unwrap_or_else(PoisonError::into_inner);
             }
-        };
-        let result = solve(&mut solver, &mut epoch, seq, &request);
-        if results.send(result).is_err() {
-            return;
+        }
+        let Some(current) = job.as_mut() else { continue };
+        let result = worker.step(current);
+        if result.finished {
+            job = None;
+            // Under the request lock, so that whoever sees the worker idle finds the result.
+            let mut pending = shared.lock();
+            pending.converging = false;
+            shared.post(result);
+        } else {
+            shared.post(result);
         }
         notify();
     }
 }
 
-fn solve(solver: &mut Solver, epoch: &mut Option<u64>, seq: u64, request: &SolveRequest) -> SolveResult {
-    let mut result = SolveResult {
-        seq,
-        epoch: request.epoch,
-        positions: Vec::new(),
-        local_ms: 0.0,
-        global_ms: 0.0,
-        setup_ms: 0.0,
-        energy: Vec::new(),
-        error: None,
-    };
-    let started = std::time::Instant::now();
-    let outcome = solver.sync(&request.state).and_then(|()| {
-        if *epoch != Some(request.epoch) {
-            solver.set_positions(&request.start);
-            *epoch = Some(request.epoch);
-        }
-        if !request.state.has_handles() {
-            return Err(EditorError::NoHandles);
-        }
-        solver.solve(request.iterations)
-    });
-    match outcome {
-        Ok(report) => {
-            result.local_ms = 1e3 * report.local_seconds;
-            result.global_ms = 1e3 * report.global_seconds;
-            result.setup_ms = 1e3 * report.setup_seconds;
-            result.energy = report.energies;
-        }
-        Err(e) => {
-            result.setup_ms = 1e3 * started.elapsed().as_secs_f64();
-            result.error = Some(e);
+/// One request being converged.
+struct Job {
+    seq: u64,
+    request: SolveRequest,
+    /// Synced the solver with the request's state.
+    started: bool,
+    /// Iterations since the request began.
+    done: usize,
+    /// E after the last iteration, for the relative change across chunks.
+    last_energy: Option<f64>,
+    /// Iterations of the last chunk (a chunk at most doubles the previous one, in case the
+    /// time estimate was off).
+    last_chunk: usize,
+}
+
+impl Job {
+    fn new(seq: u64, request: SolveRequest) -> Self {
+        Job { seq, request, started: false, done: 0, last_energy: None, last_chunk: 0 }
+    }
+}
+
+/// The thread's solver and what it remembers between requests.
+struct Converger {
+    params: WorkerParams,
+    solver: Solver,
+    /// The epoch the solver's positions belong to.
+    epoch: Option<u64>,
+    /// Positions (input frame) after the last good chunk of `epoch`, restored after a failure.
+    last_good: Vec<DVec3>,
+    /// Seconds per iteration measured on the last chunk.
+    seconds_per_iteration: Option<f64>,
+    /// The rest shape the estimate was measured on (another mesh, another cost).
+    measured_on: Option<Arc<Rest>>,
+}
+
+impl Converger {
+    fn new(params: WorkerParams) -> Self {
+        Converger {
+            params,
+            solver: Solver::new(),
+            epoch: None,
+            last_good: Vec::new(),
+            seconds_per_iteration: None,
+            measured_on: None,
         }
     }
-    result.positions = solver.positions();
-    result
+
+    /// Iterations for the next chunk of `job`: as many as fit its budget, at least one, at most
+    /// twice the previous chunk and no more than the cap leaves.
+    fn chunk_size(&self, job: &Job) -> usize {
+        let remaining = job.request.iterations.saturating_sub(job.done);
+        let budget = if job.done == 0 { self.params.first_chunk_budget } else { self.params.chunk_budget };
+        let fit = match self.seconds_per_iteration {
+            // A float-to-int `as` saturates, so a tiny estimate cannot overflow.
+            Some(s) if s > 0.0 => (budget.as_secs_f64() / s) as usize,
+            _ => 1,
+        };
+        let fit = if job.done == 0 { fit } else { fit.min(job.last_chunk.saturating_mul(2)) };
+        fit.max(1).min(remaining)
+    }
+
+    /// Syncs the solver with the request and moves to its epoch.
+    fn start(&mut self, request: &SolveRequest) -> Result<(), EditorError> {
+        self.solver.sync(&request.state)?;
+        if self.epoch != Some(request.epoch) {
+            self.solver.set_positions(&request.start);
+            self.epoch = Some(request.epoch);
+            self.last_good = self.solver.positions();
+        }
+        if !self.measured_on.as_ref().is_some_and(|r| Arc::ptr_eq(r, &request.state.rest)) {
+            self.seconds_per_iteration = None;
+            self.measured_on = Some(Arc::clone(&request.state.rest));
+        }
+        if request.state.has_handles() { Ok(()) } else { Err(EditorError::NoHandles) }
+    }
+
+    /// Runs one chunk of `job` and says how far it got.
+    fn step(&mut self, job: &mut Job) -> SolveResult {
+        let started = Instant::now();
+        let mut result = SolveResult {
+            seq: job.seq,
+            epoch: job.request.epoch,
+            positions: Vec::new(),
+            iterations: job.done,
+            converged: false,
+            finished: false,
+            relative_change: None,
+            local_ms: 0.0,
+            global_ms: 0.0,
+            setup_ms: 0.0,
+            energy: Vec::new(),
+            error: None,
+        };
+        let outcome = self.chunk(job);
+        match outcome {
+            Ok((report, positions)) => {
+                let k = report.energies.len();
+                if k > 0 {
+                    self.seconds_per_iteration = Some((report.local_seconds + report.global_seconds) / k as f64);
+                }
+                job.done += k;
+                job.last_chunk = k;
+                let tolerance = job.request.tolerance;
+                for &e in &report.energies {
+                    result.relative_change = job.last_energy.map(|p| relative_change(p, e));
+                    job.last_energy = Some(e);
+                }
+                result.converged = job.last_energy == Some(0.0)
+                    || (tolerance > 0.0 && result.relative_change.is_some_and(|c| c <= tolerance));
+                result.finished = result.converged || job.done >= job.request.iterations;
+                result.iterations = job.done;
+                result.local_ms = 1e3 * report.local_seconds;
+                result.global_ms = 1e3 * report.global_seconds;
+                result.setup_ms = 1e3 * report.setup_seconds;
+                result.energy = report.energies;
+                self.last_good.clone_from(&positions);
+                result.positions = positions;
+            }
+            Err(e) => {
+                result.setup_ms = 1e3 * started.elapsed().as_secs_f64();
+                result.error = Some(e);
+                result.finished = true;
+                result.positions = if self.epoch == Some(job.request.epoch) {
+                    // A failed solve may have moved them: back to the last good shape.
+                    self.solver.set_positions(&self.last_good);
+                    self.last_good.clone()
+                } else {
+                    job.request.start.to_vec()
+                };
+            }
+        }
+        result
+    }
+
+    /// Syncs on the first chunk, then iterates; the report and the new positions.
+    fn chunk(&mut self, job: &mut Job) -> Result<(SolveReport, Vec<DVec3>), EditorError> {
+        if !job.started {
+            self.start(&job.request)?;
+            job.started = true;
+        }
+        let k = self.chunk_size(job);
+        let report = if k > 0 { self.solver.solve(k)? } else { SolveReport::default() };
+        if report.energies.iter().any(|e| !e.is_finite()) {
+            return Err(SolveError::NonFiniteEnergy.into());
+        }
+        let positions = self.solver.positions();
+        if !positions.iter().all(|p| p.is_finite()) {
+            return Err(SolveError::NonFinite.into());
+        }
+        Ok((report, positions))
+    }
+}
+
+/// |E_k − E_{k−1}| / E_{k−1}; 0 when both are 0.
+fn relative_change(previous: f64, energy: f64) -> f64 {
+    let change = (previous - energy).abs();
+    if change == 0.0 { 0.0 } else { change / previous.abs() }
 }

@@ -1,29 +1,96 @@
-//! The background solver: newest request wins, results never block, drop joins.
+//! The background solver: it converges each request in chunks and then stops, the newest
+//! request wins, a failure keeps the last good shape, results never block, drop joins.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use glam::DVec3;
-use shapeup_app::worker::SolveRequest;
-use shapeup_app::{Command, Document, EditorError, SelectMode, ShapeModel, SolverWorker};
+use shapeup_app::worker::{SolveRequest, WorkerParams};
+use shapeup_app::{Command, Document, EditorError, GroupKey, SelectMode, ShapeModel, SolveResult, SolverWorker};
+use shapeup_core::mesh::Mesh;
 use std::path::Path;
+use std::sync::mpsc::{Receiver, SyncSender, sync_channel};
 use std::time::{Duration, Instant};
 
 const SPOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/spot.obj");
 
-/// Waits (bounded) for the result of request `seq`.
-fn wait_for(worker: &mut SolverWorker, seq: u64) -> shapeup_app::SolveResult {
+/// Waits (bounded) for the first result of request `seq`.
+fn wait_for(worker: &mut SolverWorker, seq: u64) -> SolveResult {
     let deadline = Instant::now() + Duration::from_secs(60);
     loop {
-        if let Some(r) = worker.poll()
-            && r.seq == seq
-        {
+        if let Some(r) = worker.poll_all().into_iter().find(|r| r.seq == seq) {
             return r;
         }
         assert!(Instant::now() < deadline, "no result for request {seq}");
-        std::thread::sleep(Duration::from_millis(2));
+        std::thread::sleep(Duration::from_millis(1));
     }
 }
 
-fn document_with_handles() -> (Document, shapeup_app::GroupKey) {
+/// Every result of request `seq` until its finished one (bounded wait), each checked to
+/// continue the previous one; results of older requests are checked to be older and dropped.
+fn until_finished(worker: &mut SolverWorker, seq: u64) -> Vec<SolveResult> {
+    let deadline = Instant::now() + Duration::from_secs(120);
+    let mut results: Vec<SolveResult> = Vec::new();
+    loop {
+        for r in worker.poll_all() {
+            assert!(r.seq <= seq, "a result for a request not sent");
+            assert!(results.last().is_none_or(|l| !l.finished), "a result after the finished one");
+            if r.seq == seq {
+                match results.last() {
+                    Some(l) => assert_eq!(r.iterations, l.iterations + r.energy.len(), "iterations add up"),
+                    None => assert!(r.iterations >= r.energy.len()),
+                }
+                results.push(r);
+            }
+        }
+        if results.last().is_some_and(|r| r.finished) {
+            return results;
+        }
+        assert!(Instant::now() < deadline, "request {seq} did not finish");
+        std::thread::sleep(Duration::from_millis(1));
+    }
+}
+
+/// A worker whose thread waits after each chunk until the test has polled, so that every chunk
+/// is seen on its own.
+struct Lockstep {
+    // Dropped before the worker, which then is no longer held in its notify.
+    ready: Receiver<()>,
+    go: SyncSender<()>,
+    worker: SolverWorker,
+}
+
+impl Lockstep {
+    fn new(params: WorkerParams) -> Lockstep {
+        let (ready_tx, ready) = sync_channel(0);
+        let (go, go_rx) = sync_channel(0);
+        let worker = SolverWorker::spawn_with(params, move || {
+            if ready_tx.send(()).is_ok() {
+                let _ = go_rx.recv();
+            }
+        })
+        .unwrap();
+        Lockstep { ready, go, worker }
+    }
+
+    /// The next chunk's result, alone.
+    fn next(&mut self) -> SolveResult {
+        self.ready.recv_timeout(Duration::from_secs(60)).expect("a chunk within a minute");
+        let mut results = self.worker.poll_all();
+        self.go.send(()).unwrap();
+        assert_eq!(results.len(), 1, "one result per chunk in lockstep");
+        results.pop().unwrap()
+    }
+
+    /// The chunks of the request just sent, up to its finished one.
+    fn chunks(&mut self) -> Vec<SolveResult> {
+        let mut chunks = vec![self.next()];
+        while !chunks.last().unwrap().finished {
+            chunks.push(self.next());
+        }
+        chunks
+    }
+}
+
+fn document_with_handles() -> (Document, GroupKey) {
     let mut doc = Document::open(Path::new(SPOT), ShapeModel::EdgeSprings).unwrap();
     let mut order: Vec<u32> = (0..doc.num_vertices() as u32).collect();
     order.sort_by(|&a, &b| doc.positions()[a as usize].y.total_cmp(&doc.positions()[b as usize].y));
@@ -33,6 +100,315 @@ fn document_with_handles() -> (Document, shapeup_app::GroupKey) {
     doc.apply(Command::FixSelection).unwrap();
     let head = doc.handles().last().unwrap().key;
     (doc, head)
+}
+
+/// `pieces` flat n×n-cell grids in the XY plane, side by side (x offset 2 each), not joined.
+fn grids(n: u32, pieces: u32) -> Mesh {
+    let mut positions = Vec::new();
+    let mut triangles = Vec::new();
+    for p in 0..pieces {
+        let base = p * (n + 1) * (n + 1);
+        for y in 0..=n {
+            for x in 0..=n {
+                positions.push(DVec3::new(2.0 * p as f64 + x as f64 / n as f64, y as f64 / n as f64, 0.0));
+            }
+        }
+        for y in 0..n {
+            for x in 0..n {
+                let v = base + y * (n + 1) + x;
+                triangles.push([v, v + 1, v + n + 2]);
+                triangles.push([v, v + n + 2, v + n + 1]);
+            }
+        }
+    }
+    Mesh::new(positions, triangles).unwrap()
+}
+
+/// The vertices of column `x` of grid `piece` (see [`grids`]).
+fn column(n: u32, piece: u32, x: u32) -> Vec<u32> {
+    (0..=n).map(|y| piece * (n + 1) * (n + 1) + y * (n + 1) + x).collect()
+}
+
+/// Fixes `vertices` as a new handle and returns its key.
+fn fix(doc: &mut Document, vertices: Vec<u32>) -> GroupKey {
+    doc.apply(Command::Select { vertices, mode: SelectMode::Replace }).unwrap();
+    doc.apply(Command::FixSelection).unwrap();
+    doc.handles().last().unwrap().key
+}
+
+/// One n×n grid, strain + bending, its left column held and its right column moved and turned.
+fn bent_grid(n: u32) -> (Document, GroupKey) {
+    let mut doc = Document::new(grids(n, 1), ShapeModel::StrainBending).unwrap();
+    fix(&mut doc, column(n, 0, 0));
+    let right = fix(&mut doc, column(n, 0, n));
+    doc.apply(Command::MoveHandle { handle: right, delta: DVec3::new(-0.3, 0.1, 0.4) }).unwrap();
+    doc.apply(Command::RotateHandle { handle: right, axis: DVec3::Y, angle: -0.6 }).unwrap();
+    (doc, right)
+}
+
+fn diagonal(positions: &[DVec3]) -> f64 {
+    let lo = positions.iter().fold(DVec3::INFINITY, |a, &p| a.min(p));
+    let hi = positions.iter().fold(DVec3::NEG_INFINITY, |a, &p| a.max(p));
+    (hi - lo).length()
+}
+
+fn max_distance(a: &[DVec3], b: &[DVec3]) -> f64 {
+    assert_eq!(a.len(), b.len());
+    a.iter().zip(b).map(|(p, q)| (*p - *q).length()).fold(0.0, f64::max)
+}
+
+fn relative_change(previous: f64, energy: f64) -> f64 {
+    (previous - energy).abs() / previous.abs()
+}
+
+#[test]
+fn converges_to_the_tolerance_and_matches_a_synchronous_solve() {
+    const TOL: f64 = 1e-6;
+    let (mut doc, _) = bent_grid(8);
+    let mut worker = SolverWorker::spawn().unwrap();
+    let mut request = SolveRequest::from_document(&doc);
+    assert_eq!((request.iterations, request.tolerance), (doc.iterations(), doc.tolerance()));
+    request.iterations = 100_000;
+    request.tolerance = TOL;
+    let seq = worker.request(request);
+    let results = until_finished(&mut worker, seq);
+
+    // Chunks in order, each picking up where the previous one stopped.
+    let last = results.last().unwrap();
+    assert!(last.finished && last.converged && last.error.is_none(), "{last:?}");
+    assert_eq!(results[0].iterations, results[0].energy.len(), "iterations count from the request");
+    for r in &results {
+        assert!(!r.energy.is_empty() && r.error.is_none());
+        assert!(r.local_ms >= 0.0 && r.global_ms >= 0.0 && r.setup_ms >= 0.0);
+    }
+    for r in &results[..results.len() - 1] {
+        assert!(!r.finished && !r.converged);
+        assert!(r.relative_change.is_none_or(|c| c > TOL), "it went on although converged");
+        let noun = if r.iterations == 1 { "iteration" } else { "iterations" };
+        assert!(r.status().starts_with(&format!("solving… {} {noun}, E ", r.iterations)), "{}", r.status());
+    }
+    assert_eq!(
+        last.status(),
+        format!("converged: {} iterations, E {:.3e}", last.iterations, last.last_energy().unwrap())
+    );
+    let energies: Vec<f64> = results.iter().flat_map(|r| r.energy.iter().copied()).collect();
+    let n = energies.len();
+    assert!(n >= 2 && n == last.iterations);
+    let change = relative_change(energies[n - 2], energies[n - 1]);
+    assert!(change <= TOL, "last relative change {change}");
+    assert_eq!(last.relative_change, Some(change));
+
+    // The shape is converged: one more iteration changes E by less than the tolerance.
+    let diag = diagonal(doc.rest_positions());
+    assert!(last.apply_to(&mut doc));
+    let e0: f64 = doc.group_energies().unwrap().iter().map(|(_, e)| e).sum();
+    let e1 = doc.solve(1).unwrap().energies[0];
+    assert!(relative_change(e0, e1) <= TOL, "next change {}", relative_change(e0, e1));
+
+    // The same iterations synchronously give the same shape; a long solve nearly the same.
+    let (mut sync, _) = bent_grid(8);
+    sync.solve(last.iterations).unwrap();
+    let same = max_distance(sync.positions(), &last.positions);
+    assert!(same < 1e-9 * diag, "chunked vs one solve: {same}");
+    sync.solve(20_000).unwrap();
+    let far = max_distance(sync.positions(), &last.positions);
+    assert!(far < 1e-2 * diag, "converged to 1e-6 vs 20000 more iterations: {far} (diagonal {diag})");
+}
+
+#[test]
+fn nothing_arrives_after_the_finished_result() {
+    let (doc, _) = bent_grid(6);
+    let mut worker = SolverWorker::spawn().unwrap();
+    let mut request = SolveRequest::from_document(&doc);
+    request.tolerance = 1e-8;
+    let seq = worker.request(request);
+    let results = until_finished(&mut worker, seq);
+    assert!(results.last().unwrap().converged);
+    assert!(!worker.is_busy() && !worker.is_pending(), "idle once finished");
+    std::thread::sleep(Duration::from_millis(300));
+    assert!(worker.poll_all().is_empty(), "the worker sleeps once converged");
+    assert!(!worker.is_busy());
+
+    // A new request wakes it again.
+    let seq = worker.request(SolveRequest::from_document(&doc));
+    assert!(worker.is_busy());
+    let again = until_finished(&mut worker, seq);
+    assert!(again.last().unwrap().converged);
+}
+
+#[test]
+fn the_newest_target_wins() {
+    const N: u32 = 6;
+    let moves: Vec<DVec3> = (0..12).map(|i| DVec3::new(-0.02, 0.01 * (i % 3) as f64, 0.03)).collect();
+    let (mut doc, right) = bent_grid(N);
+    // Short chunks, so that requests also arrive between chunks of a convergence.
+    let params = WorkerParams { chunk_budget: Duration::from_millis(1), first_chunk_budget: Duration::ZERO };
+    let mut worker = SolverWorker::spawn_with(params, || {}).unwrap();
+    let mut last = 0;
+    doc.begin_drag();
+    for (i, &delta) in moves.iter().enumerate() {
+        doc.apply(Command::MoveHandle { handle: right, delta }).unwrap();
+        let mut request = SolveRequest::from_document(&doc);
+        // Position error goes as the square root of the energy change: 1e-14 for ~1e-7.
+        request.tolerance = 1e-14;
+        request.iterations = 200_000;
+        last = worker.request(request);
+        // Some requests find the worker mid-convergence, some replace a pending one.
+        if i % 2 == 0 {
+            std::thread::sleep(Duration::from_millis(2));
+        }
+    }
+    doc.end_drag();
+    let results = until_finished(&mut worker, last);
+    let final_result = results.last().unwrap();
+    assert!(final_result.converged && final_result.error.is_none(), "{final_result:?}");
+
+    // The synchronous solve of the last targets, from the rest shape.
+    let (mut sync, right) = bent_grid(N);
+    for &delta in &moves {
+        sync.apply(Command::MoveHandle { handle: right, delta }).unwrap();
+    }
+    let report = sync.solve(30_000).unwrap();
+    let e = &report.energies;
+    assert!(relative_change(e[e.len() - 2], e[e.len() - 1]) < 1e-14, "the reference is converged");
+    let diag = diagonal(sync.positions());
+    let error = max_distance(sync.positions(), &final_result.positions);
+    assert!(error < 1e-6 * diag, "newest targets, converged: off by {error} (diagonal {diag})");
+    let handle = sync.group(right).unwrap();
+    for (&v, t) in handle.vertices().unwrap().iter().zip(&handle.targets) {
+        assert!((final_result.positions[v as usize] - *t).length() < 0.05 * diag, "the handle follows its last target");
+    }
+}
+
+#[test]
+fn stops_at_the_iteration_cap() {
+    let (doc, _) = bent_grid(6);
+    let mut request = SolveRequest::from_document(&doc);
+    request.iterations = 5;
+    request.tolerance = 0.0;
+    // Zero budgets: one iteration per chunk, each seen.
+    let mut lockstep = Lockstep::new(WorkerParams { chunk_budget: Duration::ZERO, first_chunk_budget: Duration::ZERO });
+    lockstep.worker.request(request.clone());
+    let chunks = lockstep.chunks();
+    assert_eq!(chunks.iter().map(|r| r.iterations).collect::<Vec<_>>(), [1, 2, 3, 4, 5]);
+    assert!(chunks.iter().all(|r| r.energy.len() == 1));
+    let last = chunks.last().unwrap();
+    assert!(last.finished && !last.converged && last.error.is_none());
+    assert!(last.status().starts_with("stopped at the 5-iteration cap, E "), "{}", last.status());
+    assert_eq!(chunks[0].status(), format!("solving… 1 iteration, E {:.3e}", chunks[0].energy[0]));
+
+    // With default chunks, still exactly 5 in all, and then nothing.
+    let mut worker = SolverWorker::spawn().unwrap();
+    let seq = worker.request(request);
+    let results = until_finished(&mut worker, seq);
+    assert_eq!(results.iter().map(|r| r.energy.len()).sum::<usize>(), 5);
+    assert_eq!(results.last().unwrap().iterations, 5);
+    std::thread::sleep(Duration::from_millis(100));
+    assert!(worker.poll_all().is_empty());
+}
+
+#[test]
+fn the_first_chunk_after_a_request_is_small_then_chunks_grow() {
+    let (mut doc, right) = bent_grid(8);
+    let mut lockstep = Lockstep::new(WorkerParams { first_chunk_budget: Duration::ZERO, ..WorkerParams::default() });
+    for _ in 0..3 {
+        doc.apply(Command::MoveHandle { handle: right, delta: DVec3::new(0.0, 0.05, 0.0) }).unwrap();
+        let mut request = SolveRequest::from_document(&doc);
+        request.tolerance = 1e-13;
+        request.iterations = 3000;
+        lockstep.worker.request(request);
+        let chunks = lockstep.chunks();
+        let sizes: Vec<usize> = chunks.iter().map(|r| r.energy.len()).collect();
+        assert_eq!(sizes[0], 1, "the first update after a request is one iteration");
+        for pair in sizes.windows(2) {
+            assert!(pair[1] <= 2 * pair[0], "a chunk at most doubles: {sizes:?}");
+        }
+        // A grid iteration takes microseconds: chunks grow to many iterations.
+        assert!(sizes.iter().any(|&c| c > 8), "{sizes:?}");
+        for r in &chunks {
+            assert!(r.ms_per_iteration().unwrap() >= 0.0);
+            assert!(r.local_ms + r.global_ms < 1000.0, "a chunk stays near its budget: {r:?}");
+        }
+    }
+    // Default budgets: the first chunk fits 10 ms, more than one grid iteration.
+    let mut lockstep = Lockstep::new(WorkerParams::default());
+    for k in 0..2 {
+        doc.apply(Command::MoveHandle { handle: right, delta: DVec3::new(0.0, -0.05, 0.0) }).unwrap();
+        lockstep.worker.request(SolveRequest::from_document(&doc));
+        let chunks = lockstep.chunks();
+        // The very first has no time estimate yet: one iteration.
+        assert!(k == 0 || chunks[0].energy.len() > 1, "{}", chunks[0].energy.len());
+    }
+}
+
+#[test]
+fn chunks_not_polled_yet_merge_into_one_result() {
+    let (doc, _) = bent_grid(6);
+    let params = WorkerParams { chunk_budget: Duration::ZERO, first_chunk_budget: Duration::ZERO };
+    let mut worker = SolverWorker::spawn_with(params, || {}).unwrap();
+    let mut request = SolveRequest::from_document(&doc);
+    request.iterations = 300;
+    request.tolerance = 0.0;
+    worker.request(request);
+    let deadline = Instant::now() + Duration::from_secs(60);
+    while worker.is_busy() {
+        assert!(Instant::now() < deadline);
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    // 300 one-iteration chunks, never polled: one result with every energy.
+    let results = worker.poll_all();
+    assert_eq!(results.len(), 1);
+    let r = &results[0];
+    assert!(r.finished && r.iterations == 300 && r.energy.len() == 300);
+    assert!(r.energy.windows(2).all(|e| e[1] <= e[0] * (1.0 + 1e-12)), "E decreases");
+}
+
+#[test]
+fn a_failed_solve_keeps_the_last_good_shape() {
+    const N: u32 = 5;
+    let mut doc = Document::new(grids(N, 2), ShapeModel::StrainBending).unwrap();
+    fix(&mut doc, column(N, 0, 0));
+    let right = fix(&mut doc, column(N, 0, N));
+    let other = fix(&mut doc, column(N, 1, 0));
+    doc.apply(Command::MoveHandle { handle: right, delta: DVec3::new(-0.2, 0.0, 0.3) }).unwrap();
+    doc.apply(Command::MoveHandle { handle: other, delta: DVec3::new(0.0, 0.1, 0.0) }).unwrap();
+    let mut worker = SolverWorker::spawn().unwrap();
+    let mut request = SolveRequest::from_document(&doc);
+    request.tolerance = 1e-9;
+    let seq = worker.request(request.clone());
+    let good = until_finished(&mut worker, seq).pop().unwrap();
+    assert!(good.converged && good.error.is_none());
+    assert!(good.apply_to(&mut doc));
+
+    // The second grid loses its only handle: singular.
+    doc.apply(Command::DeleteHandle(other)).unwrap();
+    let mut request = SolveRequest::from_document(&doc);
+    request.tolerance = 1e-9;
+    let seq = worker.request(request);
+    let failed = until_finished(&mut worker, seq);
+    assert_eq!(failed.len(), 1, "a failure finishes the request");
+    let failed = &failed[0];
+    assert!(matches!(failed.error, Some(EditorError::Solve(_))), "{:?}", failed.error);
+    assert!(failed.finished && !failed.converged);
+    assert_eq!(failed.positions, good.positions, "the last good shape, not the rest shape");
+    assert!(failed.status().starts_with("solve failed: "), "{}", failed.status());
+    assert!(!failed.apply_to(&mut doc));
+    assert_eq!(doc.positions(), good.positions.as_slice());
+    std::thread::sleep(Duration::from_millis(100));
+    assert!(worker.poll_all().is_empty(), "no retry after a failure");
+
+    // The handle comes back: the worker recovers, from the last good shape.
+    doc.apply(Command::Undo).unwrap();
+    let mut request = SolveRequest::from_document(&doc);
+    request.tolerance = 1e-9;
+    let seq = worker.request(request);
+    let recovered = until_finished(&mut worker, seq);
+    let diag = diagonal(&good.positions);
+    assert!(max_distance(&recovered[0].positions, &good.positions) < 1e-3 * diag, "resumes where it was");
+    let last = recovered.last().unwrap();
+    assert!(last.converged && last.error.is_none(), "{:?}", last.error);
+    assert!(max_distance(&last.positions, &good.positions) < 1e-3 * diag);
+    assert!(last.apply_to(&mut doc));
 }
 
 #[test]
@@ -49,16 +425,18 @@ fn the_last_of_many_rapid_requests_is_solved() {
     let result = wait_for(&mut worker, last);
     assert!(result.error.is_none(), "{:?}", result.error);
     assert!(!result.energy.is_empty() && result.local_ms >= 0.0 && result.global_ms >= 0.0);
-    // Converge on the last targets, then compare with a synchronous solve of the same state.
+    // Converge on the last targets (at most 400 iterations), then check the handle follows.
     let mut request = SolveRequest::from_document(&doc);
     request.iterations = 400;
     let seq = worker.request(request);
-    let result = wait_for(&mut worker, seq);
+    let result = until_finished(&mut worker, seq).pop().unwrap();
+    assert!(result.iterations <= 400);
     assert!(result.apply_to(&mut doc));
     let handle = doc.group(head).unwrap();
     for (&v, t) in handle.vertices.as_ref().unwrap().iter().zip(&handle.targets) {
         assert!((doc.positions()[v as usize] - *t).length() < 0.05, "handle vertex follows its last target");
     }
+    std::thread::sleep(Duration::from_millis(50));
     assert!(worker.poll().is_none(), "nothing further arrives");
 }
 
@@ -69,6 +447,7 @@ fn each_burst_is_solved_at_least_once_and_errors_are_reported() {
     let seq = worker.request(SolveRequest::from_document(&doc));
     let result = wait_for(&mut worker, seq);
     assert_eq!(result.error, Some(EditorError::NoHandles));
+    assert!(result.finished);
     assert_eq!(result.positions, doc.positions(), "an error leaves the shape as it was");
     assert!(!result.apply_to(&mut doc));
 
@@ -82,7 +461,9 @@ fn each_burst_is_solved_at_least_once_and_errors_are_reported() {
         }
         let result = wait_for(&mut worker, *seqs.last().unwrap());
         assert!(result.error.is_none(), "burst {burst}: {:?}", result.error);
+        assert!(result.apply_to(&mut doc));
     }
+    assert_ne!(doc.positions(), doc.rest_positions());
     // A result from before a reset belongs to an old epoch and is not taken.
     let seq = worker.request(SolveRequest::from_document(&doc));
     let stale = wait_for(&mut worker, seq);
@@ -96,19 +477,22 @@ fn dropping_the_worker_joins_its_thread() {
     let (doc, _) = document_with_handles();
     let mut worker = SolverWorker::spawn().unwrap();
     let mut request = SolveRequest::from_document(&doc);
-    request.iterations = 50;
+    request.iterations = 100_000;
+    request.tolerance = 0.0;
     worker.request(request);
+    std::thread::sleep(Duration::from_millis(20));
+    // Mid-convergence: it stops after its current chunk.
     let start = Instant::now();
     drop(worker);
     assert!(start.elapsed() < Duration::from_secs(30));
     let mut worker = SolverWorker::spawn().unwrap();
     worker.shutdown();
     worker.shutdown();
-    assert!(!worker.is_pending());
+    assert!(!worker.is_pending() && !worker.is_busy());
 }
 
 #[test]
-fn notify_is_called_once_a_result_can_be_polled() {
+fn notify_is_called_after_each_chunk_until_finished() {
     use std::sync::Arc;
     use std::sync::atomic::{AtomicUsize, Ordering};
     let (doc, _) = document_with_handles();
@@ -119,14 +503,25 @@ fn notify_is_called_once_a_result_can_be_polled() {
     })
     .unwrap();
     assert_eq!(calls.load(Ordering::SeqCst), 0, "no result, no wake-up");
-    worker.request(SolveRequest::from_document(&doc));
+    let mut request = SolveRequest::from_document(&doc);
+    request.iterations = 60;
+    let seq = worker.request(request);
     let deadline = Instant::now() + Duration::from_secs(60);
     while calls.load(Ordering::SeqCst) == 0 {
         assert!(Instant::now() < deadline, "notify never called");
-        std::thread::sleep(Duration::from_millis(2));
+        std::thread::sleep(Duration::from_millis(1));
     }
-    // The UI is woken after the send, so its poll finds the result without waiting.
-    let result = worker.poll().expect("the result is there when notify runs");
-    assert!(result.error.is_none(), "{:?}", result.error);
-    assert_eq!(calls.load(Ordering::SeqCst), 1);
+    // The UI is woken after the post, so its poll finds the result without waiting.
+    let mut results = worker.poll_all();
+    assert!(!results.is_empty(), "the result is there when notify runs");
+    assert!(results[0].error.is_none(), "{:?}", results[0].error);
+    if !results.last().unwrap().finished {
+        results.extend(until_finished(&mut worker, seq));
+    }
+    // At least one wake-up per result (more when chunks merged), none after the finished one.
+    std::thread::sleep(Duration::from_millis(50));
+    let after = calls.load(Ordering::SeqCst);
+    assert!(after >= results.len());
+    std::thread::sleep(Duration::from_millis(100));
+    assert_eq!(calls.load(Ordering::SeqCst), after);
 }

@@ -11,6 +11,7 @@
 //! Everything is in the working frame (see [`crate::geometry::WorkingFrame`]); the scene layer
 //! converts gravity and forces from input units.
 
+use crate::constraints::RowSink;
 use crate::solver::{SolveError, System};
 use glam::DVec3;
 use std::time::Instant;
@@ -111,18 +112,24 @@ pub struct StepReport {
     pub total_seconds: f64,
 }
 
-/// Vertices pulled towards points (the editor's mouse grab): each step moves their inertial
-/// targets a fraction `strength` of the way from x_n + h v_n to the points — an external force
-/// m (p − x_n − h v_n) · strength / h², so grabbing never refactors the matrix.
+/// Vertices pulled towards points (the editor's mouse grab). [`Simulation::grab`]: each step
+/// moves their inertial targets a fraction `strength` of the way from x_n + h v_n to the
+/// points — an external force m (p − x_n − h v_n) · strength / h², so grabbing never refactors
+/// the matrix. [`Simulation::hold`]: a stiff spring to the points inside the implicit solve.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Grab {
     /// The grabbed vertices.
     pub vertices: Vec<u32>,
     /// Where each is pulled (working frame).
     pub targets: Vec<DVec3>,
-    /// Fraction in (0, 1] of the remaining distance closed per step by the force.
+    /// In (0, 1]: the fraction of the remaining distance closed per step by the force
+    /// ([`Simulation::grab`]), or at least per iteration by the spring ([`Simulation::hold`]).
     pub strength: f64,
 }
+
+/// The largest hold weight, in units of a vertex's diagonal (strength 1): stiff enough to pin a
+/// vertex to its target, far from the round-off of the Cholesky factor.
+const MAX_HOLD_RATIO: f64 = 1e6;
 
 /// A Projective Dynamics simulation: a [`System`] in dynamic mode plus the state (x, v).
 #[derive(Debug)]
@@ -135,6 +142,9 @@ pub struct Simulation {
     /// Per-vertex external forces (working frame), if any.
     forces: Option<Vec<DVec3>>,
     grab: Option<Grab>,
+    /// For a grab by [`Simulation::hold`]: the weight added to each grabbed vertex's inertia
+    /// (in the order of the grab's vertices); `None` for a force grab.
+    hold: Option<Vec<f64>>,
     /// Inertial target and iterate buffers (reused every step).
     target: Vec<DVec3>,
     next: Vec<DVec3>,
@@ -181,6 +191,7 @@ impl Simulation {
             positions,
             forces: None,
             grab: None,
+            hold: None,
             steps: 0,
         })
     }
@@ -208,12 +219,26 @@ impl Simulation {
             }
             *s = self.positions[i] + h * self.velocities[i] + h * h * a;
         }
-        if let Some(grab) = &self.grab {
-            for (&v, &p) in grab.vertices.iter().zip(&grab.targets) {
-                let v = v as usize;
-                let coasting = self.positions[v] + h * self.velocities[v];
-                self.target[v] += grab.strength * (p - coasting);
+        match (&self.grab, &self.hold) {
+            (Some(grab), None) => {
+                for (&v, &p) in grab.vertices.iter().zip(&grab.targets) {
+                    let v = v as usize;
+                    let coasting = self.positions[v] + h * self.velocities[v];
+                    self.target[v] += grab.strength * (p - coasting);
+                }
             }
+            (Some(grab), Some(weights)) => {
+                // The system's inertia is μ_v + g_v there: its target is the weighted mean.
+                let scale = 1.0 / (self.params.stiffness * h * h);
+                for ((&v, &p), &g) in grab.vertices.iter().zip(&grab.targets).zip(weights) {
+                    let v = v as usize;
+                    let mu = self.masses[v] * scale;
+                    if g > 0.0 {
+                        self.target[v] = (mu * self.target[v] + g * p) / (mu + g);
+                    }
+                }
+            }
+            (None, _) => {}
         }
         self.system.set_inertial_target(&self.target)?;
         self.next.copy_from_slice(&self.target);
@@ -293,8 +318,22 @@ impl Simulation {
     /// [`DynamicsError::BadParams`].
     pub fn set_params(&mut self, params: DynamicsParams) -> Result<(), DynamicsError> {
         params.validate().map_err(DynamicsError::BadParams)?;
-        self.system.set_inertia(Some(params.inertia(&self.masses)))?;
-        self.params = params;
+        let old = std::mem::replace(&mut self.params, params);
+        // A hold's weights are relative to the matrix's diagonal, which k and h scale.
+        let held = self.hold.is_some().then(|| self.grab.clone()).flatten();
+        let inertia = match &held {
+            Some(grab) => {
+                let weights = self.hold_weights(&grab.vertices, grab.strength);
+                let inertia = self.inertia_with(&grab.vertices, &weights);
+                self.hold = Some(weights);
+                inertia
+            }
+            None => params.inertia(&self.masses),
+        };
+        if let Err(e) = self.system.set_inertia(Some(inertia)) {
+            self.params = old;
+            return Err(e.into());
+        }
         Ok(())
     }
 
@@ -317,12 +356,99 @@ impl Simulation {
 
     /// Pulls `vertices` towards `targets` (working frame) from the next step on, closing a
     /// fraction `strength` ∈ (0, 1] of the distance per step (see [`Grab`]); replaces any
-    /// previous grab. No refactorization.
+    /// previous grab. No refactorization (but after a [`Simulation::hold`], whose matrix it
+    /// restores). A force that weak against stiff constraints barely moves them: to make
+    /// vertices follow a cursor, use [`Simulation::hold`].
     ///
     /// # Errors
     /// [`DynamicsError::BadState`] for mismatched lengths, an index out of range, a
     /// non-finite target or a strength outside (0, 1].
     pub fn grab(&mut self, vertices: Vec<u32>, targets: Vec<DVec3>, strength: f64) -> Result<(), DynamicsError> {
+        self.check_grab(&vertices, &targets, strength)?;
+        self.end_hold()?;
+        self.grab = Some(Grab { vertices, targets, strength });
+        Ok(())
+    }
+
+    /// Holds `vertices` at `targets` (working frame) from the next step on: a spring inside the
+    /// implicit solve, g_v ‖q_v − p_v‖² next to the inertia term μ_v ‖q_v − s_v‖² of each
+    /// grabbed vertex, with g_v = γ D_v, D_v the vertex's diagonal entry of the system matrix
+    /// (inertia plus constraints) and γ = strength / (1 − strength) (at most 10⁶). The global
+    /// step then puts a grabbed vertex a fraction `strength` ∈ (0, 1] of the way from where the
+    /// rest of the system pulls it to its target, whatever the stiffness, time step or mesh
+    /// resolution: strength 1 pins the vertices to the targets (they follow a cursor), small
+    /// strengths pull softly. A vertex of mass 0 is not held.
+    ///
+    /// The first hold of a vertex set (or a new strength) refactors the matrix numerically
+    /// (same pattern); moving the targets of the same vertices costs nothing, so call it on
+    /// every cursor move. [`Simulation::release`] or [`Simulation::grab`] restore the matrix.
+    ///
+    /// # Errors
+    /// As [`Simulation::grab`], and a vertex listed twice; the previous grab then stays.
+    pub fn hold(&mut self, vertices: Vec<u32>, targets: Vec<DVec3>, strength: f64) -> Result<(), DynamicsError> {
+        self.check_grab(&vertices, &targets, strength)?;
+        let mut seen = vec![false; self.masses.len()];
+        if let Some(v) = vertices.iter().find(|&&v| std::mem::replace(&mut seen[v as usize], true)) {
+            return Err(DynamicsError::BadState(format!("grab: vertex {v} is listed twice")));
+        }
+        let same =
+            self.hold.is_some() && self.grab.as_ref().is_some_and(|g| g.vertices == vertices && g.strength == strength);
+        if !same {
+            let weights = self.hold_weights(&vertices, strength);
+            self.system.set_inertia(Some(self.inertia_with(&vertices, &weights)))?;
+            self.hold = Some(weights);
+        }
+        self.grab = Some(Grab { vertices, targets, strength });
+        Ok(())
+    }
+
+    /// g_v = γ D_v for each vertex (see [`Simulation::hold`]); 0 for a vertex without mass.
+    fn hold_weights(&self, vertices: &[u32], strength: f64) -> Vec<f64> {
+        let ratio = if strength >= 1.0 { MAX_HOLD_RATIO } else { (strength / (1.0 - strength)).min(MAX_HOLD_RATIO) };
+        let mu = self.params.inertia(&self.masses);
+        let mut slot = vec![usize::MAX; self.masses.len()];
+        for (i, &v) in vertices.iter().enumerate() {
+            slot[v as usize] = i;
+        }
+        let mut diagonal: Vec<f64> = vertices.iter().map(|&v| mu[v as usize]).collect();
+        let mut sink = RowSink::default();
+        for (_, group) in self.system.groups() {
+            for c in group.constraints.iter().filter(|c| c.vertices().iter().any(|&v| slot[v as usize] != usize::MAX)) {
+                sink.entries.clear();
+                c.rows(&mut sink);
+                // Repeated (row, vertex) entries add up before squaring, as in the assembly.
+                sink.entries.sort_unstable_by_key(|e| (e.row, e.vertex));
+                let w = group.multiplier * c.element_weight();
+                for run in sink.entries.chunk_by(|a, b| (a.row, a.vertex) == (b.row, b.vertex)) {
+                    let i = slot[run[0].vertex as usize];
+                    if i != usize::MAX {
+                        let coeff: f64 = run.iter().map(|e| e.coeff).sum();
+                        diagonal[i] += w * coeff * coeff;
+                    }
+                }
+            }
+        }
+        vertices.iter().zip(&diagonal).map(|(&v, &d)| if mu[v as usize] > 0.0 { ratio * d } else { 0.0 }).collect()
+    }
+
+    /// μ = m / (k h²) plus the hold weights of `vertices`.
+    fn inertia_with(&self, vertices: &[u32], weights: &[f64]) -> Vec<f64> {
+        let mut inertia = self.params.inertia(&self.masses);
+        for (&v, &g) in vertices.iter().zip(weights) {
+            inertia[v as usize] += g;
+        }
+        inertia
+    }
+
+    /// Ends a hold: the plain inertia again.
+    fn end_hold(&mut self) -> Result<(), SolveError> {
+        if self.hold.take().is_some() {
+            self.system.set_inertia(Some(self.params.inertia(&self.masses)))?;
+        }
+        Ok(())
+    }
+
+    fn check_grab(&self, vertices: &[u32], targets: &[DVec3], strength: f64) -> Result<(), DynamicsError> {
         if vertices.len() != targets.len() {
             return Err(DynamicsError::BadState(format!(
                 "grab: {} vertices but {} targets",
@@ -341,13 +467,14 @@ impl Simulation {
                 "grab: targets must be finite and strength in (0, 1], found {strength}"
             )));
         }
-        self.grab = Some(Grab { vertices, targets, strength });
         Ok(())
     }
 
-    /// Lets go of grabbed vertices.
+    /// Lets go of grabbed vertices (after a [`Simulation::hold`], the next step refactors).
     pub fn release(&mut self) {
         self.grab = None;
+        // Cannot fail: the plain inertia was accepted when the simulation was made.
+        let _ = self.end_hold();
     }
 
     /// The current grab, if any.
@@ -373,5 +500,79 @@ impl Simulation {
     /// Linear momentum Σ m_i v_i.
     pub fn momentum(&self) -> DVec3 {
         self.masses.iter().zip(&self.velocities).map(|(m, v)| *m * *v).sum()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used, clippy::expect_used)]
+    use super::*;
+    use crate::constraints::{BuildContext, Params, Selection, build_constraints};
+    use crate::geometry::{RestGeometry, WorkingFrame, lumped_masses_surface};
+    use crate::solver::{ConstraintGroup, SolverParams};
+
+    /// A 6×6 cloth of stiff edge springs, at rest, without gravity.
+    fn cloth() -> Simulation {
+        let mesh = crate::generate::cloth_grid(6, 6, 1.0, 1.0);
+        let rest = RestGeometry::new(mesh.positions.clone(), mesh.triangles.clone(), vec![]);
+        let ctx = BuildContext { rest: &rest, selection: &Selection::All, frame: &WorkingFrame::IDENTITY };
+        let mut system = System::new(mesh.num_vertices(), SolverParams::default());
+        let springs = build_constraints("edge_spring", &ctx, Params::default()).unwrap();
+        system.add_group(ConstraintGroup::new("shape", 100.0, springs)).unwrap();
+        let masses = lumped_masses_surface(mesh.num_vertices(), &mesh.triangles, &rest.triangle_areas, 1.0);
+        let params = DynamicsParams { gravity: DVec3::ZERO, ..DynamicsParams::default() };
+        Simulation::new(system, masses, mesh.positions, params).unwrap()
+    }
+
+    #[test]
+    fn a_full_strength_hold_follows_its_target_where_a_force_grab_lags() {
+        let mut held = cloth();
+        let mut pushed = cloth();
+        let corner = vec![35];
+        let target = vec![held.positions()[35] + DVec3::new(0.0, 0.0, 0.5)];
+        held.hold(corner.clone(), target.clone(), 1.0).unwrap();
+        pushed.grab(corner, target.clone(), 0.3).unwrap();
+        for _ in 0..3 {
+            held.step().unwrap();
+            pushed.step().unwrap();
+        }
+        let gap = |s: &Simulation| (s.positions()[35] - target[0]).length();
+        assert!(gap(&held) < 1e-3, "held {}", gap(&held));
+        assert!(gap(&pushed) > 0.25, "the force grab lags: {}", gap(&pushed));
+        assert!(held.positions()[28].z > 0.05, "the cloth follows the corner");
+    }
+
+    #[test]
+    fn moving_a_hold_does_not_refactor_and_release_restores_the_inertia() {
+        let mut sim = cloth();
+        let plain = sim.params().inertia(sim.masses());
+        let start = sim.positions()[35];
+        sim.hold(vec![35], vec![start], 0.9).unwrap();
+        assert!(sim.step().unwrap().setup_seconds > 0.0, "a new hold refactors");
+        assert!(sim.system().inertia().unwrap()[35] > 9.0 * plain[35]);
+        let mut setup = 0.0;
+        for k in 1..=50 {
+            let to = start + DVec3::new(0.0, 0.0, 0.01 * f64::from(k));
+            sim.hold(vec![35], vec![to], 0.9).unwrap();
+            setup += sim.step().unwrap().setup_seconds;
+        }
+        assert!(setup < 1e-3, "moving the targets does not refactor ({setup} s)");
+        let end = start + DVec3::new(0.0, 0.0, 0.5);
+        assert!((sim.positions()[35] - end).length() < 0.05, "{} from {end}", sim.positions()[35]);
+        // A new stiffness rescales the hold's weights with the matrix.
+        sim.set_params(DynamicsParams { stiffness: 1e3, ..*sim.params() }).unwrap();
+        assert!(sim.system().inertia().unwrap()[35] > 9.0 * sim.params().inertia(sim.masses())[35]);
+        assert!(sim.hold(vec![35, 35], vec![start, start], 0.9).is_err(), "listed twice");
+        assert!(sim.hold(vec![35], vec![start], 0.0).is_err(), "strength 0");
+        sim.release();
+        assert!(sim.grabbed().is_none());
+        assert_eq!(sim.system().inertia().unwrap(), &sim.params().inertia(sim.masses())[..]);
+        sim.hold(vec![35], vec![start], 0.5).unwrap();
+        sim.grab(vec![35], vec![start], 0.5).unwrap();
+        assert_eq!(
+            sim.system().inertia().unwrap(),
+            &sim.params().inertia(sim.masses())[..],
+            "a force grab ends a hold"
+        );
     }
 }

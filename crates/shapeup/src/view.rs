@@ -14,18 +14,14 @@ fn is_scene(path: &std::path::Path) -> bool {
         .is_some_and(|e| e.eq_ignore_ascii_case("toml") || e.eq_ignore_ascii_case("json"))
 }
 
-/// Opens `input` (default: the bundled bunny) as a document; a scene is solved once so the
-/// first frame shows its deformation.
+/// Opens `input` (default: the bundled bunny) as a document, and the path it came from (the
+/// scene's, for a scene).
 fn open(input: Option<PathBuf>) -> Result<(Document, PathBuf)> {
     let path = input.unwrap_or_else(|| sample_path("data/stanford-bunny.obj"));
     if is_scene(&path) {
         let scene = Scene::from_file(&path)?;
-        let mut document = Document::from_scene(&scene).map_err(|e| anyhow!("{}: {e}", path.display()))?;
-        if document.state().has_handles() {
-            let iterations = scene.solver.iterations * scene.solver.steps;
-            document.solve(iterations).map_err(|e| anyhow!("{}: {e}", path.display()))?;
-        }
-        Ok((document, scene.mesh_path()))
+        let document = Document::from_scene(&scene).map_err(|e| anyhow!("{}: {e}", path.display()))?;
+        Ok((document, path))
     } else {
         let document = Document::open(&path, ShapeModel::EdgeSprings).map_err(|e| anyhow!("{e}"))?;
         Ok((document, path))
@@ -39,8 +35,12 @@ pub fn run(input: Option<PathBuf>, screenshot: Option<PathBuf>, size: (u32, u32)
     {
         return Err(anyhow!("{}: the screenshot must be a .png file", out.display()));
     }
-    let (document, mesh_path) = open(input)?;
+    let (mut document, path) = open(input)?;
     if let Some(out) = screenshot {
+        // The converged shape, as the window shows it once the solver settles.
+        if document.state().has_handles() {
+            document.converge().map_err(|e| anyhow!("{}: {e}", path.display()))?;
+        }
         let mesh = document.current_mesh();
         // Handles in green, as in the editor.
         let mut colors = vec![BASE_COLOR; mesh.num_vertices()];
@@ -53,6 +53,6 @@ pub fn run(input: Option<PathBuf>, screenshot: Option<PathBuf>, size: (u32, u32)
         write_png(&out, w, h, &pixels).map_err(|e| anyhow!("{e}"))?;
         return Ok(());
     }
-    run_window(document, mesh_path, WindowOptions { print_stats: stats })
+    run_window(document, path, WindowOptions { print_stats: stats })
         .map_err(|e| anyhow!("cannot open the editor window: {e}"))
 }

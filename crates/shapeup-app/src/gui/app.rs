@@ -1,33 +1,43 @@
-//! The eframe application: panels on the left, the 3D viewport in the centre. Panels and
-//! gestures produce [`Command`]s that are applied to the [`Document`] after the UI pass; solves
-//! run on a [`SolverWorker`] thread, so the window keeps redrawing while the solver works.
+//! The eframe application: panels on the left, the 3D viewport in the centre, a status bar at
+//! the bottom. Panels and gestures produce [`Command`]s that are applied to the [`Document`]
+//! after the UI pass; after every change a [`SolverWorker`] converges the shape in the
+//! background (see [`crate::worker`]), so the window keeps redrawing while the solver works and
+//! what is on screen settles to the converged shape that a saved scene replays.
 
 use super::dialogs::{DialogPurpose, FileDialogs};
+use super::dynamics_panel::{DynamicsAction, dynamics_panel};
+use super::gizmo::HandleGizmo;
 use super::renderer::{BASE_COLOR, FrameParams, MeshRenderer};
 use crate::camera::OrbitCamera;
 use crate::command::{Command, SelectMode};
 use crate::document::{Document, GroupKey, GroupRole, ShapeModel, WEIGHT_RANGE};
 use crate::picking::{box_select, pick_vertex, visible_vertices};
-use crate::simulation::{SimulationRunner, SimulationSettings};
-use crate::worker::{SolveRequest, SolverWorker};
+use crate::simulation::{SimulationRunner, SimulationSettings, tetrahedralize_available};
+use crate::worker::{SolveRequest, SolveResult, SolverWorker};
 use eframe::egui;
 use egui::{Color32, Pos2, Rect, Sense, Stroke};
 use glam::{DVec3, Vec2, Vec3};
 use std::collections::VecDeque;
 use std::path::PathBuf;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 const SELECTED_COLOR: [f32; 3] = [0.15, 0.35, 0.95];
 /// Colour of handle vertices (green, as in the seed editor).
 pub const HANDLE_COLOR: [f32; 3] = [0.10, 0.70, 0.25];
-const HOVER_COLOR: [f32; 3] = [0.95, 0.55, 0.10];
+/// Colour of the vertices of the group whose row the pointer is over.
+pub const HOVER_COLOR: [f32; 3] = [0.95, 0.55, 0.10];
+/// Energies kept for the convergence plot.
+const ENERGY_HISTORY: usize = 400;
+/// Tolerance slider range, as powers of ten.
+const TOLERANCE_EXPONENTS: std::ops::RangeInclusive<f64> = -12.0..=-2.0;
 
 /// The bundled sample meshes (name, path relative to the repository root).
-pub const SAMPLES: [(&str, &str); 4] = [
+pub const SAMPLES: [(&str, &str); 5] = [
     ("Stanford bunny", "data/stanford-bunny.obj"),
     ("Spot", "data/spot.obj"),
     ("Cow", "data/cow.obj"),
     ("Suzanne (quads)", "data/suzanne.obj"),
+    ("Bunny ears (scene)", "examples/bunny-springs.toml"),
 ];
 
 /// A bundled sample's path: relative to the working directory when it exists there, else to
@@ -43,6 +53,7 @@ enum Gesture {
     Orbit,
     Pan,
     BoxSelect {
+        /// Where the button went down (not where the first motion was seen).
         start: Pos2,
         mode: SelectMode,
     },
@@ -61,29 +72,56 @@ enum Gesture {
     },
 }
 
+/// How far the background convergence is, from the worker's last result.
+#[derive(Debug, Clone, Default)]
+struct SolveProgress {
+    /// "converged: 153 iterations, E 1.2e-3", "solving… 40 iterations, E …", or empty.
+    line: String,
+    converged: bool,
+    local_ms: f64,
+    global_ms: f64,
+    ms_per_iteration: f64,
+}
+
 /// UI-only state (nothing here changes the solve).
 struct View {
     camera: OrbitCamera,
     wireframe: bool,
     gesture: Option<Gesture>,
     hovered_group: Option<GroupKey>,
+    /// The handle the gizmo sits on (the last one made until a row is clicked).
+    active_handle: Option<GroupKey>,
+    gizmo: HandleGizmo,
     renaming: Option<(GroupKey, String)>,
+    /// The last message (opened, saved, an error).
     status: String,
+    /// A solve or simulation error, shown over the 3D view until the next good solve.
+    banner: Option<String>,
+    progress: SolveProgress,
     path_input: String,
     export_input: String,
     scene_input: String,
+    /// A path to open once the user agrees to drop unsaved changes.
+    confirm_open: Option<PathBuf>,
+    /// The next click on the mesh selects the connected piece under it.
+    pick_piece: bool,
+    /// Whether Tetrahedralize can be ticked for this mesh (computed once per mesh).
+    tetrahedralize: Result<(), String>,
     energy_history: VecDeque<f64>,
-    last_local_ms: f64,
-    last_global_ms: f64,
     solves: VecDeque<Instant>,
     solves_applied: u64,
     frames: VecDeque<Instant>,
+    /// When the oldest change not yet shown was made (for the drag latency), and the latencies
+    /// measured, milliseconds.
+    change_since: Option<Instant>,
+    latencies: VecDeque<f64>,
 }
 
 /// Options of the editor window.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct WindowOptions {
-    /// Print frames/s, solves/s and solve times to stderr once per second (for measuring).
+    /// Print frames/s, solves/s, solve times and the latency from a change to its first
+    /// visible update to stderr once per second (for measuring).
     pub print_stats: bool,
 }
 
@@ -114,58 +152,66 @@ pub struct EditorApp {
     options: WindowOptions,
     last_stats_print: Instant,
     dialogs: FileDialogs,
+    /// A drag (slider, gizmo) ended this frame: end the document's drag after this frame's
+    /// commands, so that they still join its undo step.
+    end_drag: bool,
     /// Dynamic mode: what to simulate, the running simulation, and the grabbed vertices with
     /// their positions at grab time.
     dynamics: SimulationSettings,
     simulation: Option<SimulationRunner>,
     grabbed: Vec<(u32, DVec3)>,
+    ctx: egui::Context,
 }
 
 impl EditorApp {
-    /// The editor on a document (e.g. from `Document::open`), for eframe.
-    pub fn new(cc: &eframe::CreationContext<'_>, document: Document, mesh_path: PathBuf) -> Self {
-        Self::with_options(cc, document, mesh_path, WindowOptions::default())
+    /// The editor on a document (e.g. from `Document::open`), for eframe; `path` is the mesh or
+    /// scene file it came from.
+    pub fn new(cc: &eframe::CreationContext<'_>, document: Document, path: PathBuf) -> Self {
+        Self::with_options(cc, document, path, WindowOptions::default())
     }
 
-    /// The editor with options.
+    /// The editor with options. The shape starts converging at once.
     pub fn with_options(
         cc: &eframe::CreationContext<'_>,
         document: Document,
-        mesh_path: PathBuf,
+        path: PathBuf,
         options: WindowOptions,
     ) -> Self {
         let renderer = cc.wgpu_render_state.as_ref().map(|rs| MeshRenderer::new(&rs.device));
-        let mut camera = OrbitCamera::with_angles(super::INITIAL_YAW, super::INITIAL_PITCH);
-        frame_camera(&mut camera, &document);
-        EditorApp {
+        let mut camera = OrbitCamera::default();
+        camera.frame_front(document.positions(), document.triangles());
+        let mut app = EditorApp {
             view: View {
                 camera,
                 wireframe: false,
                 gesture: None,
                 hovered_group: None,
+                active_handle: None,
+                gizmo: HandleGizmo::new(),
                 renaming: None,
                 status: if renderer.is_some() {
-                    format!("opened {}", mesh_path.display())
+                    format!("opened {}", path.display())
                 } else {
                     "no wgpu renderer: the 3D view is unavailable".into()
                 },
-                path_input: mesh_path.display().to_string(),
+                banner: None,
+                progress: SolveProgress::default(),
+                path_input: path.display().to_string(),
                 export_input: "deformed.obj".into(),
-                scene_input: "session.toml".into(),
+                scene_input: scene_name_for(&path),
+                confirm_open: None,
+                pick_piece: false,
+                tetrahedralize: tetrahedralize_available(&document),
                 energy_history: VecDeque::new(),
-                last_local_ms: 0.0,
-                last_global_ms: 0.0,
                 solves: VecDeque::new(),
                 solves_applied: 0,
                 frames: VecDeque::new(),
+                change_since: None,
+                latencies: VecDeque::new(),
             },
             document,
-            mesh_path,
-            // Each result wakes the UI, so nothing needs to redraw continuously while waiting.
-            worker: {
-                let ctx = cc.egui_ctx.clone();
-                SolverWorker::spawn_with_notify(move || ctx.request_repaint()).ok()
-            },
+            mesh_path: path,
+            worker: spawn_worker(&cc.egui_ctx),
             renderer,
             texture: None,
             uploaded_epoch: None,
@@ -174,10 +220,15 @@ impl EditorApp {
             options,
             last_stats_print: Instant::now(),
             dialogs: FileDialogs::default(),
+            end_drag: false,
             dynamics: SimulationSettings::default(),
             simulation: None,
             grabbed: Vec::new(),
-        }
+            ctx: cc.egui_ctx.clone(),
+        };
+        // Scenes open solved: converge what was opened, like any other change.
+        app.request_solve();
+        app
     }
 
     /// The document being edited.
@@ -190,37 +241,36 @@ impl EditorApp {
         self.view.solves_applied
     }
 
-    fn apply(&mut self, commands: Vec<Command>) {
-        let mut changed = false;
-        for command in commands {
-            // Moving targets or changing weights changes nothing drawn until the solve returns.
-            self.geometry_dirty |= !matches!(
-                command,
-                Command::MoveHandle { .. }
-                    | Command::RotateHandle { .. }
-                    | Command::SetWeight { .. }
-                    | Command::SetIterations(_)
-                    | Command::RenameHandle { .. }
-            );
-            let solve = !matches!(
-                command,
-                Command::Select { .. }
-                    | Command::ClearSelection
-                    | Command::SelectBoundary(_)
-                    | Command::RenameHandle { .. }
-            );
-            match self.document.apply(command) {
-                Ok(()) => changed |= solve,
-                Err(e) => self.view.status = e.to_string(),
-            }
-        }
-        if changed {
-            // The simulation was built from the old constraints.
-            if self.simulation.take().is_some() {
-                self.view.status = "simulation stopped: the constraints changed".into();
-            }
-            self.request_solve();
-        }
+    /// The convergence line the panel shows ("converged: …", "solving… …"; empty before any
+    /// solve).
+    pub fn solve_status(&self) -> &str {
+        &self.view.progress.line
+    }
+
+    /// Whether the shape on screen is converged (the last solve reached the tolerance).
+    pub fn is_converged(&self) -> bool {
+        self.view.progress.converged
+    }
+
+    /// The error shown over the 3D view, if any.
+    pub fn banner(&self) -> Option<&str> {
+        self.view.banner.as_deref()
+    }
+
+    /// The path typed in the Open row.
+    pub fn path_input(&self) -> &str {
+        &self.view.path_input
+    }
+
+    /// The group whose row the pointer is over.
+    pub fn hovered_group(&self) -> Option<GroupKey> {
+        self.view.hovered_group
+    }
+
+    /// Milliseconds from each change of the constraints (a drag event, a slider move) to the
+    /// end of the frame that first showed a solve of it, most recent last (at most 1000).
+    pub fn latencies(&self) -> impl Iterator<Item = f64> + '_ {
+        self.view.latencies.iter().copied()
     }
 
     /// Whether dynamic mode is on (a simulation exists, running or paused).
@@ -233,116 +283,141 @@ impl EditorApp {
         self.simulation.as_ref().is_some_and(SimulationRunner::is_running)
     }
 
-    fn dynamics_panel(&mut self, ui: &mut egui::Ui) {
-        let running = self.simulation.as_ref().is_some_and(SimulationRunner::is_running);
-        let mut settings = self.dynamics;
-        ui.horizontal_wrapped(|ui| {
-            ui.checkbox(&mut settings.gravity, "Gravity");
-            ui.checkbox(&mut settings.floor, "Floor");
-            let tetgen = cfg!(feature = "tetgen");
-            ui.add_enabled(tetgen, egui::Checkbox::new(&mut settings.tetrahedralize, "Tetrahedralize"))
-                .on_disabled_hover_text("this build has no TetGen (cargo feature `tetgen`)")
-                .on_hover_text("fill the closed surface with tetrahedra (TetGen)");
-        });
-        ui.add(egui::Slider::new(&mut settings.damping, 0.0..=0.5).text("damping"));
-        if settings != self.dynamics {
-            self.dynamics = settings;
-            // New settings, new simulation (from the current shape).
-            self.simulation = None;
-        }
-        ui.horizontal_wrapped(|ui| {
-            if ui.button(if running { "Pause" } else { "Run" }).clicked() {
-                if self.simulation.is_none() {
-                    let ctx = ui.ctx().clone();
-                    match SimulationRunner::start(&self.document, self.dynamics, move || ctx.request_repaint()) {
-                        Ok(runner) => self.simulation = Some(runner),
-                        Err(e) => self.view.status = e.to_string(),
+    /// The dynamics settings the panel edits.
+    pub fn dynamics_settings(&self) -> &SimulationSettings {
+        &self.dynamics
+    }
+
+    // ---- Commands and solving ----
+
+    fn apply(&mut self, commands: Vec<Command>) {
+        let mut changed = false;
+        for command in commands {
+            // Moving targets or changing weights changes nothing drawn until the solve returns.
+            self.geometry_dirty |= !matches!(
+                command,
+                Command::MoveHandle { .. }
+                    | Command::RotateHandle { .. }
+                    | Command::SetWeight { .. }
+                    | Command::SetIterations(_)
+                    | Command::SetTolerance(_)
+                    | Command::RenameHandle { .. }
+            );
+            let solve = command.changes_solve();
+            let fixes = matches!(command, Command::FixSelection | Command::PinFreePieces);
+            match self.document.apply(command) {
+                Ok(()) => {
+                    changed |= solve;
+                    if fixes {
+                        // The new handle gets the gizmo.
+                        self.view.active_handle = self.document.handles().last().map(|h| h.key);
                     }
                 }
-                if let Some(runner) = &self.simulation {
-                    runner.set_running(!running);
-                }
+                Err(e) => self.view.status = e.to_string(),
             }
-            if ui.add_enabled(self.simulation.is_some(), egui::Button::new("Restart")).clicked()
-                && let Some(runner) = &self.simulation
-            {
-                runner.reset();
+        }
+        if std::mem::take(&mut self.end_drag) {
+            self.document.end_drag();
+        }
+        if changed {
+            // The simulation was built from the old constraints.
+            if self.simulation.take().is_some() {
+                self.view.status = "simulation stopped: the constraints changed".into();
             }
-            if ui
-                .add_enabled(self.simulation.is_some(), egui::Button::new("Stop"))
-                .on_hover_text("leave dynamic mode, keeping the current shape")
-                .clicked()
-            {
-                self.simulation = None;
-            }
-        });
-        if let Some(runner) = &self.simulation {
-            let (steps, ms, error) = runner.stats();
-            let tets = if runner.num_tetrahedra > 0 {
-                format!(", {} tetrahedra", runner.num_tetrahedra)
-            } else {
-                String::new()
-            };
-            ui.label(format!("{steps} steps, {ms:.1} ms per step{tets}"));
-            if let Some(e) = error {
-                ui.colored_label(Color32::RED, e);
-            }
-            ui.label("alt+left drag: grab and pull the mesh");
+            self.request_solve();
         }
     }
 
+    /// Starts converging the document's current state in the background (synchronously when
+    /// there is no worker thread); the newest request replaces any older one.
+    fn request_solve(&mut self) {
+        if !self.document.state().has_handles() {
+            self.view.progress = SolveProgress { line: "no handle: nothing to solve".into(), ..Default::default() };
+            self.view.banner = None;
+            return;
+        }
+        self.view.change_since.get_or_insert_with(Instant::now);
+        match &mut self.worker {
+            Some(worker) => {
+                worker.request(SolveRequest::from_document(&self.document));
+                self.view.progress.converged = false;
+            }
+            None => match self.document.converge() {
+                Ok(report) => {
+                    let n = report.energies.len();
+                    let e = report.energies.last().copied().unwrap_or(0.0);
+                    self.view.progress = SolveProgress {
+                        line: format!("converged: {n} iterations, E {e:.3e}"),
+                        converged: n < self.document.iterations(),
+                        ..Default::default()
+                    };
+                    self.view.banner = None;
+                    self.geometry_dirty = true;
+                }
+                Err(e) => self.view.banner = Some(e.to_string()),
+            },
+        }
+    }
+
+    fn poll_worker(&mut self) {
+        let Some(worker) = &mut self.worker else { return };
+        for result in worker.poll_all() {
+            self.take_result(&result);
+        }
+    }
+
+    fn take_result(&mut self, result: &SolveResult) {
+        if let Some(e) = &result.error {
+            // The document keeps the last good shape; say why where the user looks.
+            self.view.banner = Some(format!("solve failed: {e}"));
+            self.view.progress = SolveProgress { line: result.status(), ..Default::default() };
+            return;
+        }
+        if !result.apply_to(&mut self.document) {
+            return;
+        }
+        self.view.banner = None;
+        self.geometry_dirty = true;
+        self.view.progress = SolveProgress {
+            line: result.status(),
+            converged: result.converged,
+            local_ms: result.local_ms,
+            global_ms: result.global_ms,
+            ms_per_iteration: result.ms_per_iteration().unwrap_or(self.view.progress.ms_per_iteration),
+        };
+        self.view.energy_history.extend(result.energy.iter().copied());
+        let excess = self.view.energy_history.len().saturating_sub(ENERGY_HISTORY);
+        self.view.energy_history.drain(..excess);
+        self.view.solves.push_back(Instant::now());
+        self.view.solves_applied += 1;
+    }
+
     fn poll_simulation(&mut self) {
-        if let Some(positions) = self.simulation.as_ref().and_then(SimulationRunner::poll)
+        let Some(runner) = &self.simulation else { return };
+        if let Some(positions) = runner.poll()
             && self.document.accept_positions(self.document.epoch(), &positions)
         {
             self.geometry_dirty = true;
         }
     }
 
-    fn request_solve(&mut self) {
-        if !self.document.state().has_handles() {
-            return;
-        }
-        // One round per change: measured on 2 cores with software rendering, iterating on
-        // between mouse moves took frames from the renderer without adding updates per second.
-        match &mut self.worker {
-            Some(worker) => {
-                worker.request(SolveRequest::from_document(&self.document));
-            }
-            None => {
-                if let Err(e) = self.document.solve(self.document.iterations()) {
-                    self.view.status = e.to_string();
-                }
-            }
-        }
-    }
+    // ---- Files ----
 
-    fn poll_worker(&mut self) {
-        let Some(worker) = &mut self.worker else { return };
-        while let Some(result) = worker.poll() {
-            if let Some(e) = &result.error {
-                self.view.status = e.to_string();
-            }
-            if result.apply_to(&mut self.document) {
-                self.geometry_dirty = true;
-                self.view.last_local_ms = result.local_ms;
-                self.view.last_global_ms = result.global_ms;
-                self.view.energy_history.extend(result.energy.iter().copied());
-                while self.view.energy_history.len() > 300 {
-                    self.view.energy_history.pop_front();
-                }
-                self.view.solves.push_back(Instant::now());
-                self.view.solves_applied += 1;
-            }
+    /// Opens `path` now, or asks first when the session has unsaved changes.
+    fn request_open(&mut self, path: PathBuf) {
+        if self.document.is_modified() {
+            self.view.confirm_open = Some(path);
+        } else {
+            self.open(path);
         }
     }
 
     fn open(&mut self, path: PathBuf) {
-        let is_scene = path.extension().and_then(|e| e.to_str()).is_some_and(|e| matches!(e, "toml" | "json"));
-        let opened = if is_scene {
+        self.view.path_input = path.display().to_string();
+        let opened = if is_scene(&path) {
             shapeup_core::scene::Scene::from_file(&path)
                 .map_err(|e| e.to_string())
-                .and_then(|s| Document::from_scene(&s).map_err(|e| e.to_string()))
+                .and_then(|s| Document::from_scene(&s).map_err(|e| format!("{}: {e}", path.display())))
         } else {
             Document::open(&path, ShapeModel::EdgeSprings).map_err(|e| e.to_string())
         };
@@ -350,11 +425,23 @@ impl EditorApp {
             Ok(document) => {
                 self.document = document;
                 self.mesh_path = path.clone();
+                // A fresh worker: the old one holds the old mesh's system.
+                self.worker = spawn_worker(&self.ctx);
+                self.simulation = None;
+                self.grabbed.clear();
                 self.uploaded_epoch = None;
                 self.geometry_dirty = true;
-                frame_camera(&mut self.view.camera, &self.document);
+                self.view.gesture = None;
+                self.view.hovered_group = None;
+                self.view.active_handle = None;
+                self.view.banner = None;
+                self.view.progress = SolveProgress::default();
+                self.view.tetrahedralize = tetrahedralize_available(&self.document);
+                self.view.camera.frame_front(self.document.positions(), self.document.triangles());
                 self.view.energy_history.clear();
+                self.view.scene_input = scene_name_for(&path);
                 self.view.status = format!("opened {}", path.display());
+                self.request_solve();
             }
             Err(e) => self.view.status = e,
         }
@@ -374,15 +461,26 @@ impl EditorApp {
     }
 
     fn save_scene(&mut self, path: PathBuf) {
-        let mesh = std::fs::canonicalize(&self.mesh_path).unwrap_or_else(|_| self.mesh_path.clone());
-        self.view.status = match self.document.save_scene(&path, mesh) {
-            Ok(()) => format!("saved {}", path.display()),
+        self.view.status = match self.document.save_scene_with_mesh(&path) {
+            Ok(saved) => {
+                let mut line = format!("saved {}", path.display());
+                if let Some(rest) = &saved.rest_mesh {
+                    line.push_str(&format!(" and its rest mesh {}", rest.display()));
+                }
+                for warning in &saved.warnings {
+                    line.push_str(&format!("; {warning}"));
+                }
+                if !self.view.progress.converged {
+                    line.push_str(" (the shape was still converging: the replay converges it)");
+                }
+                line
+            }
             Err(e) => e.to_string(),
         };
         self.view.scene_input = path.display().to_string();
     }
 
-    /// Opens a native dialog (on its own thread) starting next to the current mesh.
+    /// Opens a native dialog (on its own thread) starting next to the current file.
     fn show_dialog(&mut self, ctx: &egui::Context, purpose: DialogPurpose) {
         let directory = std::fs::canonicalize(&self.mesh_path).ok().and_then(|p| p.parent().map(PathBuf::from));
         let proposed = match purpose {
@@ -397,18 +495,33 @@ impl EditorApp {
     /// Opens, exports or saves to `path`, whether it came from a dialog or was typed.
     fn act_on_path(&mut self, purpose: DialogPurpose, path: PathBuf) {
         match purpose {
-            DialogPurpose::Open => self.open(path),
+            DialogPurpose::Open => self.request_open(path),
             DialogPurpose::ExportMesh => self.export_mesh(path),
             DialogPurpose::SaveScene => self.save_scene(path),
         }
     }
 
-    /// One file row: the dialog button, the typed path, and the button acting on the typed path.
+    fn poll_dialogs(&mut self) {
+        match self.dialogs.poll() {
+            Some((purpose, Some(path))) => self.act_on_path(purpose, path),
+            Some((_, None)) => {
+                self.view.status = "no file chosen (without a file dialog service, type the path instead)".into();
+            }
+            None => {}
+        }
+    }
+
+    // ---- Panels ----
+
+    /// One file row: the dialog button, the typed path (Enter acts on it), and the button acting
+    /// on the typed path.
     fn path_row(&mut self, ui: &mut egui::Ui, purpose: DialogPurpose) {
         let (browse_label, act_label, hint) = match purpose {
-            DialogPurpose::Open => ("Open…", "Open", "open the typed path"),
-            DialogPurpose::ExportMesh => ("Export…", "Export mesh", "write OBJ, PLY or STL to the typed path"),
-            DialogPurpose::SaveScene => ("Save…", "Save scene", "a scene file that shapeup deform replays"),
+            DialogPurpose::Open => ("Open…", "Open", "open the typed mesh or scene file"),
+            DialogPurpose::ExportMesh => ("Export…", "Export mesh", "write OBJ, PLY, STL or OFF to the typed path"),
+            DialogPurpose::SaveScene => {
+                ("Save…", "Save scene", "a scene file that `shapeup deform` replays to the converged shape")
+            }
         };
         ui.horizontal(|ui| {
             let browse = ui.add_enabled(!self.dialogs.is_open(), egui::Button::new(browse_label));
@@ -420,22 +533,13 @@ impl EditorApp {
                 DialogPurpose::ExportMesh => &mut self.view.export_input,
                 DialogPurpose::SaveScene => &mut self.view.scene_input,
             };
-            ui.text_edit_singleline(typed).labelled_by(browse.id);
-            if ui.button(act_label).on_hover_text(hint).clicked() {
-                let path = PathBuf::from(typed.trim());
+            let edit = ui.add(egui::TextEdit::singleline(typed).desired_width(140.0)).labelled_by(browse.id);
+            let entered = edit.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter));
+            let path = PathBuf::from(typed.trim());
+            if ui.button(act_label).on_hover_text(hint).clicked() || entered {
                 self.act_on_path(purpose, path);
             }
         });
-    }
-
-    fn poll_dialogs(&mut self) {
-        match self.dialogs.poll() {
-            Some((purpose, Some(path))) => self.act_on_path(purpose, path),
-            Some((_, None)) => {
-                self.view.status = "no file chosen (without a file dialog service, type the path instead)".into();
-            }
-            None => {}
-        }
     }
 
     fn colors(&self) -> Vec<[f32; 3]> {
@@ -464,130 +568,282 @@ impl EditorApp {
         let mut commands = Vec::new();
         egui::ScrollArea::vertical().show(ui, |ui| {
             ui.heading("shapeup");
-            egui::CollapsingHeader::new("Mesh").default_open(true).show(ui, |ui| {
-                self.path_row(ui, DialogPurpose::Open);
-                ui.label("or drop a mesh or scene file on the window");
-                ui.menu_button("Sample meshes", |ui| {
-                    for (name, relative) in SAMPLES {
-                        if ui.button(name).clicked() {
-                            self.open(sample_path(relative));
-                            ui.close();
-                        }
-                    }
-                });
-            });
-            ui.separator();
+            egui::CollapsingHeader::new("Mesh").default_open(true).show(ui, |ui| self.mesh_section(ui));
             ui.collapsing("Mouse", |ui| {
                 ui.label(
                     "left drag: orbit · right or shift+left drag: pan · wheel: zoom\n\
                      ctrl+left drag: select visible vertices in a box (ctrl+alt adds, ctrl+shift removes)\n\
                      alt+left drag on a handle: move it · alt+right drag: rotate it\n\
+                     gizmo on the active handle: drag an arrow, a square or a ring (shift snaps)\n\
                      dynamics running: alt+left drag grabs and pulls the mesh\n\
                      ctrl+z / ctrl+shift+z: undo / redo",
                 );
             });
-            ui.label(format!("{} vertices selected", self.document.num_selected()));
-            ui.horizontal_wrapped(|ui| {
-                if ui.button("Fix selection").clicked() {
-                    commands.push(Command::FixSelection);
-                }
-                if ui.button("Clear selection").clicked() {
-                    commands.push(Command::ClearSelection);
-                }
-                if ui.button("Select boundary").clicked() {
-                    commands.push(Command::SelectBoundary(SelectMode::Replace));
-                }
-                if ui.button("Add smoothing to selection").clicked() {
-                    commands.push(Command::AddSmoothing);
-                }
-            });
+            ui.separator();
+            self.selection_section(ui, &mut commands);
             ui.separator();
             ui.label("Shape constraints");
             let current = self.document.shape_model();
-            for model in [ShapeModel::EdgeSprings, ShapeModel::StrainBending, ShapeModel::IsoOneRing] {
+            for model in ShapeModel::ALL {
                 if ui.radio(current == Some(model), model.label()).clicked() && current != Some(model) {
                     commands.push(Command::SetShapeModel(model));
                 }
             }
             ui.separator();
-            ui.label("Groups (hover to highlight)");
-            let previously_hovered = self.view.hovered_group.take();
-            let groups: Vec<_> = self.document.groups().to_vec();
-            for group in &groups {
-                let row = ui.horizontal(|ui| {
-                    ui.label(format!("{} ({})", group.name, group.kind));
-                    let mut weight = group.weight;
-                    let slider = egui::Slider::new(&mut weight, WEIGHT_RANGE.0..=WEIGHT_RANGE.1)
-                        .logarithmic(true)
-                        .text("weight");
-                    if ui.add(slider).changed() {
-                        commands.push(Command::SetWeight { group: group.key, weight });
-                    }
-                    if group.role == GroupRole::Handle && ui.small_button("rename").clicked() {
-                        self.view.renaming = Some((group.key, group.name.clone()));
+            self.groups_section(ui, &mut commands);
+            ui.separator();
+            self.solver_section(ui, &mut commands);
+            ui.separator();
+            self.path_row(ui, DialogPurpose::ExportMesh);
+            self.path_row(ui, DialogPurpose::SaveScene);
+            ui.separator();
+            egui::CollapsingHeader::new("Dynamics").default_open(true).show(ui, |ui| self.dynamics_section(ui));
+            ui.separator();
+            ui.horizontal(|ui| {
+                ui.checkbox(&mut self.view.wireframe, "Wireframe");
+                if ui.button("Reset view").clicked() {
+                    self.view.camera.reset();
+                }
+            });
+            self.view.gizmo.tool_selector(ui);
+            ui.separator();
+            self.stats(ui);
+        });
+        commands
+    }
+
+    fn mesh_section(&mut self, ui: &mut egui::Ui) {
+        self.path_row(ui, DialogPurpose::Open);
+        ui.label("or drop a mesh or scene file on the window");
+        let mut chosen = None;
+        ui.menu_button("Samples", |ui| {
+            for (name, relative) in SAMPLES {
+                if ui.button(name).clicked() {
+                    chosen = Some(sample_path(relative));
+                    ui.close();
+                }
+            }
+        });
+        if let Some(path) = chosen {
+            self.request_open(path);
+        }
+    }
+
+    fn selection_section(&mut self, ui: &mut egui::Ui, commands: &mut Vec<Command>) {
+        ui.label(format!("{} vertices selected", self.document.num_selected()));
+        ui.horizontal_wrapped(|ui| {
+            if ui.button("Fix selection").on_hover_text("a handle holding the selected vertices").clicked() {
+                commands.push(Command::FixSelection);
+            }
+            if ui.button("Clear selection").clicked() {
+                commands.push(Command::ClearSelection);
+            }
+            if ui.button("Select boundary").clicked() {
+                commands.push(Command::SelectBoundary(SelectMode::Replace));
+            }
+            if ui.button("Add smoothing to selection").clicked() {
+                commands.push(Command::AddSmoothing);
+            }
+        });
+        // Pieces: every connected piece needs a handle, or the system is singular.
+        let pieces = self.document.pieces().count;
+        let free = self.document.num_free_pieces();
+        ui.horizontal_wrapped(|ui| {
+            if pieces > 1 || free > 0 {
+                let text = format!("{free} of {pieces} pieces have no handle");
+                if free > 0 && self.document.state().has_handles() {
+                    ui.colored_label(Color32::from_rgb(200, 90, 0), text)
+                        .on_hover_text("a piece without a handle has no defined position: the solve fails");
+                } else {
+                    ui.label(text);
+                }
+            }
+            if ui
+                .add_enabled(free > 0, egui::Button::new("Pin free pieces"))
+                .on_hover_text("one soft handle (weight 0.01) on every piece without one, at rest")
+                .clicked()
+            {
+                commands.push(Command::PinFreePieces);
+            }
+            ui.toggle_value(&mut self.view.pick_piece, "Select connected piece")
+                .on_hover_text("then click a vertex: its piece becomes the selection (shift: adds)");
+        });
+    }
+
+    fn groups_section(&mut self, ui: &mut egui::Ui, commands: &mut Vec<Command>) {
+        ui.label("Groups (hover to highlight, click a handle's name for the gizmo)");
+        let previously_hovered = self.view.hovered_group.take();
+        let groups: Vec<_> = self.document.groups().to_vec();
+        for group in &groups {
+            let row = ui.vertical(|ui| {
+                ui.horizontal(|ui| {
+                    let active = self.view.active_handle == Some(group.key);
+                    let name = format!("{} ({})", group.name, group.kind);
+                    if group.role == GroupRole::Handle {
+                        if ui.selectable_label(active, name).on_hover_text("put the gizmo on this handle").clicked() {
+                            self.view.active_handle = Some(group.key);
+                        }
+                        if ui.small_button("rename").clicked() {
+                            self.view.renaming = Some((group.key, group.name.clone()));
+                        }
+                    } else {
+                        ui.label(name);
                     }
                     if group.role != GroupRole::Shape && ui.small_button("remove").clicked() {
                         commands.push(Command::RemoveGroup(group.key));
                     }
                 });
-                if row.response.hovered() {
-                    self.view.hovered_group = Some(group.key);
-                }
-            }
-            if let Some((key, name)) = &mut self.view.renaming {
-                let key = *key;
-                let done = ui
-                    .horizontal(|ui| {
-                        let label = ui.label("new name");
-                        let edit = ui.text_edit_singleline(name).labelled_by(label.id);
-                        edit.lost_focus() || ui.button("OK").clicked()
-                    })
-                    .inner;
-                if done {
-                    commands.push(Command::RenameHandle { handle: key, name: name.clone() });
-                    self.view.renaming = None;
-                }
-            }
-            if self.view.hovered_group != previously_hovered {
-                self.geometry_dirty = true;
-            }
-            if ui.button("Clear handles").clicked() {
-                commands.push(Command::ClearHandles);
-            }
-            ui.separator();
-            let mut iterations = self.document.iterations();
-            if ui.add(egui::Slider::new(&mut iterations, 1..=100).text("iterations per update")).changed() {
-                commands.push(Command::SetIterations(iterations));
-            }
-            ui.horizontal_wrapped(|ui| {
-                if ui.button("Reset shape").clicked() {
-                    commands.push(Command::ResetShape);
-                }
-                if ui.button("Make rest shape").clicked() {
-                    commands.push(Command::MakeRest);
-                }
-                if ui.add_enabled(self.document.can_undo(), egui::Button::new("Undo")).clicked() {
-                    commands.push(Command::Undo);
-                }
-                if ui.add_enabled(self.document.can_redo(), egui::Button::new("Redo")).clicked() {
-                    commands.push(Command::Redo);
+                if let Some(weight) = self.weight_control(ui, group.weight) {
+                    commands.push(Command::SetWeight { group: group.key, weight });
                 }
             });
-            self.path_row(ui, DialogPurpose::ExportMesh);
-            self.path_row(ui, DialogPurpose::SaveScene);
-            ui.separator();
-            egui::CollapsingHeader::new("Dynamics").default_open(true).show(ui, |ui| self.dynamics_panel(ui));
-            ui.separator();
-            ui.checkbox(&mut self.view.wireframe, "Wireframe");
-            if ui.button("Reset view").clicked() {
-                frame_camera(&mut self.view.camera, &self.document);
+            // The whole row, children included (they cover the row's own response).
+            if ui.rect_contains_pointer(row.response.rect) {
+                self.view.hovered_group = Some(group.key);
             }
-            ui.separator();
-            self.stats(ui);
-            ui.separator();
-            ui.label(&self.view.status);
+        }
+        if let Some((key, name)) = &mut self.view.renaming {
+            let key = *key;
+            let done = ui
+                .horizontal(|ui| {
+                    let label = ui.label("new name");
+                    let edit = ui.text_edit_singleline(name).labelled_by(label.id);
+                    edit.lost_focus() || ui.button("OK").clicked()
+                })
+                .inner;
+            if done {
+                commands.push(Command::RenameHandle { handle: key, name: name.clone() });
+                self.view.renaming = None;
+            }
+        }
+        if self.view.hovered_group != previously_hovered {
+            self.geometry_dirty = true;
+        }
+        if ui.button("Clear handles").clicked() {
+            commands.push(Command::ClearHandles);
+        }
+    }
+
+    /// A weight slider over log10(w) from [`WEIGHT_RANGE`], with text entry (the number field:
+    /// type any weight) and fine steps while shift is held. Returns the new weight when it
+    /// changed. One undo step per slider drag.
+    fn weight_control(&mut self, ui: &mut egui::Ui, weight: f64) -> Option<f64> {
+        let (lo, hi) = (WEIGHT_RANGE.0.log10(), WEIGHT_RANGE.1.log10());
+        let before = weight.max(WEIGHT_RANGE.0).log10();
+        let mut exponent = before;
+        let slider = egui::Slider::new(&mut exponent, lo..=hi)
+            .text("weight")
+            .custom_formatter(|x, _| format_weight(10f64.powf(x)))
+            .custom_parser(|text| text.trim().parse::<f64>().ok().filter(|w| *w > 0.0).map(f64::log10));
+        let response = ui.add(slider);
+        self.track_drag(&response);
+        if response.dragged() && ui.input(|i| i.modifiers.shift) {
+            // Fine: a tenth of the pointer's motion.
+            let per_px = (hi - lo) / f64::from(ui.spacing().slider_width.max(1.0));
+            exponent = (before + 0.1 * per_px * f64::from(response.drag_delta().x)).clamp(lo, hi);
+        }
+        let weight = 10f64.powf(exponent);
+        (exponent != before && response.changed()).then_some(weight)
+    }
+
+    /// Slider drags form one undo step each.
+    fn track_drag(&mut self, response: &egui::Response) {
+        if response.drag_started() {
+            self.document.begin_drag();
+        }
+        if response.drag_stopped() {
+            self.end_drag = true;
+        }
+    }
+
+    fn solver_section(&mut self, ui: &mut egui::Ui, commands: &mut Vec<Command>) {
+        ui.label("Solver");
+        let converged = self.view.progress.converged;
+        let color = if converged { Color32::from_rgb(20, 140, 60) } else { ui.visuals().text_color() };
+        ui.colored_label(color, if self.view.progress.line.is_empty() { "—" } else { &self.view.progress.line });
+        let mut exponent = self.document.tolerance().log10();
+        let response = ui
+            .add(
+                egui::Slider::new(&mut exponent, TOLERANCE_EXPONENTS)
+                    .step_by(0.5)
+                    .custom_formatter(|x, _| format!("{:.0e}", 10f64.powf(x)))
+                    .custom_parser(|t| t.trim().parse::<f64>().ok().filter(|v| *v > 0.0).map(f64::log10))
+                    .text("tolerance"),
+            )
+            .on_hover_text("converged when an iteration changes the energy by at most this fraction");
+        self.track_drag(&response);
+        if response.changed() {
+            commands.push(Command::SetTolerance(10f64.powf(exponent)));
+        }
+        let mut cap = self.document.iterations();
+        let response = ui
+            .add(egui::DragValue::new(&mut cap).range(1..=10_000_000).prefix("at most ").suffix(" iterations"))
+            .on_hover_text("the most iterations one convergence runs");
+        self.track_drag(&response);
+        if response.changed() {
+            commands.push(Command::SetIterations(cap));
+        }
+        ui.horizontal_wrapped(|ui| {
+            if ui.button("Reset shape").on_hover_text("back to the rest shape (undoable)").clicked() {
+                commands.push(Command::ResetShape);
+            }
+            if ui.button("Make rest shape").on_hover_text("the current shape becomes the rest shape").clicked() {
+                commands.push(Command::MakeRest);
+            }
+            if ui.add_enabled(self.document.can_undo(), egui::Button::new("Undo")).clicked() {
+                commands.push(Command::Undo);
+            }
+            if ui.add_enabled(self.document.can_redo(), egui::Button::new("Redo")).clicked() {
+                commands.push(Command::Redo);
+            }
         });
-        commands
+    }
+
+    fn dynamics_section(&mut self, ui: &mut egui::Ui) {
+        let available = self.view.tetrahedralize.clone();
+        let action = dynamics_panel(ui, &mut self.dynamics, self.simulation.as_ref(), available);
+        match action {
+            Some(DynamicsAction::Run) => {
+                if self.simulation.is_none() {
+                    let ctx = ui.ctx().clone();
+                    match SimulationRunner::start(&self.document, self.dynamics, move || ctx.request_repaint()) {
+                        Ok(runner) => {
+                            // The run is undoable: undo brings back the shape it started from.
+                            self.document.checkpoint();
+                            self.simulation = Some(runner);
+                        }
+                        Err(e) => self.view.banner = Some(e.to_string()),
+                    }
+                }
+                if let Some(runner) = &self.simulation {
+                    runner.set_running(true);
+                }
+            }
+            Some(DynamicsAction::Pause) => {
+                if let Some(runner) = &self.simulation {
+                    runner.set_running(false);
+                }
+            }
+            Some(DynamicsAction::Restart) => {
+                if let Some(runner) = &self.simulation {
+                    runner.reset();
+                }
+            }
+            Some(DynamicsAction::Stop) => self.simulation = None,
+            Some(DynamicsAction::SettingsChanged) => {
+                if let Some(runner) = &self.simulation
+                    && !runner.update_settings(&self.dynamics)
+                {
+                    // A new model, floor or tetrahedralization: a new simulation on Run.
+                    self.simulation = None;
+                    self.view.status = "dynamics settings changed: Run starts a new simulation".into();
+                }
+            }
+            None => {}
+        }
+        if let Some(error) = self.simulation.as_ref().and_then(|r| r.stats().error) {
+            self.view.banner = Some(format!("simulation: {error}"));
+        }
     }
 
     fn stats(&mut self, ui: &mut egui::Ui) {
@@ -597,12 +853,15 @@ impl EditorApp {
                 q.pop_front();
             }
         }
+        let p = &self.view.progress;
         ui.label(format!(
-            "{} vertices, {} triangles\nlocal {:.1} ms, global {:.1} ms per solve\n{} solves/s, {} frames/s",
+            "{} vertices, {} triangles, {} pieces\n{:.1} ms per iteration (last update: local {:.1} ms, global {:.1} ms)\n{} updates/s, {} frames/s",
             self.document.num_vertices(),
             self.document.triangles().len(),
-            self.view.last_local_ms,
-            self.view.last_global_ms,
+            self.document.pieces().count,
+            p.ms_per_iteration,
+            p.local_ms,
+            p.global_ms,
             self.view.solves.len(),
             self.view.frames.len(),
         ));
@@ -628,6 +887,37 @@ impl EditorApp {
         ui.label("energy (log) over recent iterations");
     }
 
+    /// Asks before dropping unsaved changes.
+    fn confirm_open_modal(&mut self, ctx: &egui::Context) {
+        let Some(path) = self.view.confirm_open.clone() else { return };
+        let mut choice = None;
+        egui::Modal::new(egui::Id::unique("confirm-open")).show(ctx, |ui| {
+            ui.label(format!("Open {}?", path.display()));
+            ui.label("This session has unsaved changes (save the scene to keep them); its undo history goes.");
+            ui.horizontal(|ui| {
+                if ui.button("Discard changes and open").clicked() {
+                    choice = Some(true);
+                }
+                if ui.button("Cancel").clicked() {
+                    choice = Some(false);
+                }
+            });
+        });
+        match choice {
+            Some(true) => {
+                self.view.confirm_open = None;
+                self.open(path);
+            }
+            Some(false) => {
+                self.view.confirm_open = None;
+                self.view.path_input = self.mesh_path.display().to_string();
+            }
+            None => {}
+        }
+    }
+
+    // ---- Viewport ----
+
     fn viewport(&mut self, ui: &mut egui::Ui, frame: &eframe::Frame) -> Vec<Command> {
         let mut commands = Vec::new();
         let (rect, response) = ui.allocate_exact_size(ui.available_size(), Sense::click_and_drag());
@@ -636,12 +926,15 @@ impl EditorApp {
         let modifiers = ui.input(|i| i.modifiers);
         let positions: Vec<Vec3> = self.document.positions().iter().map(|p| p.as_vec3()).collect();
 
-        if response.drag_started() {
-            let start = response.interact_pointer_pos().unwrap_or(rect.center());
+        if response.drag_started() && !self.view.gizmo.claims_pointer() {
+            // Where the button went down: egui reports the drag a few pixels later.
+            let start = ui
+                .input(|i| i.pointer.press_origin())
+                .or_else(|| response.interact_pointer_pos())
+                .unwrap_or(rect.center());
             let primary = response.drag_started_by(egui::PointerButton::Primary);
             self.view.gesture = if primary && modifiers.command {
-                // Ctrl+Shift removes (as the editor issue asks); Shift+Left alone already pans,
-                // so adding to the selection is Ctrl+Alt.
+                // Ctrl+Shift removes; Shift+Left alone already pans, so adding is Ctrl+Alt.
                 let mode = if modifiers.shift {
                     SelectMode::Remove
                 } else if modifiers.alt {
@@ -655,11 +948,13 @@ impl EditorApp {
             } else if primary && modifiers.alt {
                 self.handle_under(to_local(start), viewport).map(|(handle, v)| {
                     self.document.begin_drag();
+                    self.view.active_handle = Some(handle);
                     Gesture::DragHandle { handle, anchor: positions[v as usize] }
                 })
             } else if response.drag_started_by(egui::PointerButton::Secondary) && modifiers.alt {
                 self.handle_under(to_local(start), viewport).map(|(handle, _)| {
                     self.document.begin_drag();
+                    self.view.active_handle = Some(handle);
                     Gesture::RotateHandle { handle }
                 })
             } else if response.drag_started_by(egui::PointerButton::Secondary) || (primary && modifiers.shift) {
@@ -669,6 +964,21 @@ impl EditorApp {
             } else {
                 None
             };
+        }
+        if response.clicked()
+            && self.view.pick_piece
+            && let Some(pos) = response.interact_pointer_pos()
+        {
+            let visible =
+                visible_vertices(self.document.positions(), self.document.triangles(), &self.view.camera, viewport);
+            match pick_vertex(self.document.positions(), &visible, &self.view.camera, viewport, to_local(pos), 12.0) {
+                Some(vertex) => {
+                    let mode = if modifiers.shift { SelectMode::Add } else { SelectMode::Replace };
+                    commands.push(Command::SelectPiece { vertex, mode });
+                    self.view.pick_piece = false;
+                }
+                None => self.view.status = "no vertex under the pointer: click on the mesh".into(),
+            }
         }
         let delta = response.drag_delta();
         let delta = Vec2::new(delta.x, delta.y);
@@ -724,13 +1034,10 @@ impl EditorApp {
                 runner.release();
                 self.grabbed.clear();
             }
-            let released = matches!(self.view.gesture, Some(Gesture::DragHandle { .. } | Gesture::RotateHandle { .. }));
-            self.view.gesture = None;
-            if released {
-                self.document.end_drag();
-                // One more round on the final targets.
-                self.request_solve();
+            if matches!(self.view.gesture, Some(Gesture::DragHandle { .. } | Gesture::RotateHandle { .. })) {
+                self.end_drag = true;
             }
+            self.view.gesture = None;
         }
         if response.hovered() {
             let scroll = ui.input(|i| i.smooth_scroll_delta.y);
@@ -750,7 +1057,50 @@ impl EditorApp {
                 egui::StrokeKind::Inside,
             );
         }
+        commands.extend(self.gizmo(ui, rect));
+        self.paint_banner(ui, rect);
         commands
+    }
+
+    /// The gizmo on the active handle (static mode only).
+    fn gizmo(&mut self, ui: &egui::Ui, rect: Rect) -> Vec<Command> {
+        let handle = if self.simulation.is_none() && !matches!(self.view.gesture, Some(Gesture::BoxSelect { .. })) {
+            let active = self.view.active_handle.and_then(|k| self.document.handles().find(|h| h.key == k));
+            active.or_else(|| self.document.handles().last()).and_then(|h| Some((h.key, h.target_centroid()?)))
+        } else {
+            None
+        };
+        let Some((handle, center)) = handle else {
+            if self.view.gizmo.cancel() {
+                self.end_drag = true;
+            }
+            return Vec::new();
+        };
+        let (lo, hi) = self.document.rest_mesh().bounding_box();
+        let output = self.view.gizmo.show(ui, rect, &self.view.camera, handle, center, (hi - lo).length());
+        if output.drag_started {
+            self.document.begin_drag();
+            self.view.gesture = None;
+        }
+        if output.drag_stopped {
+            self.end_drag = true;
+        }
+        output.commands
+    }
+
+    /// The solve or simulation error over the top of the 3D view.
+    fn paint_banner(&self, ui: &egui::Ui, rect: Rect) {
+        let Some(text) = &self.view.banner else { return };
+        let painter = ui.painter_at(rect);
+        let galley = painter.layout(
+            text.clone(),
+            egui::FontId::proportional(15.0),
+            Color32::WHITE,
+            (rect.width() - 24.0).max(50.0),
+        );
+        let banner = Rect::from_min_size(rect.min + egui::vec2(8.0, 8.0), galley.size() + egui::vec2(16.0, 12.0));
+        painter.rect_filled(banner, 4.0, Color32::from_rgb(180, 30, 30));
+        painter.galley(banner.min + egui::vec2(8.0, 6.0), galley, Color32::WHITE);
     }
 
     /// Dynamic mode: grabs the visible vertex nearest to `pixel` and those within 3 % of the
@@ -844,6 +1194,54 @@ impl EditorApp {
         drop(egui_renderer);
         ui.painter().image(id, rect, Rect::from_min_max(Pos2::ZERO, Pos2::new(1.0, 1.0)), Color32::WHITE);
     }
+
+    /// The bottom line: the convergence and the last message, always in view.
+    fn status_bar(&self, ui: &mut egui::Ui) {
+        ui.horizontal(|ui| {
+            let p = &self.view.progress;
+            if !p.line.is_empty() {
+                ui.label(&p.line);
+                ui.separator();
+            }
+            ui.label(&self.view.status);
+        });
+    }
+
+    /// One latency per change that has now been drawn (see [`EditorApp::latencies`]).
+    fn record_latency(&mut self, shown_before: u64) {
+        if self.view.solves_applied > shown_before
+            && let Some(since) = self.view.change_since.take()
+        {
+            self.view.latencies.push_back(since.elapsed().as_secs_f64() * 1e3);
+            if self.view.latencies.len() > 1000 {
+                self.view.latencies.pop_front();
+            }
+        }
+    }
+}
+
+/// Whether `path` names a scene file (.toml or .json).
+fn is_scene(path: &std::path::Path) -> bool {
+    path.extension().and_then(|e| e.to_str()).is_some_and(|e| matches!(e, "toml" | "json"))
+}
+
+/// The scene path proposed for saving: the opened scene itself, or `STEM.toml` for a mesh.
+fn scene_name_for(path: &std::path::Path) -> String {
+    if is_scene(path) {
+        path.display().to_string()
+    } else {
+        let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "session".into());
+        format!("{stem}-session.toml")
+    }
+}
+
+/// A weight as the slider shows it: 3 significant digits, scientific outside [0.01, 1000).
+fn format_weight(w: f64) -> String {
+    if (0.01..1000.0).contains(&w) {
+        format!("{:.3}", w).trim_end_matches('0').trim_end_matches('.').into()
+    } else {
+        format!("{w:.2e}")
+    }
 }
 
 /// The file name part of a typed path, proposed by save dialogs.
@@ -851,23 +1249,23 @@ fn file_name_of(typed: &str) -> String {
     std::path::Path::new(typed.trim()).file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default()
 }
 
-fn frame_camera(camera: &mut OrbitCamera, document: &Document) {
-    let (lo, hi) = document
-        .positions()
-        .iter()
-        .fold((DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
-    camera.frame(lo.as_vec3(), hi.as_vec3());
+/// A solver thread whose results wake the UI (so nothing redraws while waiting); `None` when the
+/// thread cannot start (the editor then converges synchronously).
+fn spawn_worker(ctx: &egui::Context) -> Option<SolverWorker> {
+    let ctx = ctx.clone();
+    SolverWorker::spawn_with_notify(move || ctx.request_repaint()).ok()
 }
 
 impl eframe::App for EditorApp {
     fn ui(&mut self, ui: &mut egui::Ui, frame: &mut eframe::Frame) {
         self.view.frames.push_back(Instant::now());
+        let shown_before = self.view.solves_applied;
         self.poll_worker();
         self.poll_simulation();
         self.poll_dialogs();
         let dropped: Vec<PathBuf> = ui.input(|i| i.raw.dropped_files.iter().map(|f| f.path().to_path_buf()).collect());
         if let Some(path) = dropped.into_iter().next() {
-            self.open(path);
+            self.request_open(path);
         }
         let (undo, redo) = ui.input_mut(|i| {
             let redo = i.consume_key(egui::Modifiers::COMMAND | egui::Modifiers::SHIFT, egui::Key::Z);
@@ -880,11 +1278,14 @@ impl eframe::App for EditorApp {
         } else if undo {
             commands.push(Command::Undo);
         }
-        let panel = egui::Panel::left("controls").default_size(300.0).show(ui, |ui| self.side_panel(ui));
+        egui::Panel::bottom("status").show(ui, |ui| self.status_bar(ui));
+        let panel = egui::Panel::left("controls").default_size(330.0).show(ui, |ui| self.side_panel(ui));
         commands.extend(panel.inner);
         let viewport = egui::CentralPanel::no_frame().show(ui, |ui| self.viewport(ui, frame));
         commands.extend(viewport.inner);
         self.apply(commands);
+        self.confirm_open_modal(ui.ctx());
+        self.record_latency(shown_before);
         if self.options.print_stats {
             self.print_stats(ui.ctx());
         }
@@ -892,7 +1293,7 @@ impl eframe::App for EditorApp {
 }
 
 impl EditorApp {
-    /// One line per second on stderr: frames/s, solves/s, last solve times.
+    /// One line per second on stderr: frames/s, updates/s, solve times, change-to-screen latency.
     fn print_stats(&mut self, ctx: &egui::Context) {
         use std::io::Write as _;
         let now = Instant::now();
@@ -900,26 +1301,32 @@ impl EditorApp {
             self.last_stats_print = now;
             let count =
                 |q: &VecDeque<Instant>| q.iter().filter(|t| now.duration_since(**t).as_secs_f64() <= 1.0).count();
+            let mut latencies: Vec<f64> = self.view.latencies.iter().copied().collect();
+            latencies.sort_by(f64::total_cmp);
+            let median = latencies.get(latencies.len() / 2).copied().unwrap_or(f64::NAN);
             // Best effort: a closed stderr must not stop the editor.
             let _ = writeln!(
                 std::io::stderr().lock(),
-                "stats: {} frames/s, {} solves/s, local {:.1} ms, global {:.1} ms",
+                "stats: {} frames/s, {} updates/s, {:.1} ms per iteration, change to screen median {:.0} ms ({} changes), {}",
                 count(&self.view.frames),
                 count(&self.view.solves),
-                self.view.last_local_ms,
-                self.view.last_global_ms,
+                self.view.progress.ms_per_iteration,
+                median,
+                latencies.len(),
+                self.view.progress.line,
             );
         }
-        // Keep printing when idle.
-        ctx.request_repaint_after(std::time::Duration::from_millis(250));
+        // Only while measuring: keep printing when idle (otherwise nothing redraws when idle).
+        ctx.request_repaint_after(Duration::from_millis(250));
     }
 }
 
-/// Opens the editor window on a document and runs until it is closed.
+/// Opens the editor window on a document and runs until it is closed; `path` is the mesh or
+/// scene it came from.
 ///
 /// # Errors
 /// The windowing or graphics error, as text (no display, no adapter…).
-pub fn run_window(document: Document, mesh_path: PathBuf, window: WindowOptions) -> Result<(), String> {
+pub fn run_window(document: Document, path: PathBuf, window: WindowOptions) -> Result<(), String> {
     let options = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default().with_title("shapeup").with_inner_size([1280.0, 800.0]),
         ..Default::default()
@@ -927,9 +1334,7 @@ pub fn run_window(document: Document, mesh_path: PathBuf, window: WindowOptions)
     eframe::run_native(
         "shapeup",
         options,
-        Box::new(move |cc| {
-            Ok(Box::new(EditorApp::with_options(cc, document, mesh_path, window)) as Box<dyn eframe::App>)
-        }),
+        Box::new(move |cc| Ok(Box::new(EditorApp::with_options(cc, document, path, window)) as Box<dyn eframe::App>)),
     )
     .map_err(|e| e.to_string())
 }

@@ -1,1 +1,139 @@
-//! The Dynamics panel (placeholder, being written).
+//! The Dynamics panel: run, pause, restart and stop the simulation, and its settings (gravity,
+//! floor, tetrahedra, model, stiffness, time step, damping, grab strength) and timings.
+//!
+//! The panel edits [`SimulationSettings`] in place and says what the user asked for; the editor
+//! acts on it (starting, pausing, dropping runners, [`SimulationRunner::update_settings`]).
+
+use crate::simulation::{DynamicsModel, SimulationRunner, SimulationSettings};
+use eframe::egui;
+use egui::Color32;
+
+/// What the user did in the panel this frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DynamicsAction {
+    /// Start stepping: start a runner from the current shape if there is none, then
+    /// `set_running(true)`.
+    Run,
+    /// Stop stepping, keeping the runner (`set_running(false)`).
+    Pause,
+    /// Back to the shape the runner started from (`reset`).
+    Restart,
+    /// Leave dynamic mode, keeping the current shape (drop the runner).
+    Stop,
+    /// The settings changed: apply them to the runner (`update_settings`), or drop it when
+    /// that returns `false` (a new model, floor or tetrahedralization).
+    SettingsChanged,
+}
+
+/// Stiffness slider range (log): from a jelly to nearly rigid at the default time step.
+const STIFFNESS_RANGE: std::ops::RangeInclusive<f64> = 1.0..=1e5;
+
+/// Time step slider range, in milliseconds.
+const TIME_STEP_MS_RANGE: std::ops::RangeInclusive<f64> = 1.0..=50.0;
+
+/// Draws the panel; `runner` is the current simulation, if any, and `tetrahedralize` whether
+/// Tetrahedralize can be ticked (the reason why not, from
+/// [`crate::simulation::tetrahedralize_available`]). Returns what the user did, if anything.
+///
+/// Buttons: "Run" / "Pause" (one toggle), "Restart", "Stop". Checkboxes: "Gravity", "Floor",
+/// "Tetrahedralize". Model radio buttons: "Document's shape model", "Tet strain". Sliders:
+/// "stiffness", "time step (ms)", "damping", "grab strength".
+pub fn dynamics_panel(
+    ui: &mut egui::Ui,
+    settings: &mut SimulationSettings,
+    runner: Option<&SimulationRunner>,
+    tetrahedralize: Result<(), String>,
+) -> Option<DynamicsAction> {
+    let before = *settings;
+    let mut action = None;
+    let running = runner.is_some_and(SimulationRunner::is_running);
+    ui.horizontal_wrapped(|ui| {
+        let (label, toggled, hint) = if running {
+            ("Pause", DynamicsAction::Pause, "stop stepping; the shape stays")
+        } else {
+            ("Run", DynamicsAction::Run, "simulate from the current shape (or go on)")
+        };
+        if ui.button(label).on_hover_text(hint).clicked() {
+            action = Some(toggled);
+        }
+        if ui
+            .add_enabled(runner.is_some(), egui::Button::new("Restart"))
+            .on_hover_text("back to the shape the simulation started from, at rest")
+            .clicked()
+        {
+            action = Some(DynamicsAction::Restart);
+        }
+        if ui
+            .add_enabled(runner.is_some(), egui::Button::new("Stop"))
+            .on_hover_text("leave dynamic mode, keeping the current shape")
+            .clicked()
+        {
+            action = Some(DynamicsAction::Stop);
+        }
+    });
+
+    ui.horizontal_wrapped(|ui| {
+        ui.checkbox(&mut settings.gravity, "Gravity");
+        ui.checkbox(&mut settings.floor, "Floor").on_hover_text("a floor just below the shape");
+        let available = tetrahedralize.is_ok();
+        // Never leave a tick that cannot be taken back.
+        let mut tick = settings.tetrahedralize && available;
+        let response = ui
+            .add_enabled(available, egui::Checkbox::new(&mut tick, "Tetrahedralize"))
+            .on_hover_text("fill the closed surface with tetrahedra (TetGen): a solid body");
+        if let Err(why) = &tetrahedralize {
+            response.on_disabled_hover_text(why.as_str());
+        }
+        if tick != settings.tetrahedralize {
+            settings.tetrahedralize = tick;
+            // A solid wants the solid's model; without tetrahedra there is none.
+            settings.model = if tick { DynamicsModel::TetStrain } else { DynamicsModel::Document };
+        }
+    });
+
+    let has_tetrahedra = settings.tetrahedralize || runner.is_some_and(|r| r.num_tetrahedra > 0);
+    ui.horizontal_wrapped(|ui| {
+        ui.label("Model:");
+        ui.radio_value(&mut settings.model, DynamicsModel::Document, DynamicsModel::Document.label())
+            .on_hover_text("the document's shape constraints (on the surface)");
+        ui.add_enabled_ui(has_tetrahedra, |ui| {
+            ui.radio_value(&mut settings.model, DynamicsModel::TetStrain, DynamicsModel::TetStrain.label())
+                .on_hover_text("every tetrahedron keeps its rest shape: the body keeps its volume")
+                .on_disabled_hover_text("needs tetrahedra: tick Tetrahedralize");
+        });
+    });
+
+    ui.add(egui::Slider::new(&mut settings.stiffness, STIFFNESS_RANGE).logarithmic(true).text("stiffness"))
+        .on_hover_text("k: how strongly the constraints act against inertia");
+    let mut ms = settings.time_step * 1e3;
+    if ui
+        .add(egui::Slider::new(&mut ms, TIME_STEP_MS_RANGE).text("time step (ms)"))
+        .on_hover_text("h: simulated time per step")
+        .changed()
+    {
+        settings.time_step = ms * 1e-3;
+    }
+    ui.add(egui::Slider::new(&mut settings.damping, 0.0..=0.5).text("damping"))
+        .on_hover_text("the fraction of the velocity lost per step");
+    ui.add(egui::Slider::new(&mut settings.grab_strength, 0.05..=1.0).text("grab strength"))
+        .on_hover_text("how closely grabbed vertices follow the cursor (1: exactly)");
+
+    if let Some(runner) = runner {
+        let s = runner.stats();
+        let tets =
+            if runner.num_tetrahedra > 0 { format!(", {} tetrahedra", runner.num_tetrahedra) } else { String::new() };
+        ui.label(format!(
+            "{} steps, {:.0} steps/s, {:.1} ms per step (local {:.1} ms, global {:.1} ms){tets}",
+            s.steps, s.steps_per_second, s.step_ms, s.local_ms, s.global_ms
+        ));
+        if let Some(e) = s.error {
+            ui.colored_label(Color32::RED, e);
+        }
+        ui.label("alt+left drag: grab and pull the mesh");
+    }
+
+    if action.is_none() && *settings != before {
+        action = Some(DynamicsAction::SettingsChanged);
+    }
+    action
+}

@@ -2,7 +2,6 @@
 //! `shapeup view MESH --screenshot out.png`).
 
 use super::renderer::{BASE_COLOR, FrameParams, MeshRenderer};
-use super::{INITIAL_PITCH, INITIAL_YAW};
 use crate::camera::OrbitCamera;
 use glam::{Vec2, Vec3};
 use shapeup_core::mesh::Mesh;
@@ -48,9 +47,8 @@ pub fn render_rgba(
     let colors: Vec<[f32; 3]> = if colors.len() == p.len() { colors.to_vec() } else { vec![BASE_COLOR; p.len()] };
     let mut renderer = MeshRenderer::new(&device);
     renderer.set_mesh(&device, &p, &mesh.triangles, &colors);
-    let (lo, hi) = mesh.bounding_box();
-    let mut camera = OrbitCamera::with_angles(INITIAL_YAW, INITIAL_PITCH);
-    camera.frame(lo.as_vec3(), hi.as_vec3());
+    let mut camera = OrbitCamera::default();
+    camera.frame_front(&mesh.positions, &mesh.triangles);
     let viewport = Vec2::new(size.0 as f32, size.1 as f32);
     let frame = FrameParams {
         view_proj: camera.view_projection(viewport),

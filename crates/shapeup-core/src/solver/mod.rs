@@ -502,7 +502,7 @@ impl System {
             }
             report.energies.push(energy);
             // Relative change |E_k − E_{k−1}| / E_{k−1}.
-            let converged = tolerance > 0.0 && (previous - energy).abs() < tolerance * previous.abs();
+            let converged = tolerance > 0.0 && (previous - energy).abs() <= tolerance * previous.abs();
             previous = energy;
             if converged {
                 break;
