@@ -111,9 +111,10 @@ struct View {
     solves: VecDeque<Instant>,
     solves_applied: u64,
     frames: VecDeque<Instant>,
-    /// When the oldest change not yet shown was made (for the drag latency), and the latencies
-    /// measured, milliseconds.
-    change_since: Option<Instant>,
+    /// The oldest change not shown yet (its request's sequence number and time), a change shown
+    /// in this frame, and the latencies measured (milliseconds), for [`EditorApp::latencies`].
+    change_since: Option<(u64, Instant)>,
+    shown_change: Option<Instant>,
     latencies: VecDeque<f64>,
 }
 
@@ -207,6 +208,7 @@ impl EditorApp {
                 solves_applied: 0,
                 frames: VecDeque::new(),
                 change_since: None,
+                shown_change: None,
                 latencies: VecDeque::new(),
             },
             document,
@@ -290,6 +292,12 @@ impl EditorApp {
 
     // ---- Commands and solving ----
 
+    /// Applies commands as if they came from the panels this frame (scripted sessions,
+    /// measurements): the shape then converges in the background like after any change.
+    pub fn apply_commands(&mut self, commands: Vec<Command>) {
+        self.apply(commands);
+    }
+
     fn apply(&mut self, commands: Vec<Command>) {
         let mut changed = false;
         for command in commands {
@@ -336,10 +344,10 @@ impl EditorApp {
             self.view.banner = None;
             return;
         }
-        self.view.change_since.get_or_insert_with(Instant::now);
         match &mut self.worker {
             Some(worker) => {
-                worker.request(SolveRequest::from_document(&self.document));
+                let seq = worker.request(SolveRequest::from_document(&self.document));
+                self.view.change_since.get_or_insert((seq, Instant::now()));
                 self.view.progress.converged = false;
             }
             None => match self.document.converge() {
@@ -390,6 +398,12 @@ impl EditorApp {
         self.view.energy_history.drain(..excess);
         self.view.solves.push_back(Instant::now());
         self.view.solves_applied += 1;
+        if let Some((seq, since)) = self.view.change_since
+            && result.seq >= seq
+        {
+            self.view.change_since = None;
+            self.view.shown_change = Some(since);
+        }
     }
 
     fn poll_simulation(&mut self) {
@@ -1180,13 +1194,13 @@ impl EditorApp {
                 egui_renderer.update_egui_texture_from_wgpu_texture(
                     &render_state.device,
                     view,
-                    wgpu::FilterMode::Linear,
+                    wgpu::FilterMode::Nearest,
                     id,
                 );
                 id
             }
             None => {
-                let id = egui_renderer.register_native_texture(&render_state.device, view, wgpu::FilterMode::Linear);
+                let id = egui_renderer.register_native_texture(&render_state.device, view, wgpu::FilterMode::Nearest);
                 self.texture = Some(id);
                 id
             }
@@ -1208,10 +1222,8 @@ impl EditorApp {
     }
 
     /// One latency per change that has now been drawn (see [`EditorApp::latencies`]).
-    fn record_latency(&mut self, shown_before: u64) {
-        if self.view.solves_applied > shown_before
-            && let Some(since) = self.view.change_since.take()
-        {
+    fn record_latency(&mut self) {
+        if let Some(since) = self.view.shown_change.take() {
             self.view.latencies.push_back(since.elapsed().as_secs_f64() * 1e3);
             if self.view.latencies.len() > 1000 {
                 self.view.latencies.pop_front();
@@ -1259,7 +1271,6 @@ fn spawn_worker(ctx: &egui::Context) -> Option<SolverWorker> {
 impl eframe::App for EditorApp {
     fn ui(&mut self, ui: &mut egui::Ui, frame: &mut eframe::Frame) {
         self.view.frames.push_back(Instant::now());
-        let shown_before = self.view.solves_applied;
         self.poll_worker();
         self.poll_simulation();
         self.poll_dialogs();
@@ -1285,7 +1296,7 @@ impl eframe::App for EditorApp {
         commands.extend(viewport.inner);
         self.apply(commands);
         self.confirm_open_modal(ui.ctx());
-        self.record_latency(shown_before);
+        self.record_latency();
         if self.options.print_stats {
             self.print_stats(ui.ctx());
         }
@@ -1329,6 +1340,9 @@ impl EditorApp {
 pub fn run_window(document: Document, path: PathBuf, window: WindowOptions) -> Result<(), String> {
     let options = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default().with_title("shapeup").with_inner_size([1280.0, 800.0]),
+        // Dithering costs every pixel of every frame on software renderers; flat panels and a
+        // shaded mesh show no banding without it.
+        dithering: false,
         ..Default::default()
     };
     eframe::run_native(
