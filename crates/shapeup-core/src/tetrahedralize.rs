@@ -60,7 +60,9 @@ pub fn tetrahedralize(mesh: &Mesh, max_volume: Option<f64>) -> Result<Mesh, Tetr
     let m = original.len();
     let out_points = tetgen.out_npoint();
     if out_points < m {
-        return Err(TetrahedralizeError::TetGen(format!("{out_points} points out for {m} in")));
+        return Err(TetrahedralizeError::TetGen(format!(
+            "it returned {out_points} points for the {m} of the surface, so no solid"
+        )));
     }
     // TetGen numbers the input points first; check it kept them in place.
     for (i, &v) in original.iter().enumerate() {
