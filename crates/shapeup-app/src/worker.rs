@@ -4,7 +4,8 @@
 //! weights, groups, the iteration cap and the tolerance) with [`SolverWorker::request`]. The
 //! worker keeps its own [`Solver`] and iterates from its current positions in chunks, posting a
 //! [`SolveResult`] after each, until
-//! - the relative energy change of an iteration is at most the request's tolerance (or E = 0),
+//! - an iteration meets the request's tolerance (`shapeup_core::solver::is_converged`: its
+//!   relative energy change is at most the tolerance, or E is numerically zero),
 //! - the request's iteration cap is reached,
 //! - a newer request arrives: it takes over at once, from the current positions (a request that
 //!   arrives while a chunk runs replaces any pending one, so stale targets are never solved),
@@ -20,7 +21,7 @@
 
 use crate::document::{Document, EditState, EditorError, Rest, Solver};
 use glam::DVec3;
-use shapeup_core::solver::{SolveError, SolveReport};
+use shapeup_core::solver::{ENERGY_FLOOR, SolveError, SolveReport};
 use std::fmt;
 use std::sync::{Arc, Condvar, Mutex, MutexGuard, PoisonError};
 use std::thread::JoinHandle;
@@ -453,7 +454,7 @@ impl Converger {
                     result.relative_change = job.last_energy.map(|p| relative_change(p, e));
                     job.last_energy = Some(e);
                 }
-                result.converged = job.last_energy == Some(0.0)
+                result.converged = job.last_energy.is_some_and(|e| e <= ENERGY_FLOOR)
                     || (tolerance > 0.0 && result.relative_change.is_some_and(|c| c <= tolerance));
                 result.finished = result.converged || job.done >= job.request.iterations;
                 result.iterations = job.done;
@@ -487,7 +488,9 @@ impl Converger {
             job.started = true;
         }
         let k = self.chunk_size(job);
-        let report = if k > 0 { self.solver.solve(k)? } else { SolveReport::default() };
+        // Stops at the first iteration that meets the tolerance, as `shapeup deform` does, so the
+        // converged shape is the one a saved scene replays.
+        let report = if k > 0 { self.solver.solve_to(k, job.request.tolerance)? } else { SolveReport::default() };
         if report.energies.iter().any(|e| !e.is_finite()) {
             return Err(SolveError::NonFiniteEnergy.into());
         }

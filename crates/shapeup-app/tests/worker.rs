@@ -230,8 +230,8 @@ fn nothing_arrives_after_the_finished_result() {
     assert!(!worker.is_busy());
 
     // A new request wakes it again.
+    // (It may already be done: from a converged shape the first iteration meets the tolerance.)
     let seq = worker.request(SolveRequest::from_document(&doc));
-    assert!(worker.is_busy());
     let again = until_finished(&mut worker, seq);
     assert!(again.last().unwrap().converged);
 }

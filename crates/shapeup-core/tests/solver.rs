@@ -302,3 +302,16 @@ fn energy_reports_each_group_and_tolerance_stops_early() {
     let report = s.solve(&mut q, 1000, 1e-3).unwrap();
     assert!(report.energies.len() < 1000, "stopped after {} iterations", report.energies.len());
 }
+
+/// The stopping test: a relative change at most the tolerance, or E numerically zero.
+#[test]
+fn tolerance_runs_stop_on_a_small_relative_change_or_a_round_off_energy() {
+    use shapeup_core::solver::{ENERGY_FLOOR, is_converged};
+    assert!(is_converged(1.0, 1.0 - 1e-7, 1e-6));
+    assert!(!is_converged(1.0, 1.0 - 1e-5, 1e-6));
+    assert!(!is_converged(1e-10, 0.5e-10, 1e-6), "a small E still has to settle");
+    // Round-off: E jumps by its own size every iteration, but it is zero for every purpose.
+    assert!(is_converged(1e-28, 3e-28, 1e-6));
+    assert!(is_converged(0.0, 0.0, 1e-6));
+    assert!(!is_converged(1.0, 10.0 * ENERGY_FLOOR, 1e-6));
+}

@@ -6,6 +6,7 @@ use shapeup_app::gui::app::{HANDLE_COLOR, WindowOptions, run_window, sample_path
 use shapeup_app::gui::headless::{render_rgba, write_png};
 use shapeup_app::gui::renderer::BASE_COLOR;
 use shapeup_core::scene::Scene;
+use std::io::Write as _;
 use std::path::PathBuf;
 
 fn is_scene(path: &std::path::Path) -> bool {
@@ -39,7 +40,21 @@ pub fn run(input: Option<PathBuf>, screenshot: Option<PathBuf>, size: (u32, u32)
     if let Some(out) = screenshot {
         // The converged shape, as the window shows it once the solver settles.
         if document.state().has_handles() {
-            document.converge().map_err(|e| anyhow!("{}: {e}", path.display()))?;
+            // As the window shows it once settled: to the tolerance, which can take many plain
+            // iterations on a large mesh, so say what runs.
+            let mut err = std::io::stderr().lock();
+            let _ = writeln!(
+                err,
+                "shapeup: converging {} to a relative energy change of {:e} (at most {} iterations)…",
+                path.display(),
+                document.tolerance(),
+                document.iterations()
+            );
+            let started = std::time::Instant::now();
+            let report = document.converge().map_err(|e| anyhow!("{}: {e}", path.display()))?;
+            let n = report.energies.len();
+            let how = if n < document.iterations() { "converged" } else { "stopped at the cap" };
+            let _ = writeln!(err, "shapeup: {how} after {n} iterations ({:.1} s)", started.elapsed().as_secs_f64());
         }
         let mesh = document.current_mesh();
         // Handles in green, as in the editor.

@@ -315,6 +315,10 @@ impl EditorApp {
             let fixes = matches!(command, Command::FixSelection | Command::PinFreePieces);
             match self.document.apply(command) {
                 Ok(()) => {
+                    if solve {
+                        // An earlier message (an error, "opened…") no longer describes the state.
+                        self.view.status.clear();
+                    }
                     changed |= solve;
                     if fixes {
                         // The new handle gets the gizmo.
@@ -419,7 +423,8 @@ impl EditorApp {
 
     /// Opens `path` now, or asks first when the session has unsaved changes.
     fn request_open(&mut self, path: PathBuf) {
-        if self.document.is_modified() {
+        // A path that cannot be opened fails at once, without asking first.
+        if self.document.is_modified() && path.is_file() {
             self.view.confirm_open = Some(path);
         } else {
             self.open(path);

@@ -525,7 +525,9 @@ fn parse_group(mut entry: Map<String, Value>) -> Result<GroupSpec, String> {
         None => ty.default_multiplier(),
         Some(v) => match v.as_f64() {
             Some(w) if w.is_finite() && w >= 0.0 => w,
-            _ => return Err(format!("\"weight\" must be a number ≥ 0, found {v}")),
+            // TOML's inf and nan arrive as null (the entry went through JSON values).
+            _ if v.is_null() => return Err("\"weight\" must be a finite number ≥ 0, found inf, nan or null".into()),
+            _ => return Err(format!("\"weight\" must be a finite number ≥ 0, found {v}")),
         },
     };
     let given: Vec<&str> = SELECTION_KEYS.iter().copied().filter(|k| entry.contains_key(*k)).collect();

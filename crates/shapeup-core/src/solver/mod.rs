@@ -157,6 +157,19 @@ pub struct Energy {
     pub per_group: Vec<(GroupId, f64)>,
 }
 
+/// E at or below this counts as converged whatever its relative change: round-off, e.g. a rest
+/// shape moved rigidly, whose E is about 1e-28 and changes by its own size every iteration.
+/// In the working frame (the mesh about one unit across when normalized), E ≤ 1e-20 means the
+/// constraints are met to about 1e-10 of the mesh's size.
+pub const ENERGY_FLOOR: f64 = 1e-20;
+
+/// The stopping test of a tolerance run: after an iteration that took E from `previous` to
+/// `energy`, the relative change |E_k − E_{k−1}| / E_{k−1} is at most `tolerance`, or E is at
+/// most [`ENERGY_FLOOR`] (E = 0 included).
+pub fn is_converged(previous: f64, energy: f64, tolerance: f64) -> bool {
+    energy <= ENERGY_FLOOR || (previous - energy).abs() <= tolerance * previous.abs()
+}
+
 /// What a [`System::solve`] did.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct SolveReport {
@@ -470,7 +483,8 @@ impl System {
     }
 
     /// Runs `iterations` local-global iterations from q, recording E after each; stops early
-    /// when `tolerance` > 0 and the relative energy change of an iteration is below it.
+    /// when `tolerance` > 0 and an iteration meets it ([`is_converged`]: the relative energy
+    /// change is at most `tolerance`, or E ≤ [`ENERGY_FLOOR`]).
     ///
     /// # Errors
     /// As [`System::step`].
@@ -501,8 +515,7 @@ impl System {
                 return Err(SolveError::NonFiniteEnergy);
             }
             report.energies.push(energy);
-            // Relative change |E_k − E_{k−1}| / E_{k−1}.
-            let converged = tolerance > 0.0 && (previous - energy).abs() <= tolerance * previous.abs();
+            let converged = tolerance > 0.0 && is_converged(previous, energy, tolerance);
             previous = energy;
             if converged {
                 break;
