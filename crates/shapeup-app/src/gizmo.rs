@@ -72,7 +72,7 @@ pub struct PointerState {
     pub pressed: bool,
     /// The primary button is down.
     pub down: bool,
-    /// A modifier (alt, ctrl/cmd, shift) is held: a press then belongs to the viewport's own
+    /// A modifier (alt, ctrl/cmd; not shift, which snaps) is held: a press then belongs to the viewport's own
     /// gestures (alt-drags, box selection, pan), not to the gizmo.
     pub modifiers: bool,
     /// Snap while dragging (translations to [`snap_step`] of the scale hint, rotations to

@@ -270,7 +270,8 @@ impl EditorApp {
     }
 
     /// Milliseconds from each change of the constraints (a drag event, a slider move) to the
-    /// end of the frame that first showed a solve of it, most recent last (at most 1000).
+    /// end of the UI pass of the first frame that shows a solve of it (its rendering and presentation
+    /// come after), most recent last (at most 1000).
     pub fn latencies(&self) -> impl Iterator<Item = f64> + '_ {
         self.view.latencies.iter().copied()
     }
@@ -685,7 +686,7 @@ impl EditorApp {
                 commands.push(Command::PinFreePieces);
             }
             ui.toggle_value(&mut self.view.pick_piece, "Select connected piece")
-                .on_hover_text("then click a vertex: its piece becomes the selection (shift: adds)");
+                .on_hover_text("while on, a click on a vertex selects its piece (shift adds); click again to stop");
         });
     }
 
@@ -796,7 +797,7 @@ impl EditorApp {
         }
         let mut cap = self.document.iterations();
         let response = ui
-            .add(egui::DragValue::new(&mut cap).range(1..=10_000_000).prefix("at most ").suffix(" iterations"))
+            .add(egui::DragValue::new(&mut cap).range(1..=10_000_000).prefix("iteration cap "))
             .on_hover_text("the most iterations one convergence runs");
         self.track_drag(&response);
         if response.changed() {
@@ -994,7 +995,6 @@ impl EditorApp {
                 Some(vertex) => {
                     let mode = if modifiers.shift { SelectMode::Add } else { SelectMode::Replace };
                     commands.push(Command::SelectPiece { vertex, mode });
-                    self.view.pick_piece = false;
                 }
                 None => self.view.status = "no vertex under the pointer: click on the mesh".into(),
             }
@@ -1242,14 +1242,11 @@ fn is_scene(path: &std::path::Path) -> bool {
     path.extension().and_then(|e| e.to_str()).is_some_and(|e| matches!(e, "toml" | "json"))
 }
 
-/// The scene path proposed for saving: the opened scene itself, or `STEM.toml` for a mesh.
+/// The scene path proposed for saving: `STEM-session.toml` in the working directory.
 fn scene_name_for(path: &std::path::Path) -> String {
-    if is_scene(path) {
-        path.display().to_string()
-    } else {
-        let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "session".into());
-        format!("{stem}-session.toml")
-    }
+    // Never the opened scene itself: one click must not overwrite it (a bundled example, say).
+    let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "session".into());
+    format!("{stem}-session.toml")
 }
 
 /// A weight as the slider shows it: 3 significant digits, scientific outside [0.01, 1000).
@@ -1319,11 +1316,11 @@ impl EditorApp {
                 |q: &VecDeque<Instant>| q.iter().filter(|t| now.duration_since(**t).as_secs_f64() <= 1.0).count();
             let mut latencies: Vec<f64> = self.view.latencies.iter().copied().collect();
             latencies.sort_by(f64::total_cmp);
-            let median = latencies.get(latencies.len() / 2).copied().unwrap_or(f64::NAN);
+            let median = latencies.get(latencies.len() / 2).map_or("—".into(), |m| format!("{m:.0} ms"));
             // Best effort: a closed stderr must not stop the editor.
             let _ = writeln!(
                 std::io::stderr().lock(),
-                "stats: {} frames/s, {} updates/s, {:.1} ms per iteration, change to screen median {:.0} ms ({} changes), {}",
+                "stats: {} frames/s, {} updates/s, {:.1} ms per iteration, change to the UI pass showing it: median {} ({} changes), {}",
                 count(&self.view.frames),
                 count(&self.view.solves),
                 self.view.progress.ms_per_iteration,

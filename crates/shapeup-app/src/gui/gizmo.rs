@@ -76,8 +76,8 @@ impl HandleGizmo {
     /// Draws the gizmo at `center` (the handle's target centroid, input frame) in the viewport
     /// `rect` seen by `camera`, and turns a drag on one of its parts into this frame's
     /// `MoveHandle`/`RotateHandle` commands for `handle`. A primary press without modifiers on a
-    /// part starts a drag (alt-drags, ctrl box selection and shift pan keep working on top of
-    /// the gizmo); holding shift during the drag snaps. `scale_hint` is a length typical of the
+    /// part starts a drag, also with shift held (alt-drags and ctrl box selection keep working on
+    /// top of the gizmo); holding shift during the drag snaps. `scale_hint` is a length typical of the
     /// scene (the mesh's bounding-box diagonal), for the snapping step.
     ///
     /// Call it every frame a handle is selected, after the mesh image is painted.
@@ -113,7 +113,8 @@ pub fn pointer_state(ui: &egui::Ui, rect: egui::Rect, dragging: bool) -> Pointer
         pos: pos.filter(|_| over).map(|p| Vec2::new(p.x - rect.left(), p.y - rect.top())),
         pressed,
         down,
-        modifiers: modifiers.alt || modifiers.shift || modifiers.command || modifiers.ctrl || modifiers.mac_cmd,
+        // Shift on a gizmo part is a snapped gizmo drag (elsewhere, shift+drag pans).
+        modifiers: modifiers.alt || modifiers.command || modifiers.ctrl || modifiers.mac_cmd,
         snap: modifiers.shift,
     }
 }
