@@ -21,7 +21,7 @@
 
 use crate::document::{Document, EditState, EditorError, Rest, Solver};
 use glam::DVec3;
-use shapeup_core::solver::{ENERGY_FLOOR, SolveError, SolveReport};
+use shapeup_core::solver::{ENERGY_FLOOR, SolveError, SolveReport, is_converged};
 use std::fmt;
 use std::sync::{Arc, Condvar, Mutex, MutexGuard, PoisonError};
 use std::thread::JoinHandle;
@@ -450,12 +450,19 @@ impl Converger {
                 job.done += k;
                 job.last_chunk = k;
                 let tolerance = job.request.tolerance;
+                let mut previous = None;
                 for &e in &report.energies {
                     result.relative_change = job.last_energy.map(|p| relative_change(p, e));
+                    previous = job.last_energy;
                     job.last_energy = Some(e);
                 }
-                result.converged = job.last_energy.is_some_and(|e| e <= ENERGY_FLOOR)
-                    || (tolerance > 0.0 && result.relative_change.is_some_and(|c| c <= tolerance));
+                // The solver's own stopping test (it stopped this chunk on it), or a round-off E
+                // when there is no previous energy to compare with.
+                result.converged = match (previous, job.last_energy) {
+                    (Some(p), Some(e)) if tolerance > 0.0 => is_converged(p, e, tolerance),
+                    (_, Some(e)) => e <= ENERGY_FLOOR,
+                    _ => false,
+                };
                 result.finished = result.converged || job.done >= job.request.iterations;
                 result.iterations = job.done;
                 result.local_ms = 1e3 * report.local_seconds;
