@@ -23,6 +23,7 @@ use shapeup_core::mesh::Mesh;
 use shapeup_core::scene::{GroupSpec, MeshSettings, Scene, SelectionSpec, SolverSettings, Targets};
 use shapeup_core::solver::{ConstraintGroup, GroupId, SolveError, SolveReport, SolverParams, System};
 use std::fmt;
+use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -413,8 +414,24 @@ impl Solver {
     /// # Errors
     /// As [`Solver::solve`].
     pub fn solve_to(&mut self, iterations: usize, tolerance: f64) -> Result<SolveReport, EditorError> {
+        self.solve_until(iterations, tolerance, || false)
+    }
+
+    /// [`Solver::solve_to`] that also stops after any iteration for which `interrupted()` is
+    /// true (a newer request in the background worker); at least one iteration runs.
+    ///
+    /// # Errors
+    /// As [`Solver::solve`].
+    pub fn solve_until(
+        &mut self,
+        iterations: usize,
+        tolerance: f64,
+        interrupted: impl Fn() -> bool,
+    ) -> Result<SolveReport, EditorError> {
         let system = self.system.as_mut().ok_or(EditorError::NoHandles)?;
-        Ok(system.solve(&mut self.q, iterations, tolerance)?)
+        Ok(system.solve_with(&mut self.q, iterations, tolerance, |_, _| {
+            if interrupted() { ControlFlow::Break(()) } else { ControlFlow::Continue(()) }
+        })?)
     }
 
     /// The current positions in the input frame; vertices no constraint touches keep their rest
@@ -1154,6 +1171,12 @@ impl Document {
     /// Ends a drag (see [`Document::begin_drag`]).
     pub fn end_drag(&mut self) {
         self.drag = None;
+    }
+
+    /// Whether a drag is under way (between [`Document::begin_drag`] and
+    /// [`Document::end_drag`]): more changes are expected within a frame.
+    pub fn is_dragging(&self) -> bool {
+        self.drag.is_some()
     }
 
     /// Whether there is a step to undo.

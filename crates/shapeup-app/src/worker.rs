@@ -8,7 +8,8 @@
 //!   relative energy change is at most the tolerance, or E is numerically zero),
 //! - the request's iteration cap is reached,
 //! - a newer request arrives: it takes over at once, from the current positions (a request that
-//!   arrives while a chunk runs replaces any pending one, so stale targets are never solved),
+//!   arrives while a chunk runs stops it after the current iteration and replaces any pending
+//!   one, so stale targets are never solved),
 //! - or the worker shuts down.
 //!
 //! Then it sleeps until the next request. A chunk lasts about [`WorkerParams::chunk_budget`]
@@ -17,7 +18,9 @@
 //! iteration), so the shape answers each drag event quickly. The system is rebuilt only when the groups or the
 //! rest shape changed. Results come back through [`SolverWorker::poll`], which never blocks; a
 //! result not taken yet absorbs the next chunk of the same request, so results never pile up
-//! (a hidden window that does not poll holds one shape, not one per chunk).
+//! (a hidden window that does not poll holds one shape, not one per chunk). A UI that would
+//! rather draw the answer to a drag than the shape before it can block briefly in
+//! [`SolverWorker::wait_for`].
 
 use crate::document::{Document, EditState, EditorError, Rest, Solver};
 use glam::DVec3;
@@ -42,6 +45,10 @@ pub struct SolveRequest {
     pub epoch: u64,
     /// Positions (input frame) the epoch starts from.
     pub start: Arc<Vec<DVec3>>,
+    /// Part of a drag: newer requests are expected within a frame. After such a request's first
+    /// chunk the worker waits up to [`WorkerParams::live_pause`] for the next one before
+    /// iterating on, leaving the CPU to the frame that draws its answer.
+    pub live: bool,
 }
 
 impl SolveRequest {
@@ -53,6 +60,7 @@ impl SolveRequest {
             tolerance: document.tolerance(),
             epoch: document.epoch(),
             start: Arc::clone(document.epoch_start()),
+            live: document.is_dragging(),
         }
     }
 }
@@ -158,6 +166,10 @@ pub struct WorkerParams {
     /// Wall time the first chunk after a request aims at (at least one iteration), so that the
     /// first update after a drag event comes fast.
     pub first_chunk_budget: Duration,
+    /// How long the worker waits for a newer request after the first chunk of a live one
+    /// ([`SolveRequest::live`]) before converging on: a user holding still mid-drag sees the
+    /// shape settle after this.
+    pub live_pause: Duration,
 }
 
 /// [`WorkerParams::chunk_budget`] by default: about two frames at 60 Hz.
@@ -166,9 +178,17 @@ pub const DEFAULT_CHUNK_BUDGET: Duration = Duration::from_millis(30);
 /// [`WorkerParams::first_chunk_budget`] by default.
 pub const DEFAULT_FIRST_CHUNK_BUDGET: Duration = Duration::from_millis(10);
 
+/// [`WorkerParams::live_pause`] by default: longer than a frame on a software renderer, short
+/// enough that holding still looks like letting go.
+pub const DEFAULT_LIVE_PAUSE: Duration = Duration::from_millis(100);
+
 impl Default for WorkerParams {
     fn default() -> Self {
-        WorkerParams { chunk_budget: DEFAULT_CHUNK_BUDGET, first_chunk_budget: DEFAULT_FIRST_CHUNK_BUDGET }
+        WorkerParams {
+            chunk_budget: DEFAULT_CHUNK_BUDGET,
+            first_chunk_budget: DEFAULT_FIRST_CHUNK_BUDGET,
+            live_pause: DEFAULT_LIVE_PAUSE,
+        }
     }
 }
 
@@ -187,6 +207,8 @@ struct Shared {
     wake: Condvar,
     /// Results not polled yet, oldest first, at most one per request.
     results: Mutex<Vec<SolveResult>>,
+    /// Signalled whenever a result is queued.
+    posted: Condvar,
 }
 
 impl Shared {
@@ -205,6 +227,22 @@ impl Shared {
             Some(last) if last.seq == result.seq => last.absorb(result),
             _ => results.push(result),
         }
+        self.posted.notify_all();
+    }
+
+    /// Waits up to `pause` for a newer request (or shutdown).
+    fn pause_for_next(&self, pause: Duration) {
+        let deadline = Instant::now() + pause;
+        let mut pending = self.lock();
+        while pending.request.is_none() && !pending.shutdown {
+            let Some(left) = deadline.checked_duration_since(Instant::now()) else { return };
+            pending = self.wake.wait_timeout(pending, left).unwrap_or_else(PoisonError::into_inner).0;
+        }
+    }
+
+    /// Whether a newer request waits: the chunk under way stops after its current iteration.
+    fn interrupted(&self) -> bool {
+        self.lock().request.is_some()
     }
 }
 
@@ -275,6 +313,30 @@ impl SolverWorker {
         std::mem::take(&mut *self.shared.results())
     }
 
+    /// Blocks until a result of request `seq` (or a newer one) is queued, the worker has nothing
+    /// left to do, or `timeout` passes; whether such a result is there to poll. An editor calls
+    /// it before drawing a frame right after a drag, so the frame shows the answer to the drag
+    /// instead of the shape before it.
+    pub fn wait_for(&self, seq: u64, timeout: Duration) -> bool {
+        let deadline = Instant::now() + timeout;
+        let arrived = || self.shared.results().iter().any(|r| r.seq >= seq);
+        loop {
+            // The results lock is never held while taking the request lock (the thread takes
+            // them in the other order).
+            let now = Instant::now();
+            if arrived() || now >= deadline || !self.is_busy() {
+                return arrived();
+            }
+            let results = self.shared.results();
+            if results.iter().any(|r| r.seq >= seq) {
+                return true;
+            }
+            // Short slices: a worker that goes idle without a result wakes nobody.
+            let slice = (deadline - now).min(Duration::from_millis(5));
+            drop(self.shared.posted.wait_timeout(results, slice).unwrap_or_else(PoisonError::into_inner));
+        }
+    }
+
     /// Whether a request is queued and not started yet.
     pub fn is_pending(&self) -> bool {
         self.shared.lock().request.is_some()
@@ -333,7 +395,8 @@ fn run(shared: &Shared, notify: &dyn Fn(), params: WorkerParams) {
             }
         }
         let Some(current) = job.as_mut() else { continue };
-        let result = worker.step(current);
+        let first = current.done == 0;
+        let result = worker.step(current, &|| shared.interrupted());
         if result.finished {
             job = None;
             // Under the request lock, so that whoever sees the worker idle finds the result.
@@ -341,7 +404,13 @@ fn run(shared: &Shared, notify: &dyn Fn(), params: WorkerParams) {
             pending.converging = false;
             shared.post(result);
         } else {
+            let pause = first && current.request.live;
             shared.post(result);
+            notify();
+            if pause {
+                shared.pause_for_next(params.live_pause);
+            }
+            continue;
         }
         notify();
     }
@@ -424,7 +493,7 @@ impl Converger {
     }
 
     /// Runs one chunk of `job` and says how far it got.
-    fn step(&mut self, job: &mut Job) -> SolveResult {
+    fn step(&mut self, job: &mut Job, interrupted: &dyn Fn() -> bool) -> SolveResult {
         let started = Instant::now();
         let mut result = SolveResult {
             seq: job.seq,
@@ -440,7 +509,7 @@ impl Converger {
             energy: Vec::new(),
             error: None,
         };
-        let outcome = self.chunk(job);
+        let outcome = self.chunk(job, interrupted);
         match outcome {
             Ok((report, positions)) => {
                 let k = report.energies.len();
@@ -489,7 +558,11 @@ impl Converger {
     }
 
     /// Syncs on the first chunk, then iterates; the report and the new positions.
-    fn chunk(&mut self, job: &mut Job) -> Result<(SolveReport, Vec<DVec3>), EditorError> {
+    fn chunk(
+        &mut self,
+        job: &mut Job,
+        interrupted: &dyn Fn() -> bool,
+    ) -> Result<(SolveReport, Vec<DVec3>), EditorError> {
         if !job.started {
             self.start(&job.request)?;
             job.started = true;
@@ -497,7 +570,11 @@ impl Converger {
         let k = self.chunk_size(job);
         // Stops at the first iteration that meets the tolerance, as `shapeup deform` does, so the
         // converged shape is the one a saved scene replays.
-        let report = if k > 0 { self.solver.solve_to(k, job.request.tolerance)? } else { SolveReport::default() };
+        let report = if k > 0 {
+            self.solver.solve_until(k, job.request.tolerance, interrupted)?
+        } else {
+            SolveReport::default()
+        };
         if report.energies.iter().any(|e| !e.is_finite()) {
             return Err(SolveError::NonFiniteEnergy.into());
         }

@@ -242,7 +242,11 @@ fn the_newest_target_wins() {
     let moves: Vec<DVec3> = (0..12).map(|i| DVec3::new(-0.02, 0.01 * (i % 3) as f64, 0.03)).collect();
     let (mut doc, right) = bent_grid(N);
     // Short chunks, so that requests also arrive between chunks of a convergence.
-    let params = WorkerParams { chunk_budget: Duration::from_millis(1), first_chunk_budget: Duration::ZERO };
+    let params = WorkerParams {
+        chunk_budget: Duration::from_millis(1),
+        first_chunk_budget: Duration::ZERO,
+        ..WorkerParams::default()
+    };
     let mut worker = SolverWorker::spawn_with(params, || {}).unwrap();
     let mut last = 0;
     doc.begin_drag();
@@ -287,7 +291,11 @@ fn stops_at_the_iteration_cap() {
     request.iterations = 5;
     request.tolerance = 0.0;
     // Zero budgets: one iteration per chunk, each seen.
-    let mut lockstep = Lockstep::new(WorkerParams { chunk_budget: Duration::ZERO, first_chunk_budget: Duration::ZERO });
+    let mut lockstep = Lockstep::new(WorkerParams {
+        chunk_budget: Duration::ZERO,
+        first_chunk_budget: Duration::ZERO,
+        ..WorkerParams::default()
+    });
     lockstep.worker.request(request.clone());
     let chunks = lockstep.chunks();
     assert_eq!(chunks.iter().map(|r| r.iterations).collect::<Vec<_>>(), [1, 2, 3, 4, 5]);
@@ -344,7 +352,8 @@ fn the_first_chunk_after_a_request_is_small_then_chunks_grow() {
 #[test]
 fn chunks_not_polled_yet_merge_into_one_result() {
     let (doc, _) = bent_grid(6);
-    let params = WorkerParams { chunk_budget: Duration::ZERO, first_chunk_budget: Duration::ZERO };
+    let params =
+        WorkerParams { chunk_budget: Duration::ZERO, first_chunk_budget: Duration::ZERO, ..WorkerParams::default() };
     let mut worker = SolverWorker::spawn_with(params, || {}).unwrap();
     let mut request = SolveRequest::from_document(&doc);
     request.iterations = 300;
@@ -524,4 +533,78 @@ fn notify_is_called_after_each_chunk_until_finished() {
     assert!(after >= results.len());
     std::thread::sleep(Duration::from_millis(100));
     assert_eq!(calls.load(Ordering::SeqCst), after);
+}
+
+/// A newer request stops the chunk under way after its current iteration, however long that
+/// chunk was meant to run; `wait_for` returns once the newer request's first result is there.
+#[test]
+fn a_newer_request_interrupts_a_long_chunk_and_wait_for_sees_its_first_result() {
+    let (mut doc, right) = bent_grid(8);
+    let minute = Duration::from_secs(60);
+    let worker = &mut SolverWorker::spawn_with(
+        WorkerParams { chunk_budget: minute, first_chunk_budget: minute, ..WorkerParams::default() },
+        || {},
+    )
+    .unwrap();
+    // A short request measures the time per iteration ...
+    let mut request = SolveRequest::from_document(&doc);
+    request.iterations = 3;
+    let seq = worker.request(request);
+    until_finished(worker, seq);
+    // ... so this one's first chunk aims at a minute of iterations.
+    doc.apply(Command::MoveHandle { handle: right, delta: DVec3::new(0.0, 0.05, 0.0) }).unwrap();
+    let mut long = SolveRequest::from_document(&doc);
+    long.iterations = usize::MAX;
+    long.tolerance = 0.0;
+    let long_seq = worker.request(long);
+    std::thread::sleep(Duration::from_millis(100));
+    assert!(worker.is_busy());
+    doc.apply(Command::MoveHandle { handle: right, delta: DVec3::new(0.0, -0.05, 0.0) }).unwrap();
+    let mut short = SolveRequest::from_document(&doc);
+    short.iterations = 1;
+    let started = Instant::now();
+    let short_seq = worker.request(short);
+    assert!(worker.wait_for(short_seq, Duration::from_secs(30)), "the newer request was not answered");
+    assert!(started.elapsed() < Duration::from_secs(30));
+    let results = worker.poll_all();
+    let interrupted = results.iter().find(|r| r.seq == long_seq).expect("the interrupted chunk is posted");
+    assert!(!interrupted.finished && interrupted.error.is_none(), "{interrupted:?}");
+    assert!(interrupted.iterations > 0);
+    let answer = results.iter().find(|r| r.seq == short_seq).unwrap();
+    assert_eq!(answer.iterations, 1);
+    // Nothing more to come: waiting for a request never sent returns at once, empty-handed.
+    let idle = Instant::now();
+    assert!(!worker.wait_for(short_seq + 1, minute));
+    assert!(idle.elapsed() < Duration::from_secs(30));
+}
+
+/// During a drag (live requests) the worker answers each request with one chunk and then
+/// leaves the CPU to the UI until the next request or the pause ends; then it converges on.
+#[test]
+fn live_requests_pause_after_their_first_chunk() {
+    let (mut doc, right) = bent_grid(6);
+    let pause = Duration::from_secs(2);
+    let params = WorkerParams { chunk_budget: Duration::ZERO, first_chunk_budget: Duration::ZERO, live_pause: pause };
+    let worker = &mut SolverWorker::spawn_with(params, || {}).unwrap();
+    doc.begin_drag();
+    doc.apply(Command::MoveHandle { handle: right, delta: DVec3::new(0.0, 0.05, 0.0) }).unwrap();
+    let live = SolveRequest::from_document(&doc);
+    assert!(live.live);
+    let seq = worker.request(live);
+    assert!(worker.wait_for(seq, Duration::from_secs(30)));
+    let sent = Instant::now();
+    std::thread::sleep(pause / 4);
+    let during: usize = worker.poll_all().iter().map(|r| r.energy.len()).sum();
+    assert!(sent.elapsed() < pause, "the check ran late");
+    assert_eq!(during, 1, "one iteration, then the pause");
+    assert!(worker.is_busy(), "paused, not finished");
+    // A newer request ends the pause at once; after the drag the worker converges.
+    doc.end_drag();
+    let mut last = SolveRequest::from_document(&doc);
+    assert!(!last.live);
+    last.tolerance = 1e-10;
+    let seq = worker.request(last);
+    let results = until_finished(worker, seq);
+    assert!(results.last().unwrap().converged);
+    assert!(results.iter().map(|r| r.energy.len()).sum::<usize>() > 1);
 }

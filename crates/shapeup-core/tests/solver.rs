@@ -315,3 +315,35 @@ fn tolerance_runs_stop_on_a_small_relative_change_or_a_round_off_energy() {
     assert!(is_converged(0.0, 0.0, 1e-6));
     assert!(!is_converged(1.0, 10.0 * ENERGY_FLOOR, 1e-6));
 }
+
+/// `solve_with` sees every iteration's energy, and a break stops the solve at that iteration's
+/// result: the same q as a solve of that many iterations.
+#[test]
+fn solve_with_reports_each_iteration_and_stops_on_break() {
+    use std::ops::ControlFlow;
+    let mesh = spot();
+    let (low, high) = ends(&mesh, 1);
+    let mut s = system(&mesh, &[("edge_spring", 10.0)], &low, &high, |p| p + DVec3::X * 0.2);
+    let mut seen = Vec::new();
+    let mut q = mesh.positions.clone();
+    let report = s
+        .solve_with(&mut q, 50, 0.0, |k, e| {
+            seen.push((k, e));
+            if k == 7 { ControlFlow::Break(()) } else { ControlFlow::Continue(()) }
+        })
+        .unwrap();
+    assert_eq!(report.energies.len(), 7);
+    assert_eq!(seen.iter().map(|(k, _)| *k).collect::<Vec<_>>(), (1..=7).collect::<Vec<_>>());
+    assert_eq!(seen.iter().map(|(_, e)| *e).collect::<Vec<_>>(), report.energies);
+    let mut plain = mesh.positions.clone();
+    s.solve(&mut plain, 7, 0.0).unwrap();
+    assert!(q.iter().zip(&plain).all(|(a, b)| (*a - *b).length() < 1e-12));
+    // The callback also runs on the iteration that meets the tolerance.
+    let mut calls = 0;
+    let mut q = mesh.positions.clone();
+    let report = s.solve_with(&mut q, 1000, 1e-3, |_, _| {
+        calls += 1;
+        ControlFlow::Continue(())
+    });
+    assert_eq!(calls, report.unwrap().energies.len());
+}

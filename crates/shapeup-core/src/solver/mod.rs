@@ -24,6 +24,7 @@ use crate::constraints::{Constraint, Position};
 use assemble::Assembly;
 use cholesky::SparseCholesky;
 use glam::DVec3;
+use std::ops::ControlFlow;
 use std::time::Instant;
 
 /// Solver settings. Each default is written once, here and in the scene contract.
@@ -489,6 +490,23 @@ impl System {
     /// # Errors
     /// As [`System::step`].
     pub fn solve(&mut self, q: &mut [DVec3], iterations: usize, tolerance: f64) -> Result<SolveReport, SolveError> {
+        self.solve_with(q, iterations, tolerance, |_, _| ControlFlow::Continue(()))
+    }
+
+    /// [`System::solve`], calling `after_iteration(k, E_k)` after iteration k (from 1): it can
+    /// report progress, or stop the solve with [`ControlFlow::Break`] (a newer target in an
+    /// editor, an interrupt), leaving q at that iteration's result. The report then holds the
+    /// iterations that ran.
+    ///
+    /// # Errors
+    /// As [`System::step`].
+    pub fn solve_with(
+        &mut self,
+        q: &mut [DVec3],
+        iterations: usize,
+        tolerance: f64,
+        mut after_iteration: impl FnMut(usize, f64) -> ControlFlow<()>,
+    ) -> Result<SolveReport, SolveError> {
         self.check_length(q)?;
         let mut report = SolveReport::default();
         let t = Instant::now();
@@ -517,7 +535,8 @@ impl System {
             report.energies.push(energy);
             let converged = tolerance > 0.0 && is_converged(previous, energy, tolerance);
             previous = energy;
-            if converged {
+            let stop = after_iteration(report.energies.len(), energy).is_break();
+            if converged || stop {
                 break;
             }
         }
