@@ -201,6 +201,12 @@ pub struct System {
     ct_weighted: Vec<f64>,
     /// Projections P, one row per constraint row.
     projections: Vec<DVec3>,
+    /// The q the projections were computed at (empty when they are stale): a solve that starts
+    /// from that q again (the next chunk of an interactive convergence) reuses them instead of
+    /// running a whole local step, re-projecting only the groups in `retargeted`.
+    projected_at: Vec<DVec3>,
+    /// Slots whose targets moved since the projections were computed.
+    retargeted: Vec<usize>,
     /// C q, for energies.
     cq: Vec<DVec3>,
     /// Right-hand side / solution, column-major (x, y, z) over solved vertices.
@@ -227,6 +233,8 @@ impl System {
             factor: None,
             ct_weighted: Vec::new(),
             projections: Vec::new(),
+            projected_at: Vec::new(),
+            retargeted: Vec::new(),
             cq: Vec::new(),
             rhs: Vec::new(),
             assembled: false,
@@ -378,6 +386,7 @@ impl System {
         if !position.set_targets(targets) {
             return Err(bad(format!("has {expected} vertices but {} targets were given", targets.len())));
         }
+        self.retargeted.push(id.0 as usize);
         Ok(())
     }
 
@@ -409,6 +418,7 @@ impl System {
         self.assembly = Assembly::new(self.num_vertices, &lists, self.inertia.as_deref());
         let rows = self.assembly.num_rows();
         self.projections = vec![DVec3::ZERO; rows];
+        self.projected_at.clear();
         self.cq = vec![DVec3::ZERO; rows];
         self.rhs = vec![0.0; 3 * self.assembly.num_solved()];
         self.factor = None;
@@ -513,7 +523,7 @@ impl System {
         self.prepare()?;
         report.setup_seconds = t.elapsed().as_secs_f64();
         let mut t = Instant::now();
-        self.project(q);
+        self.project_unless_current(q);
         report.local_seconds += t.elapsed().as_secs_f64();
         let mut previous = self.energy_of_projections(q);
         if !previous.is_finite() {
@@ -583,6 +593,25 @@ impl System {
                 local::project_all(&group.constraints, &rows.offsets, q, &mut self.projections[rows.range()]);
             }
         }
+        self.projected_at.clear();
+        self.projected_at.extend_from_slice(q);
+        self.retargeted.clear();
+    }
+
+    /// [`System::project`], except that when the projections were computed at this very q only
+    /// the groups whose targets moved since are projected again (the same numbers as a full
+    /// local step: a projection depends on q and its own constraint only).
+    fn project_unless_current(&mut self, q: &[DVec3]) {
+        if self.projected_at.as_slice() != q {
+            self.project(q);
+            return;
+        }
+        for (&slot, rows) in self.order.iter().zip(&self.assembly.groups) {
+            if let (true, Some(group)) = (self.retargeted.contains(&slot), &self.slots[slot]) {
+                local::project_all(&group.constraints, &rows.offsets, q, &mut self.projections[rows.range()]);
+            }
+        }
+        self.retargeted.clear();
     }
 
     /// Global step alone: q = (Σ w CᵀC)⁻¹ Σ w Cᵀ P over the solved vertices, from the last
