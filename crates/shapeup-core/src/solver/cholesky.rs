@@ -3,6 +3,12 @@
 //! The symbolic analysis (fill-reducing AMD ordering, elimination tree, supernodes) runs once
 //! per sparsity pattern; the numeric factorization reuses it and writes into the same L buffer
 //! when only the values change (weights, time step); solves are in place on an n×3 right side.
+//!
+//! A supernodal factor is also copied, after each numeric factorization, into plain compressed
+//! columns for the solves: the per-iteration solve with three right-hand sides is faster
+//! column by column than through dense supernodal blocks (on the bunny with strain + bending,
+//! 13.5 against 18.6 ms per global step), while the supernodal factorization stays 0.35 s
+//! faster than a simplicial one. The copy costs one pass over L per factorization.
 
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::{LltError, LltRegularization};
@@ -10,6 +16,9 @@ use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::linalg::cholesky::{
     CholeskySymbolicParams, LltRef, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
     factorize_symbolic_cholesky,
+};
+use faer::sparse::linalg::triangular_solve::{
+    solve_lower_triangular_in_place, solve_lower_triangular_transpose_in_place,
 };
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Side};
@@ -48,6 +57,53 @@ pub(crate) struct SparseCholesky {
     l_values: Vec<f64>,
     mem: MemBuffer,
     factored: bool,
+    /// A supernodal L in compressed columns, for the solves (see the module doc).
+    columns: Option<SolveColumns>,
+}
+
+/// L (lower triangle, diagonal first in each column) in compressed sparse columns, in the
+/// factor's permuted order, with the permutation and a work buffer for the right side.
+struct SolveColumns {
+    col_ptr: Vec<u32>,
+    row_idx: Vec<u32>,
+    values: Vec<f64>,
+    /// Where each value sits in the supernodal storage.
+    source: Vec<u32>,
+    /// Row i of P b is b[forward[i]].
+    forward: Vec<u32>,
+    work: Vec<f64>,
+}
+
+impl SolveColumns {
+    /// The compressed-column pattern of a supernodal factor: column j of supernode s holds the
+    /// diagonal block's rows j.. and then the rows below the block.
+    fn new(s: &faer::sparse::linalg::cholesky::supernodal::SymbolicSupernodalCholesky<u32>, forward: Vec<u32>) -> Self {
+        let n = s.nrows();
+        let capacity = s.len_val();
+        let (mut col_ptr, mut row_idx, mut source) =
+            (Vec::with_capacity(n + 1), Vec::with_capacity(capacity), Vec::with_capacity(capacity));
+        col_ptr.push(0);
+        for k in 0..s.n_supernodes() {
+            let (first, end) = (s.supernode_begin()[k] as usize, s.supernode_end()[k] as usize);
+            let width = end - first;
+            let below = &s.row_idx()[s.col_ptr_for_row_idx()[k] as usize..s.col_ptr_for_row_idx()[k + 1] as usize];
+            let ld = width + below.len();
+            let base = s.col_ptr_for_val()[k] as usize;
+            for j in 0..width {
+                let column = base + j * ld;
+                for i in j..width {
+                    row_idx.push((first + i) as u32);
+                    source.push((column + i) as u32);
+                }
+                for (k, &r) in below.iter().enumerate() {
+                    row_idx.push(r);
+                    source.push((column + width + k) as u32);
+                }
+                col_ptr.push(row_idx.len() as u32);
+            }
+        }
+        SolveColumns { values: vec![0.0; row_idx.len()], col_ptr, row_idx, source, forward, work: vec![0.0; 3 * n] }
+    }
 }
 
 impl std::fmt::Debug for SparseCholesky {
@@ -105,7 +161,19 @@ impl SparseCholesky {
             .factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default())
             .or(symbolic.solve_in_place_scratch::<f64>(3, SOLVE_PAR));
         let mem = MemBuffer::try_new(scratch).map_err(|e| FactorError::Other(format!("{e:?}")))?;
+        let columns = match symbolic.raw() {
+            SymbolicCholeskyRaw::Supernodal(s) => {
+                let forward = match symbolic.perm() {
+                    Some(p) => p.arrays().0.to_vec(),
+                    None => (0..n as u32).collect(),
+                };
+                // u32 positions: a factor beyond 4 G entries (32 GB) is out of reach anyway.
+                (symbolic.len_val() <= u32::MAX as usize).then(|| SolveColumns::new(s, forward))
+            }
+            SymbolicCholeskyRaw::Simplicial(_) => None,
+        };
         Ok(SparseCholesky {
+            columns,
             n,
             l_values: vec![0.0; symbolic.len_val()],
             col_ptr,
@@ -150,13 +218,44 @@ impl SparseCholesky {
             .map_err(|e| match e {
                 LltError::NonPositivePivot { index } => FactorError::NotPositiveDefinite(index),
             })?;
+        if let Some(columns) = &mut self.columns {
+            columns.values.iter_mut().zip(&columns.source).for_each(|(v, &k)| *v = self.l_values[k as usize]);
+        }
         self.factored = true;
         Ok(())
     }
 
-    /// Solves A X = B in place for B given column-major as `rhs` (n×k, k = rhs.len() / n).
+    /// Solves A X = B in place for B given column-major as `rhs` (n×k, k = rhs.len() / n,
+    /// k ≤ 3): X = Pᵀ L⁻ᵀ L⁻¹ P B.
     pub fn solve_in_place(&mut self, rhs: &mut [f64]) {
         debug_assert!(self.factored);
+        let n = self.n;
+        if n == 0 {
+            return;
+        }
+        let Some(c) = self.columns.as_mut().filter(|_| rhs.len() <= 3 * n) else { return self.solve_with_faer(rhs) };
+        let k = rhs.len() / n.max(1);
+        let work = &mut c.work[..rhs.len()];
+        for (w, b) in work.chunks_exact_mut(n).zip(rhs.chunks_exact(n)) {
+            w.iter_mut().zip(&c.forward).for_each(|(w, &i)| *w = b[i as usize]);
+        }
+        let pattern = SymbolicSparseColMatRef::new_checked(n, n, &c.col_ptr, None, &c.row_idx);
+        let l = SparseColMatRef::<u32, f64>::new(pattern, &c.values);
+        solve_lower_triangular_in_place(l, Conj::No, MatMut::from_column_major_slice_mut(work, n, k), SOLVE_PAR);
+        let work = &mut c.work[..rhs.len()];
+        solve_lower_triangular_transpose_in_place(
+            l,
+            Conj::No,
+            MatMut::from_column_major_slice_mut(work, n, k),
+            SOLVE_PAR,
+        );
+        for (w, b) in c.work.chunks_exact(n).zip(rhs.chunks_exact_mut(n)) {
+            w.iter().zip(&c.forward).for_each(|(w, &i)| b[i as usize] = *w);
+        }
+    }
+
+    /// [`SparseCholesky::solve_in_place`] with faer's solve on its own storage.
+    fn solve_with_faer(&mut self, rhs: &mut [f64]) {
         let k = rhs.len() / self.n.max(1);
         let b = MatMut::from_column_major_slice_mut(rhs, self.n, k);
         LltRef::<u32, f64>::new(&self.symbolic, &self.l_values).solve_in_place_with_conj(
@@ -208,6 +307,64 @@ mod tests {
             let mut b: Vec<f64> = (0..3 * n).map(|i| if i % n == 0 || i % n == n - 1 { 2.0 } else { 1.0 }).collect();
             chol.solve_in_place(&mut b);
             assert!(b.iter().all(|x| (x - 1.0).abs() < 1e-10), "{layout:?} refactor");
+        }
+    }
+
+    /// A random sparse SPD matrix coupling each node of a √n × √n grid to a two-ring-like
+    /// neighbourhood (multi-column supernodes in both layouts); lower triangle in CSC.
+    fn mesh_like(n: usize, seed: u64) -> (Vec<u32>, Vec<u32>, Vec<f64>) {
+        let mut state = seed;
+        let mut random = move || {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let side = (n as f64).sqrt().ceil() as usize;
+        let (mut cp, mut ri, mut v) = (vec![0u32], vec![], vec![]);
+        for j in 0..n {
+            let (x, y) = (j % side, j / side);
+            let mut rows = vec![j];
+            for (dx, dy) in [(1, 0), (2, 0), (0, 1), (1, 1), (0, 2), (2, 1), (1, 2)] {
+                let i = (y + dy) * side + x + dx;
+                if x + dx < side && i < n {
+                    rows.push(i);
+                }
+            }
+            rows.sort_unstable();
+            for i in rows {
+                ri.push(i as u32);
+                v.push(if i == j { 20.0 + random() } else { -random() });
+            }
+            cp.push(ri.len() as u32);
+        }
+        (cp, ri, v)
+    }
+
+    #[test]
+    fn the_column_copy_of_a_supernodal_factor_solves_as_faer_does() {
+        for layout in [Factorization::Supernodal, Factorization::Auto, Factorization::Simplicial] {
+            for n in [1, 2, 7, 300, 3000] {
+                let (cp, ri, v) = mesh_like(n, n as u64);
+                let mut chol = SparseCholesky::analyze(n, cp, ri, layout).unwrap();
+                assert_eq!(chol.columns.is_some(), chol.is_supernodal(), "{layout:?}");
+                for round in 0..2 {
+                    // The second round refactors with other values into the same buffers.
+                    let values: Vec<f64> = v.iter().map(|x| x * (1.0 + round as f64)).collect();
+                    chol.factorize(&values).unwrap();
+                    for k in 1..=3 {
+                        let b: Vec<f64> = (0..k * n).map(|i| (i as f64 * 0.37).sin() + (i % 5) as f64).collect();
+                        let mut reference = b.clone();
+                        chol.solve_with_faer(&mut reference);
+                        let mut x = b.clone();
+                        chol.solve_in_place(&mut x);
+                        for (i, (a, r)) in x.iter().zip(&reference).enumerate() {
+                            assert!(
+                                (a - r).abs() <= 1e-12 * (1.0 + r.abs()),
+                                "{layout:?} n={n} k={k} entry {i}: {a} vs {r}"
+                            );
+                        }
+                    }
+                }
+            }
         }
     }
 
