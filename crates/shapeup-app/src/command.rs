@@ -99,6 +99,8 @@ pub enum Command {
     SetIterations(usize),
     /// The convergence tolerance on the relative energy change (> 0).
     SetTolerance(f64),
+    /// How the solver combines iterates (Anderson acceleration or plain).
+    SetAcceleration(shapeup_core::solver::Acceleration),
     /// Undoes the last undoable command (or drag).
     Undo,
     /// Redoes the last undone step.

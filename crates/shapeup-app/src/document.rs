@@ -21,7 +21,7 @@ use shapeup_core::geometry::{RestGeometry, WorkingFrame};
 use shapeup_core::io::read_mesh;
 use shapeup_core::mesh::Mesh;
 use shapeup_core::scene::{GroupSpec, MeshSettings, Scene, SelectionSpec, SolverSettings, Targets};
-use shapeup_core::solver::{ConstraintGroup, GroupId, SolveError, SolveReport, SolverParams, System};
+use shapeup_core::solver::{Acceleration, ConstraintGroup, GroupId, SolveError, SolveReport, SolverParams, System};
 use std::fmt;
 use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
@@ -198,6 +198,10 @@ pub struct EditState {
     /// Convergence stops when the relative energy change of an iteration is at most this
     /// (the scene's `[solver] tolerance`).
     pub tolerance: f64,
+    /// How iterates are combined (the scene's `[solver] acceleration`).
+    pub acceleration: Acceleration,
+    /// Iterations Anderson acceleration mixes (the scene's `[solver] anderson_window`).
+    pub anderson_window: usize,
 }
 
 impl PartialEq for EditState {
@@ -207,6 +211,8 @@ impl PartialEq for EditState {
             && self.groups == other.groups
             && self.iterations == other.iterations
             && self.tolerance.to_bits() == other.tolerance.to_bits()
+            && self.acceleration == other.acceleration
+            && self.anderson_window == other.anderson_window
     }
 }
 
@@ -352,8 +358,17 @@ impl Solver {
                 .iter()
                 .zip(&state.groups)
                 .all(|((k, kind, v), g)| (*k, kind.as_str(), v.as_deref()) == g.structure());
+        let params = SolverParams {
+            iterations: state.iterations,
+            acceleration: state.acceleration,
+            anderson_window: state.anderson_window,
+            ..SolverParams::default()
+        };
         match self.system.as_mut() {
             Some(system) if same_rest && same_groups => {
+                if *system.params() != params {
+                    system.set_params(params);
+                }
                 for (group, &id) in state.groups.iter().zip(&self.ids) {
                     if group.role == GroupRole::Handle {
                         let working: Vec<DVec3> =
@@ -365,7 +380,6 @@ impl Solver {
             }
             _ => {
                 let rest = &state.rest;
-                let params = SolverParams { iterations: state.iterations, ..SolverParams::default() };
                 let mut system = System::new(rest.mesh.num_vertices(), params);
                 let mut ids = Vec::with_capacity(state.groups.len());
                 for group in &state.groups {
@@ -612,6 +626,8 @@ impl Document {
                     DEFAULT_MAX_ITERATIONS
                 },
                 tolerance: if solver_settings.tolerance > 0.0 { solver_settings.tolerance } else { DEFAULT_TOLERANCE },
+                acceleration: solver_settings.acceleration,
+                anderson_window: solver_settings.anderson_window,
             },
             solver: Solver::new(),
             epoch_start: Arc::new(positions.clone()),
@@ -756,6 +772,8 @@ impl Document {
                 iterations: self.state.iterations,
                 steps: 1,
                 tolerance: self.state.tolerance,
+                acceleration: self.state.acceleration,
+                anderson_window: self.state.anderson_window,
                 ..self.solver_settings
             },
             groups,
@@ -839,6 +857,11 @@ impl Document {
     /// The most iterations one convergence runs ([`EditState::iterations`]).
     pub fn iterations(&self) -> usize {
         self.state.iterations
+    }
+
+    /// How the solver combines iterates ([`EditState::acceleration`]).
+    pub fn acceleration(&self) -> Acceleration {
+        self.state.acceleration
     }
 
     /// The convergence tolerance on the relative energy change ([`EditState::tolerance`]).
@@ -1122,6 +1145,7 @@ impl Document {
                 }
                 state.tolerance = tolerance;
             }
+            Command::SetAcceleration(acceleration) => state.acceleration = acceleration,
             Command::PinFreePieces => {
                 let mut pinned = vec![false; self.positions.len()];
                 for group in state.groups.iter().filter(|g| g.role == GroupRole::Handle) {

@@ -37,7 +37,8 @@
 //!
 //! let mut q = rest.clone();
 //! let report = system.solve(&mut q, 20, 0.0)?;
-//! assert!(report.energies.windows(2).all(|e| e[1] <= e[0]));
+//! // E never increases (up to round-off once converged).
+//! assert!(report.energies.windows(2).all(|e| e[1] <= e[0] * (1.0 + 1e-12)));
 //! assert!(q[2].x > 1.2, "the pulled corner moved towards its target");
 //!
 //! // Dragging a handle only changes its targets: no refactorization.

@@ -9,7 +9,7 @@ use shapeup_core::generate;
 use shapeup_core::geometry::tet_volume;
 use shapeup_core::geometry::{RestGeometry, WorkingFrame, lumped_masses_surface, lumped_masses_volume};
 use shapeup_core::mesh::Mesh;
-use shapeup_core::solver::{ConstraintGroup, SolverParams, System};
+use shapeup_core::solver::{Acceleration, ConstraintGroup, SolverParams, System};
 
 fn group(kind: &str, weight: f64, rest: &RestGeometry, params: Params) -> ConstraintGroup {
     let ctx = BuildContext { rest, selection: &Selection::All, frame: &WorkingFrame::IDENTITY };
@@ -26,8 +26,18 @@ fn masses(mesh: &Mesh, rest: &RestGeometry) -> Vec<f64> {
 
 /// A simulation of `mesh` with the given shape groups (kind, weight) and settings.
 fn simulation(mesh: &Mesh, kinds: &[(&str, f64)], params: DynamicsParams) -> (Simulation, RestGeometry) {
+    simulation_with(mesh, kinds, params, SolverParams::default().acceleration)
+}
+
+/// [`simulation`] with a chosen acceleration.
+fn simulation_with(
+    mesh: &Mesh,
+    kinds: &[(&str, f64)],
+    params: DynamicsParams,
+    acceleration: Acceleration,
+) -> (Simulation, RestGeometry) {
     let rest = RestGeometry::new(mesh.positions.clone(), mesh.triangles.clone(), mesh.tetrahedra.clone());
-    let mut system = System::new(mesh.num_vertices(), SolverParams::default());
+    let mut system = System::new(mesh.num_vertices(), SolverParams { acceleration, ..SolverParams::default() });
     for &(kind, w) in kinds {
         system.add_group(group(kind, w, &rest, Params::default())).unwrap();
     }
@@ -44,25 +54,27 @@ fn swirl(positions: &[DVec3]) -> Vec<DVec3> {
 fn free_fall_without_constraints_follows_the_discrete_formula() {
     let mesh = generate::cloth_grid(5, 4, 1.0, 0.8);
     let params = DynamicsParams { gravity: DVec3::new(0.5, -9.81, 0.2), ..DynamicsParams::default() };
-    let (mut sim, _) = simulation(&mesh, &[], params);
-    let v0 = swirl(&mesh.positions);
-    sim.set_state(&mesh.positions, &v0).unwrap();
-    let h = params.time_step;
-    let (mut x, mut v) = (mesh.positions.clone(), v0);
-    for _ in 0..30 {
-        sim.step().unwrap();
-        for i in 0..x.len() {
-            // x_{n+1} = x_n + h v_n + h² g, v_{n+1} = (x_{n+1} − x_n)/h
-            let next = x[i] + h * v[i] + h * h * params.gravity;
-            v[i] = (next - x[i]) / h;
-            x[i] = next;
+    for acceleration in [Acceleration::None, Acceleration::Anderson] {
+        let (mut sim, _) = simulation_with(&mesh, &[], params, acceleration);
+        let v0 = swirl(&mesh.positions);
+        sim.set_state(&mesh.positions, &v0).unwrap();
+        let h = params.time_step;
+        let (mut x, mut v) = (mesh.positions.clone(), v0);
+        for _ in 0..30 {
+            sim.step().unwrap();
+            for i in 0..x.len() {
+                // x_{n+1} = x_n + h v_n + h² g, v_{n+1} = (x_{n+1} − x_n)/h
+                let next = x[i] + h * v[i] + h * h * params.gravity;
+                v[i] = (next - x[i]) / h;
+                x[i] = next;
+            }
         }
-    }
-    for (a, b) in sim.positions().iter().zip(&x) {
-        assert!((*a - *b).length() < 1e-12, "{a} vs {b}");
-    }
-    for (a, b) in sim.velocities().iter().zip(&v) {
-        assert!((*a - *b).length() < 1e-9, "{a} vs {b}");
+        for (a, b) in sim.positions().iter().zip(&x) {
+            assert!((*a - *b).length() < 1e-12, "{a} vs {b}");
+        }
+        for (a, b) in sim.velocities().iter().zip(&v) {
+            assert!((*a - *b).length() < 1e-9, "{a} vs {b}");
+        }
     }
 }
 
@@ -70,8 +82,9 @@ fn free_fall_without_constraints_follows_the_discrete_formula() {
 fn momentum_is_conserved_without_gravity_or_damping() {
     let mesh = generate::cloth_grid(12, 12, 1.0, 1.0);
     let params = DynamicsParams { gravity: DVec3::ZERO, ..DynamicsParams::default() };
-    for kinds in [&[("edge_spring", 10.0)][..], &[("triangle_strain", 10.0), ("bending", 10.0)][..]] {
-        let (mut sim, _) = simulation(&mesh, kinds, params);
+    let kinds = [&[("edge_spring", 10.0)][..], &[("triangle_strain", 10.0), ("bending", 10.0)][..]];
+    for (kinds, acceleration) in kinds.iter().flat_map(|k| [(*k, Acceleration::None), (*k, Acceleration::Anderson)]) {
+        let (mut sim, _) = simulation_with(&mesh, kinds, params, acceleration);
         sim.set_state(&mesh.positions, &swirl(&mesh.positions)).unwrap();
         let p0 = sim.momentum();
         let mut moved = 0.0_f64;
@@ -81,7 +94,7 @@ fn momentum_is_conserved_without_gravity_or_damping() {
         }
         assert!(moved > 0.1, "the body moved ({moved})");
         let p = sim.momentum();
-        assert!((p - p0).length() < 1e-10 * (1.0 + p0.length()), "{kinds:?}: momentum {p0} -> {p}");
+        assert!((p - p0).length() < 1e-10 * (1.0 + p0.length()), "{kinds:?} {acceleration:?}: momentum {p0} -> {p}");
     }
 }
 

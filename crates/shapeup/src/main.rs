@@ -9,11 +9,12 @@
 //! Every error is one line on stderr and a non-zero exit; nothing is written on failure.
 
 use anyhow::{Context, Result, bail};
-use clap::{Parser, Subcommand};
+use clap::{Args, Parser, Subcommand};
 use shapeup_core::bench::{Scenario, load_scenario};
 use shapeup_core::io::{PlyEncoding, WriteFormat, read_mesh, write_atomic, write_mesh_with};
 use shapeup_core::scene::Scene;
-use shapeup_core::solver::{Factorization, SolverParams};
+use shapeup_core::scene::SolverSettings;
+use shapeup_core::solver::{Acceleration, Factorization, MAX_ANDERSON_WINDOW, SolverParams};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -56,6 +57,8 @@ enum Command {
         /// input's when it is a PLY file, else binary_little_endian).
         #[arg(long, value_name = "ENCODING", value_parser = parse_ply_encoding)]
         ply_encoding: Option<PlyEncoding>,
+        #[command(flatten)]
+        acceleration: AccelerationArgs,
     },
     /// Projective Dynamics time steps of a scene (whatever its mode) from rest; writes frame k
     /// (the state after k steps) to DIR/frame_000k.EXT: the input's surface (obj, ply, off,
@@ -80,6 +83,8 @@ enum Command {
         /// Write a JSON report (energy after each step, warnings, timings).
         #[arg(long, value_name = "REPORT.json")]
         report: Option<PathBuf>,
+        #[command(flatten)]
+        acceleration: AccelerationArgs,
     },
     /// Prints the energy of given positions under a scene's constraints (working frame), in all
     /// and per group.
@@ -125,6 +130,36 @@ enum Command {
     },
 }
 
+/// Overrides of the scene's acceleration settings.
+#[derive(Args, Clone, Copy)]
+struct AccelerationArgs {
+    /// How iterates are combined: anderson or none (overrides the scene's `acceleration`).
+    #[arg(long, value_name = "KIND", value_parser = parse_acceleration)]
+    acceleration: Option<Acceleration>,
+    /// Iterations Anderson acceleration mixes, 1 to 50 (overrides `anderson_window`).
+    #[arg(long, value_name = "M", value_parser = clap::value_parser!(u64).range(1..=MAX_ANDERSON_WINDOW as u64))]
+    anderson_window: Option<u64>,
+}
+
+impl AccelerationArgs {
+    fn apply(self, solver: &mut SolverSettings) {
+        if let Some(a) = self.acceleration {
+            solver.acceleration = a;
+        }
+        if let Some(m) = self.anderson_window {
+            solver.anderson_window = usize::try_from(m).unwrap_or(MAX_ANDERSON_WINDOW);
+        }
+    }
+}
+
+fn parse_acceleration(s: &str) -> Result<Acceleration, String> {
+    match s {
+        "anderson" => Ok(Acceleration::Anderson),
+        "none" => Ok(Acceleration::None),
+        _ => Err(format!("unknown acceleration \"{s}\" (anderson, none)")),
+    }
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match run(cli) {
@@ -150,18 +185,21 @@ fn run(cli: Cli) -> Result<()> {
             .map_err(|e| anyhow::anyhow!("cannot start the thread pool: {e}"))?;
     }
     match cli.command {
-        Command::Deform { scene, output, iterations, report, ply_encoding } => {
-            deform(&scene, &output, iterations, report.as_deref(), ply_encoding)
+        Command::Deform { scene, output, iterations, report, ply_encoding, acceleration } => {
+            deform(&scene, &output, iterations, report.as_deref(), ply_encoding, acceleration)
         }
         Command::Energy { scene, positions } => energy(&scene, &positions),
-        Command::Simulate { scene, frames, output, every, format, report } => simulate::run(&simulate::SimulateArgs {
-            scene: &scene,
-            frames: usize::try_from(frames).unwrap_or(usize::MAX),
-            output: &output,
-            every,
-            format: &format,
-            report: report.as_deref(),
-        }),
+        Command::Simulate { scene, frames, output, every, format, report, acceleration } => {
+            simulate::run(&simulate::SimulateArgs {
+                scene: &scene,
+                overrides: &|solver| acceleration.apply(solver),
+                frames: usize::try_from(frames).unwrap_or(usize::MAX),
+                output: &output,
+                every,
+                format: &format,
+                report: report.as_deref(),
+            })
+        }
         #[cfg(feature = "gui")]
         Command::View { input, screenshot, size, stats } => view::run(input, screenshot, size, stats),
         Command::Bench { dynamic: true, iterations, scenarios, .. } => bench_dynamic(iterations, &scenarios),
@@ -196,6 +234,7 @@ fn deform(
     iterations: Option<usize>,
     report_path: Option<&Path>,
     ply_encoding: Option<PlyEncoding>,
+    acceleration: AccelerationArgs,
 ) -> Result<()> {
     let start = Instant::now();
     check_output_extension(output, &["obj", "ply", "off", "stl", "vtu", "msh"])?;
@@ -204,7 +243,8 @@ fn deform(
         check_output_extension(r, &["json"])?;
         check_parent_dir(r)?;
     }
-    let scene = Scene::from_file(scene_path)?;
+    let mut scene = Scene::from_file(scene_path)?;
+    acceleration.apply(&mut scene.solver);
     let mut loaded = scene.load()?;
     let (q, solve) = loaded.solve_static(iterations)?;
     let mut warnings = loaded.warnings.clone();
@@ -234,6 +274,10 @@ fn deform(
             "groups": groups,
             "iterations": solve.energies.len(),
             "energy": solve.energies,
+            // |E_k − E_{k−1}| / E_{k−1}; none for the first iteration (E_0 is not recorded).
+            "relative_change": relative_changes(&solve.energies),
+            "acceleration": loaded.system.params().acceleration,
+            "anderson_rejected": solve.rejected,
             "factor": {"nnz_lower": nnz_a, "nnz_l": nnz_l},
             "warnings": warnings.to_json(),
             "timings": {
@@ -436,4 +480,12 @@ fn bench(mesh: Option<PathBuf>, iterations: usize, names: &[String], factorizati
         )?;
     }
     Ok(())
+}
+
+/// |E_k − E_{k−1}| / E_{k−1} after each iteration; `None` for the first.
+fn relative_changes(energies: &[f64]) -> Vec<Option<f64>> {
+    std::iter::once(None)
+        .chain(energies.windows(2).map(|e| Some(if e[0] == e[1] { 0.0 } else { (e[0] - e[1]).abs() / e[0].abs() })))
+        .take(energies.len())
+        .collect()
 }

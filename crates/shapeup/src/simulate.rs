@@ -72,6 +72,8 @@ impl FrameFormat {
 pub struct SimulateArgs<'a> {
     /// The scene file.
     pub scene: &'a Path,
+    /// Changes to the scene's solver settings from the command line.
+    pub overrides: &'a dyn Fn(&mut shapeup_core::scene::SolverSettings),
     /// Time steps to run.
     pub frames: usize,
     /// Output directory (created if missing).
@@ -167,7 +169,8 @@ pub fn run(args: &SimulateArgs<'_>) -> Result<()> {
     if let Some(r) = args.report {
         crate::check_parent_dir(r)?;
     }
-    let scene = Scene::from_file(args.scene)?;
+    let mut scene = Scene::from_file(args.scene)?;
+    (args.overrides)(&mut scene.solver);
     let mut loaded = scene.load()?;
     let mut simulation = loaded.start_simulation()?;
     std::fs::create_dir_all(args.output)

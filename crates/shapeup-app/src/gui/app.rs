@@ -17,6 +17,7 @@ use crate::worker::{SolveRequest, SolveResult, SolverWorker};
 use eframe::egui;
 use egui::{Color32, Pos2, Rect, Sense, Stroke};
 use glam::{DVec3, Vec2, Vec3};
+use shapeup_core::solver::Acceleration;
 use std::collections::VecDeque;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
@@ -373,6 +374,7 @@ impl EditorApp {
                     | Command::SetWeight { .. }
                     | Command::SetIterations(_)
                     | Command::SetTolerance(_)
+                    | Command::SetAcceleration(_)
                     | Command::RenameHandle { .. }
             );
             let solve = command.changes_solve();
@@ -865,6 +867,17 @@ impl EditorApp {
         self.track_drag(&response);
         if response.changed() {
             commands.push(Command::SetIterations(cap));
+        }
+        let mut anderson = self.document.acceleration() == Acceleration::Anderson;
+        if ui
+            .checkbox(&mut anderson, "Anderson acceleration")
+            .on_hover_text(
+                "mix the last iterations (Peng et al. 2018): the same shape in far fewer iterations; \
+                 a mixed step that does not lower the energy is replaced by a plain one",
+            )
+            .changed()
+        {
+            commands.push(Command::SetAcceleration(if anderson { Acceleration::Anderson } else { Acceleration::None }));
         }
         ui.horizontal_wrapped(|ui| {
             if ui.button("Reset shape").on_hover_text("back to the rest shape (undoable)").clicked() {

@@ -88,6 +88,8 @@ impl Scene {
             iterations: self.solver.iterations,
             tolerance: self.solver.tolerance,
             factorization: self.solver.factorization,
+            acceleration: self.solver.acceleration,
+            anderson_window: self.solver.anderson_window,
         };
         let mut system = System::new(mesh.num_vertices(), params);
         let mut group_ids = Vec::with_capacity(self.groups.len());

@@ -11,7 +11,7 @@ mod write;
 pub use build::{LoadedScene, SpinningHandle};
 
 use crate::mesh::Mesh;
-use crate::solver::Factorization;
+use crate::solver::{Acceleration, Factorization, MAX_ANDERSON_WINDOW, SolverParams};
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 use serde_json::{Map, Value};
@@ -52,6 +52,10 @@ pub struct SolverSettings {
     pub density: f64,
     /// Sparse Cholesky layout: "auto" (default), "simplicial" or "supernodal".
     pub factorization: Factorization,
+    /// "anderson" (default) or "none": see [`Acceleration`].
+    pub acceleration: Acceleration,
+    /// Anderson acceleration: iterations mixed, m ≥ 1 (default 5).
+    pub anderson_window: usize,
 }
 
 impl Default for SolverSettings {
@@ -67,6 +71,8 @@ impl Default for SolverSettings {
             damping: 0.0,
             density: 1.0,
             factorization: Factorization::Auto,
+            acceleration: SolverParams::default().acceleration,
+            anderson_window: SolverParams::default().anderson_window,
         }
     }
 }
@@ -502,6 +508,9 @@ fn validate_solver(s: &SolverSettings) -> Result<(), String> {
     }
     if !s.gravity.iter().all(|g| g.is_finite()) {
         return Err("gravity must be three finite numbers".into());
+    }
+    if !(1..=MAX_ANDERSON_WINDOW).contains(&s.anderson_window) {
+        return Err(format!("anderson_window must be in 1..={MAX_ANDERSON_WINDOW}, found {}", s.anderson_window));
     }
     Ok(())
 }

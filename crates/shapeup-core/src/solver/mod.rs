@@ -13,6 +13,7 @@
 //! weights μ_i and an inertial target s: the global step then solves
 //! (diag(μ) + Σ w_i C_iᵀC_i) q = μ s + Σ w_i C_iᵀ P_i.
 
+mod anderson;
 mod assemble;
 mod cholesky;
 mod global;
@@ -21,6 +22,7 @@ mod local;
 pub use cholesky::{FactorError, Factorization};
 
 use crate::constraints::{Constraint, Position};
+use anderson::Anderson;
 use assemble::Assembly;
 use cholesky::SparseCholesky;
 use glam::DVec3;
@@ -37,12 +39,43 @@ pub struct SolverParams {
     pub tolerance: f64,
     /// Factorization layout (default: chosen by faer).
     pub factorization: Factorization,
+    /// How the local-global iterates are combined (default: Anderson acceleration).
+    pub acceleration: Acceleration,
+    /// Anderson acceleration: how many previous iterations are mixed, m (default 5).
+    pub anderson_window: usize,
 }
+
+/// [`SolverParams::anderson_window`] by default: the m of Peng et al. 2018's experiments.
+pub const DEFAULT_ANDERSON_WINDOW: usize = 5;
+
+/// The largest [`SolverParams::anderson_window`] a scene may ask for: more mixed iterations
+/// only cost time and conditioning.
+pub const MAX_ANDERSON_WINDOW: usize = 50;
 
 impl Default for SolverParams {
     fn default() -> Self {
-        SolverParams { iterations: 10, tolerance: 0.0, factorization: Factorization::Auto }
+        SolverParams {
+            iterations: 10,
+            tolerance: 0.0,
+            factorization: Factorization::Auto,
+            acceleration: Acceleration::default(),
+            anderson_window: DEFAULT_ANDERSON_WINDOW,
+        }
     }
+}
+
+/// How successive local-global iterates are combined.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Acceleration {
+    /// The plain iteration x_{k+1} = G(x_k): one local and one global step per iteration.
+    None,
+    /// Anderson acceleration (Peng, Deng, Zhang, Pauly, SIGGRAPH 2018): x_{k+1} mixes the last
+    /// m iterates of G; a mixed iterate that does not lower the energy is replaced by the plain
+    /// one (and the history restarts), so the energy never increases. An iteration costs one
+    /// more energy evaluation, and a rejected one also a second local step.
+    #[default]
+    Anderson,
 }
 
 /// A named set of constraints of one type sharing a multiplier g (w_i = ω_i · g).
@@ -182,6 +215,9 @@ pub struct SolveReport {
     pub global_seconds: f64,
     /// Seconds spent (re)assembling and factoring before the iterations.
     pub setup_seconds: f64,
+    /// Anderson acceleration: iterations whose mixed iterate did not lower the energy and were
+    /// replaced by the plain one.
+    pub rejected: usize,
 }
 
 /// The ShapeUp system: constraint groups over n vertices, their assembled matrix, its factor and
@@ -207,6 +243,13 @@ pub struct System {
     projected_at: Vec<DVec3>,
     /// Slots whose targets moved since the projections were computed.
     retargeted: Vec<usize>,
+    /// The fixed-point map changed since the last solve (weights, targets, groups, inertia):
+    /// the acceleration's history no longer applies.
+    map_changed: bool,
+    anderson: Anderson,
+    /// Scratch for the accelerated iteration: G(x) and the mixed iterate (n points each).
+    plain_iterate: Vec<DVec3>,
+    mixed_iterate: Vec<DVec3>,
     /// C q, for energies.
     cq: Vec<DVec3>,
     /// Right-hand side / solution, column-major (x, y, z) over solved vertices.
@@ -235,6 +278,10 @@ impl System {
             projections: Vec::new(),
             projected_at: Vec::new(),
             retargeted: Vec::new(),
+            map_changed: true,
+            anderson: Anderson::default(),
+            plain_iterate: Vec::new(),
+            mixed_iterate: Vec::new(),
             cq: Vec::new(),
             rhs: Vec::new(),
             assembled: false,
@@ -287,6 +334,7 @@ impl System {
         self.inertial_target.clear();
         self.inertial_target.extend_from_slice(target);
         self.update_inertial_rhs();
+        self.map_changed = true;
         Ok(())
     }
 
@@ -387,10 +435,12 @@ impl System {
             return Err(bad(format!("has {expected} vertices but {} targets were given", targets.len())));
         }
         self.retargeted.push(id.0 as usize);
+        self.map_changed = true;
         Ok(())
     }
 
     fn mark(&mut self, stale: Stale) {
+        self.map_changed = true;
         self.stale = match (self.stale, stale) {
             (Stale::Pattern, _) | (_, Stale::Pattern) => Stale::Pattern,
             _ => Stale::Values,
@@ -520,22 +570,45 @@ impl System {
         self.check_length(q)?;
         let mut report = SolveReport::default();
         let t = Instant::now();
+        // Whether this solve continues the last one: same map, starting where it stopped.
+        let continuing = !std::mem::take(&mut self.map_changed) && self.projected_at.as_slice() == &q[..];
         self.prepare()?;
         report.setup_seconds = t.elapsed().as_secs_f64();
-        let mut t = Instant::now();
+        let t = Instant::now();
         self.project_unless_current(q);
         report.local_seconds += t.elapsed().as_secs_f64();
-        let mut previous = self.energy_of_projections(q);
-        if !previous.is_finite() {
+        let energy = self.energy_of_projections(q);
+        if !energy.is_finite() {
             return Err(SolveError::NonFiniteEnergy);
         }
+        match self.params.acceleration {
+            Acceleration::Anderson if self.params.anderson_window > 0 => {
+                if !continuing {
+                    self.anderson.reset();
+                }
+                self.iterate_anderson(q, iterations, tolerance, energy, &mut after_iteration, &mut report)?;
+            }
+            _ => self.iterate_plain(q, iterations, tolerance, energy, &mut after_iteration, &mut report)?,
+        }
+        Ok(report)
+    }
+
+    /// The plain iteration: global step from the last projections, then the local step at the
+    /// new q, whose projections give E(q) and feed the next global step.
+    fn iterate_plain(
+        &mut self,
+        q: &mut [DVec3],
+        iterations: usize,
+        tolerance: f64,
+        mut previous: f64,
+        after_iteration: &mut impl FnMut(usize, f64) -> ControlFlow<()>,
+        report: &mut SolveReport,
+    ) -> Result<(), SolveError> {
         for _ in 0..iterations {
-            // Each pass: global step from the last projections, then the local step at the new
-            // q, whose projections give E(q) and feed the next global step.
-            t = Instant::now();
+            let t = Instant::now();
             self.global_step(q)?;
             report.global_seconds += t.elapsed().as_secs_f64();
-            t = Instant::now();
+            let t = Instant::now();
             self.project(q);
             report.local_seconds += t.elapsed().as_secs_f64();
             let energy = self.energy_of_projections(q);
@@ -550,7 +623,83 @@ impl System {
                 break;
             }
         }
-        Ok(report)
+        Ok(())
+    }
+
+    /// Anderson-accelerated iteration (see [`anderson`]): x_{k+1} is the mixed iterate when its
+    /// objective (E, plus the inertial term in dynamic mode) is below x_k's, else the plain
+    /// G(x_k), which never raises it; the history restarts after a rejection.
+    fn iterate_anderson(
+        &mut self,
+        q: &mut [DVec3],
+        iterations: usize,
+        tolerance: f64,
+        mut previous: f64,
+        after_iteration: &mut impl FnMut(usize, f64) -> ControlFlow<()>,
+        report: &mut SolveReport,
+    ) -> Result<(), SolveError> {
+        let n = q.len();
+        self.anderson.resize(n, self.params.anderson_window);
+        let mut plain = std::mem::take(&mut self.plain_iterate);
+        let mut mixed = std::mem::take(&mut self.mixed_iterate);
+        plain.resize(n, DVec3::ZERO);
+        mixed.resize(n, DVec3::ZERO);
+        let mut objective = previous + self.inertial_energy(q);
+        let mut result = Ok(());
+        for _ in 0..iterations {
+            let t = Instant::now();
+            plain.copy_from_slice(q);
+            if let Err(e) = self.global_step(&mut plain) {
+                result = Err(e);
+                break;
+            }
+            report.global_seconds += t.elapsed().as_secs_f64();
+            let t = Instant::now();
+            let is_mixed = self.anderson.mix(q, &plain, &mut mixed);
+            self.project(&mixed);
+            let mut energy = self.energy_of_projections(&mixed);
+            let mut mixed_objective = energy + self.inertial_energy(&mixed);
+            let accepted_mixed = is_mixed && mixed_objective < objective;
+            if is_mixed && !accepted_mixed {
+                // The plain iterate: E(G(x)) ≤ E(x) by the local-global argument.
+                self.anderson.reset();
+                report.rejected += 1;
+                self.project(&plain);
+                energy = self.energy_of_projections(&plain);
+                mixed_objective = energy + self.inertial_energy(&plain);
+                q.copy_from_slice(&plain);
+            } else {
+                q.copy_from_slice(&mixed);
+            }
+            report.local_seconds += t.elapsed().as_secs_f64();
+            if !energy.is_finite() {
+                result = Err(SolveError::NonFiniteEnergy);
+                break;
+            }
+            objective = mixed_objective;
+            report.energies.push(energy);
+            let mut converged = tolerance > 0.0 && is_converged(previous, energy, tolerance);
+            if converged && accepted_mixed {
+                // A mixed step can creep along a flat valley by less than the tolerance: only
+                // a plain iteration, the one the tolerance is defined on, may end the solve.
+                self.anderson.reset();
+                converged = false;
+            }
+            previous = energy;
+            let stop = after_iteration(report.energies.len(), energy).is_break();
+            if converged || stop {
+                break;
+            }
+        }
+        self.plain_iterate = plain;
+        self.mixed_iterate = mixed;
+        result
+    }
+
+    /// Σ_v μ_v ‖q_v − s_v‖²: the inertial part of the objective in dynamic mode (0 in static).
+    fn inertial_energy(&self, q: &[DVec3]) -> f64 {
+        let (Some(mu), false) = (&self.inertia, self.inertial_target.is_empty()) else { return 0.0 };
+        mu.iter().zip(q).zip(&self.inertial_target).map(|((m, p), s)| m * (*p - *s).length_squared()).sum()
     }
 
     /// E(q) and its share per group, without solving (the matrix need not be invertible).
