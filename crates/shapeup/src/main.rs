@@ -127,6 +127,15 @@ enum Command {
         /// meshes, 10 iterations per time step); `--iterations` counts time steps.
         #[arg(long)]
         dynamic: bool,
+        /// Time to a converged shape instead: for each scenario, iterations and seconds until
+        /// (E_k − E*)/E* ≤ 1 %, 0.1 % and 0.01 % with and without acceleration, E* the lowest
+        /// energy of a long accelerated run (`--reference-iterations`); `--iterations` caps
+        /// each timed run.
+        #[arg(long, conflicts_with = "dynamic")]
+        converge: bool,
+        /// Iterations of the reference run that gives E* (with --converge).
+        #[arg(long, default_value_t = 3000, value_name = "N", requires = "converge")]
+        reference_iterations: usize,
     },
 }
 
@@ -203,7 +212,10 @@ fn run(cli: Cli) -> Result<()> {
         #[cfg(feature = "gui")]
         Command::View { input, screenshot, size, stats } => view::run(input, screenshot, size, stats),
         Command::Bench { dynamic: true, iterations, scenarios, .. } => bench_dynamic(iterations, &scenarios),
-        Command::Bench { mesh, iterations, scenarios, factorization, dynamic: false } => {
+        Command::Bench { mesh, iterations, scenarios, converge: true, reference_iterations, .. } => {
+            bench_converge(mesh, iterations, reference_iterations, &scenarios)
+        }
+        Command::Bench { mesh, iterations, scenarios, factorization, dynamic: false, .. } => {
             bench(mesh, iterations, &scenarios, factorization)
         }
     }
@@ -488,4 +500,85 @@ fn relative_changes(energies: &[f64]) -> Vec<Option<f64>> {
         .chain(energies.windows(2).map(|e| Some(if e[0] == e[1] { 0.0 } else { (e[0] - e[1]).abs() / e[0].abs() })))
         .take(energies.len())
         .collect()
+}
+
+/// The relative energy gaps `shapeup bench --converge` reports.
+const CONVERGE_GAPS: [f64; 3] = [1e-2, 1e-3, 1e-4];
+
+/// Energy after each iteration and the seconds since the solve began (setup included), for up
+/// to `iterations` iterations from the rest shape.
+fn convergence_run(
+    scene: &mut shapeup_core::scene::LoadedScene,
+    acceleration: Acceleration,
+    iterations: usize,
+) -> Result<Vec<(f64, f64)>> {
+    let params = SolverParams { acceleration, ..*scene.system.params() };
+    scene.system.set_params(params);
+    let mut q = scene.rest.positions.clone();
+    let start = Instant::now();
+    let mut trace = Vec::with_capacity(iterations);
+    scene
+        .system
+        .solve_with(&mut q, iterations, 0.0, |_, e| {
+            trace.push((e, start.elapsed().as_secs_f64()));
+            std::ops::ControlFlow::Continue(())
+        })
+        .map_err(|e| anyhow::anyhow!("{e}"))?;
+    Ok(trace)
+}
+
+fn bench_converge(mesh: Option<PathBuf>, iterations: usize, reference: usize, names: &[String]) -> Result<()> {
+    let scenarios = pick_scenarios(names, &Scenario::ALL, Scenario::name)?;
+    let path = mesh.unwrap_or_else(default_bench_mesh);
+    let loaded = read_mesh(&path)?;
+    let mut out = std::io::stdout().lock();
+    writeln!(
+        out,
+        "{}: {} vertices; {} threads; E* = lowest energy of {reference} accelerated iterations; runs capped at {iterations} iterations",
+        path.display(),
+        loaded.mesh.num_vertices(),
+        rayon::current_num_threads()
+    )?;
+    writeln!(
+        out,
+        "time to (E_k - E*)/E* <= gap: iterations / seconds from the start of the solve (factorization included); - = not within the cap"
+    )?;
+    writeln!(
+        out,
+        "{:<16} {:<10} {:>18} {:>18} {:>18} {:>12}",
+        "scenario", "iteration", "1 %", "0.1 %", "0.01 %", "E end"
+    )?;
+    for s in scenarios {
+        let mut scene = load_scenario(s, &loaded.mesh, path.clone())?;
+        let star = convergence_run(&mut scene, Acceleration::Anderson, reference)?;
+        let mut runs = Vec::new();
+        for acceleration in [Acceleration::None, Acceleration::Anderson] {
+            let mut scene = load_scenario(s, &loaded.mesh, path.clone())?;
+            runs.push((acceleration, convergence_run(&mut scene, acceleration, iterations)?));
+        }
+        let e_star = star.iter().chain(runs.iter().flat_map(|(_, r)| r)).map(|(e, _)| *e).fold(f64::INFINITY, f64::min);
+        for (acceleration, trace) in &runs {
+            let cell = |gap: f64| {
+                trace
+                    .iter()
+                    .position(|(e, _)| (e - e_star) / e_star <= gap)
+                    .map_or("-".to_string(), |k| format!("{} / {:.2} s", k + 1, trace[k].1))
+            };
+            let name = match acceleration {
+                Acceleration::None => "plain",
+                Acceleration::Anderson => "anderson",
+            };
+            writeln!(
+                out,
+                "{:<16} {:<10} {:>18} {:>18} {:>18} {:>12.6e}",
+                s.name(),
+                name,
+                cell(CONVERGE_GAPS[0]),
+                cell(CONVERGE_GAPS[1]),
+                cell(CONVERGE_GAPS[2]),
+                trace.last().map_or(f64::NAN, |(e, _)| *e)
+            )?;
+        }
+    }
+    Ok(())
 }

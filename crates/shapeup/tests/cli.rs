@@ -897,6 +897,32 @@ fn bench_prints_the_three_scenarios() {
     ws.expect_failure(&[OsStr::new("bench"), "--mesh".as_ref(), ws.path("none.obj").as_os_str()], &["none.obj"]);
 }
 
+/// `bench --converge`: a plain and an accelerated row per scenario; on one-rings (which converge
+/// fast) both reach the 1 % gap within the cap, the accelerated one in fewer iterations.
+#[test]
+fn bench_converge_compares_time_to_a_converged_shape() {
+    let out = shapeup([
+        "bench",
+        "--converge",
+        "--mesh",
+        SPOT,
+        "--scenario",
+        "iso",
+        "--iterations",
+        "150",
+        "--reference-iterations",
+        "300",
+    ])
+    .success();
+    let rows: Vec<Vec<&str>> = out.stdout.lines().map(|l| l.split_whitespace().collect()).collect();
+    let first_cell = |kind: &str| -> usize {
+        let row = rows.iter().find(|r| r.len() > 2 && r[0] == "iso" && r[1] == kind);
+        let row = row.unwrap_or_else(|| panic!("no {kind} row\n{}", out.describe()));
+        row[2].parse().unwrap_or_else(|_| panic!("{kind} did not reach 1 %\n{}", out.describe()))
+    };
+    assert!(first_cell("anderson") < first_cell("plain"), "{}", out.describe());
+}
+
 // ---------------------------------------------------------------------------------------------
 // The shipped examples, as they are
 // ---------------------------------------------------------------------------------------------
