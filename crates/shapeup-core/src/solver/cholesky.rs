@@ -95,9 +95,9 @@ impl SolveColumns {
                     row_idx.push((first + i) as u32);
                     source.push((column + i) as u32);
                 }
-                for (k, &r) in below.iter().enumerate() {
+                for (i, &r) in below.iter().enumerate() {
                     row_idx.push(r);
-                    source.push((column + width + k) as u32);
+                    source.push((column + width + i) as u32);
                 }
                 col_ptr.push(row_idx.len() as u32);
             }

@@ -570,12 +570,15 @@ impl System {
         self.check_length(q)?;
         let mut report = SolveReport::default();
         let t = Instant::now();
-        // Whether this solve continues the last one: same map, starting where it stopped.
-        let continuing = !std::mem::take(&mut self.map_changed) && self.projected_at.as_slice() == &q[..];
+        let map_changed = std::mem::take(&mut self.map_changed);
         self.prepare()?;
         report.setup_seconds = t.elapsed().as_secs_f64();
+        // Compared once: the projections were computed at this q (false after a re-assembly).
+        let at_last_projection = self.projected_at.as_slice() == &q[..];
+        // Whether this solve continues the last one: same map, starting where it stopped.
+        let continuing = !map_changed && at_last_projection;
         let t = Instant::now();
-        self.project_unless_current(q);
+        self.project_unless_current(q, at_last_projection);
         report.local_seconds += t.elapsed().as_secs_f64();
         let energy = self.energy_of_projections(q);
         if !energy.is_finite() {
@@ -612,13 +615,7 @@ impl System {
             self.project(q);
             report.local_seconds += t.elapsed().as_secs_f64();
             let energy = self.energy_of_projections(q);
-            if !energy.is_finite() {
-                return Err(SolveError::NonFiniteEnergy);
-            }
-            report.energies.push(energy);
-            let converged = tolerance > 0.0 && is_converged(previous, energy, tolerance);
-            previous = energy;
-            let stop = after_iteration(report.energies.len(), energy).is_break();
+            let (converged, stop) = record_iteration(report, &mut previous, energy, tolerance, after_iteration)?;
             if converged || stop {
                 break;
             }
@@ -634,66 +631,74 @@ impl System {
         q: &mut [DVec3],
         iterations: usize,
         tolerance: f64,
-        mut previous: f64,
+        previous: f64,
         after_iteration: &mut impl FnMut(usize, f64) -> ControlFlow<()>,
         report: &mut SolveReport,
     ) -> Result<(), SolveError> {
         let n = q.len();
         self.anderson.resize(n, self.params.anderson_window);
+        // Scratch kept in the system between solves, taken out while the loop borrows it.
         let mut plain = std::mem::take(&mut self.plain_iterate);
         let mut mixed = std::mem::take(&mut self.mixed_iterate);
         plain.resize(n, DVec3::ZERO);
         mixed.resize(n, DVec3::ZERO);
+        let result =
+            self.anderson_loop(q, &mut plain, &mut mixed, iterations, tolerance, previous, after_iteration, report);
+        self.plain_iterate = plain;
+        self.mixed_iterate = mixed;
+        result
+    }
+
+    /// The iterations of [`System::iterate_anderson`], on its scratch buffers.
+    #[allow(clippy::too_many_arguments)]
+    fn anderson_loop(
+        &mut self,
+        q: &mut [DVec3],
+        plain: &mut [DVec3],
+        mixed: &mut [DVec3],
+        iterations: usize,
+        tolerance: f64,
+        mut previous: f64,
+        after_iteration: &mut impl FnMut(usize, f64) -> ControlFlow<()>,
+        report: &mut SolveReport,
+    ) -> Result<(), SolveError> {
         let mut objective = previous + self.inertial_energy(q);
-        let mut result = Ok(());
         for _ in 0..iterations {
             let t = Instant::now();
             plain.copy_from_slice(q);
-            if let Err(e) = self.global_step(&mut plain) {
-                result = Err(e);
-                break;
-            }
+            self.global_step(plain)?;
             report.global_seconds += t.elapsed().as_secs_f64();
             let t = Instant::now();
-            let is_mixed = self.anderson.mix(q, &plain, &mut mixed);
-            self.project(&mixed);
-            let mut energy = self.energy_of_projections(&mixed);
-            let mut mixed_objective = energy + self.inertial_energy(&mixed);
+            let is_mixed = self.anderson.mix(q, plain, mixed);
+            self.project(mixed);
+            let mut energy = self.energy_of_projections(mixed);
+            let mut mixed_objective = energy + self.inertial_energy(mixed);
             let accepted_mixed = is_mixed && mixed_objective < objective;
             if is_mixed && !accepted_mixed {
                 // The plain iterate: E(G(x)) ≤ E(x) by the local-global argument.
                 self.anderson.reset();
                 report.rejected += 1;
-                self.project(&plain);
-                energy = self.energy_of_projections(&plain);
-                mixed_objective = energy + self.inertial_energy(&plain);
-                q.copy_from_slice(&plain);
+                self.project(plain);
+                energy = self.energy_of_projections(plain);
+                mixed_objective = energy + self.inertial_energy(plain);
+                q.copy_from_slice(plain);
             } else {
-                q.copy_from_slice(&mixed);
+                q.copy_from_slice(mixed);
             }
             report.local_seconds += t.elapsed().as_secs_f64();
-            if !energy.is_finite() {
-                result = Err(SolveError::NonFiniteEnergy);
-                break;
-            }
             objective = mixed_objective;
-            report.energies.push(energy);
-            let mut converged = tolerance > 0.0 && is_converged(previous, energy, tolerance);
+            let (mut converged, stop) = record_iteration(report, &mut previous, energy, tolerance, after_iteration)?;
             if converged && accepted_mixed {
                 // A mixed step can creep along a flat valley by less than the tolerance: only
                 // a plain iteration, the one the tolerance is defined on, may end the solve.
                 self.anderson.reset();
                 converged = false;
             }
-            previous = energy;
-            let stop = after_iteration(report.energies.len(), energy).is_break();
             if converged || stop {
                 break;
             }
         }
-        self.plain_iterate = plain;
-        self.mixed_iterate = mixed;
-        result
+        Ok(())
     }
 
     /// Σ_v μ_v ‖q_v − s_v‖²: the inertial part of the objective in dynamic mode (0 in static).
@@ -747,11 +752,11 @@ impl System {
         self.retargeted.clear();
     }
 
-    /// [`System::project`], except that when the projections were computed at this very q only
-    /// the groups whose targets moved since are projected again (the same numbers as a full
-    /// local step: a projection depends on q and its own constraint only).
-    fn project_unless_current(&mut self, q: &[DVec3]) {
-        if self.projected_at.as_slice() != q {
+    /// [`System::project`], except that when the projections were computed at this very q
+    /// (`at_last_projection`) only the groups whose targets moved since are projected again (the
+    /// same numbers as a full local step: a projection depends on q and its own constraint only).
+    fn project_unless_current(&mut self, q: &[DVec3], at_last_projection: bool) {
+        if !at_last_projection {
             self.project(q);
             return;
         }
@@ -820,6 +825,28 @@ impl System {
     pub fn factor_sizes(&self) -> (usize, usize) {
         self.factor.as_ref().map_or((0, 0), |f| (f.nnz(), f.nnz_l()))
     }
+}
+
+/// After an iteration with energy E: records it and says whether it met the tolerance (against
+/// `previous`, then set to E) and whether `after_iteration` asks to stop.
+///
+/// # Errors
+/// [`SolveError::NonFiniteEnergy`] for a NaN or infinite E.
+fn record_iteration(
+    report: &mut SolveReport,
+    previous: &mut f64,
+    energy: f64,
+    tolerance: f64,
+    after_iteration: &mut impl FnMut(usize, f64) -> ControlFlow<()>,
+) -> Result<(bool, bool), SolveError> {
+    if !energy.is_finite() {
+        return Err(SolveError::NonFiniteEnergy);
+    }
+    report.energies.push(energy);
+    let converged = tolerance > 0.0 && is_converged(*previous, energy, tolerance);
+    *previous = energy;
+    let stop = after_iteration(report.energies.len(), energy).is_break();
+    Ok((converged, stop))
 }
 
 fn check_weight(name: &str, value: f64) -> Result<(), SolveError> {
