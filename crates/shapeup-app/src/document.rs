@@ -962,10 +962,14 @@ impl Document {
     /// [`Document::begin_drag`] and [`Document::end_drag`]) and clear the redo history; a
     /// command that fails changes nothing.
     ///
+    /// Returns whether the edit state or the shape changed, i.e. whether there is something
+    /// new to solve: `false` for selections, for undo with nothing to undo and for edits that
+    /// set what is already there.
+    ///
     /// # Errors
     /// [`EditorError`] saying why the command cannot apply (unknown group, empty selection,
     /// NaN weight, a group that cannot be built…).
-    pub fn apply(&mut self, command: Command) -> Result<(), EditorError> {
+    pub fn apply(&mut self, command: Command) -> Result<bool, EditorError> {
         match command {
             Command::Select { vertices, mode } => self.select(&vertices, mode),
             Command::ClearSelection => self.clear_selection(),
@@ -976,24 +980,22 @@ impl Document {
             }
             Command::ResetShape => {
                 let rest = self.state.rest.mesh.positions.clone();
-                if rest != self.positions {
-                    self.record(self.state.clone());
-                    self.set_shape(rest);
+                if rest == self.positions {
+                    return Ok(false);
                 }
+                self.record(self.state.clone());
+                self.set_shape(rest);
+                return Ok(true);
             }
-            Command::Undo => {
-                self.undo();
-            }
-            Command::Redo => {
-                self.redo();
-            }
+            Command::Undo => return Ok(self.undo()),
+            Command::Redo => return Ok(self.redo()),
             command => {
                 let mut next = self.state.clone();
                 let make_rest = command == Command::MakeRest;
                 let fixes = command == Command::FixSelection;
                 self.edit(&mut next, command)?;
                 if next == self.state {
-                    return Ok(());
+                    return Ok(false);
                 }
                 self.solver.sync(&next)?;
                 let previous = std::mem::replace(&mut self.state, next);
@@ -1006,9 +1008,10 @@ impl Document {
                     // Fixed vertices show as a handle, not as a selection.
                     self.clear_selection();
                 }
+                return Ok(true);
             }
         }
-        Ok(())
+        Ok(false)
     }
 
     /// Records an undo step for the current state and shape, e.g. before a dynamics run moves
@@ -1215,15 +1218,17 @@ impl Document {
 
     /// Undoes the last step; `false` if there was none. The shape goes back to what was on
     /// screen before the step (the next solve converges from there).
+    ///
+    /// While a drag is under way this does nothing and returns `false`: the drag is one step
+    /// whatever the keyboard does meanwhile, and is undone as one once it ends.
     pub fn undo(&mut self) -> bool {
-        self.end_drag();
-        self.step_history(true)
+        !self.is_dragging() && self.step_history(true)
     }
 
-    /// Redoes the last undone step; `false` if there was none.
+    /// Redoes the last undone step; `false` if there was none or a drag is under way (see
+    /// [`Document::undo`]).
     pub fn redo(&mut self) -> bool {
-        self.end_drag();
-        self.step_history(false)
+        !self.is_dragging() && self.step_history(false)
     }
 
     fn step_history(&mut self, back: bool) -> bool {

@@ -255,6 +255,45 @@ fn a_drag_is_one_undo_step() {
 }
 
 #[test]
+fn undo_during_a_drag_does_nothing_and_the_drag_stays_one_step() {
+    let mut doc = spot(ShapeModel::EdgeSprings);
+    let key = fix(&mut doc, &[5]);
+    let before = doc.state().clone();
+    let step = Command::MoveHandle { handle: key, delta: DVec3::new(0.01, 0.0, 0.0) };
+    doc.begin_drag();
+    doc.apply(step.clone()).unwrap();
+    // ctrl+z (and ctrl+shift+z) with the button still held: ignored, the drag goes on.
+    assert!(!doc.apply(Command::Undo).unwrap());
+    assert!(!doc.apply(Command::Redo).unwrap());
+    assert!(!doc.undo());
+    assert!(doc.is_dragging());
+    for _ in 0..6 {
+        doc.apply(step.clone()).unwrap();
+    }
+    doc.end_drag();
+    let target = doc.group(key).unwrap().targets[0];
+    assert!((target - doc.rest_positions()[5] - DVec3::new(0.07, 0.0, 0.0)).length() < 1e-12);
+    assert!(doc.undo());
+    assert_eq!(doc.state(), &before, "one undo undoes the whole drag, the moves after ctrl+z too");
+}
+
+#[test]
+fn apply_says_whether_there_is_something_new_to_solve() {
+    let mut doc = spot(ShapeModel::EdgeSprings);
+    assert!(!doc.apply(Command::Undo).unwrap(), "nothing to undo");
+    assert!(!doc.apply(Command::Redo).unwrap(), "nothing to redo");
+    assert!(!doc.apply(Command::ResetShape).unwrap(), "already at rest");
+    assert!(!doc.apply(Command::Select { vertices: vec![1, 2], mode: SelectMode::Replace }).unwrap());
+    let key = fix(&mut doc, &[5]);
+    let weight = doc.group(key).unwrap().weight;
+    assert!(!doc.apply(Command::SetWeight { group: key, weight }).unwrap(), "the same weight");
+    assert!(doc.apply(Command::SetWeight { group: key, weight: weight * 2.0 }).unwrap());
+    assert!(doc.apply(Command::MoveHandle { handle: key, delta: DVec3::X * 0.1 }).unwrap());
+    assert!(doc.apply(Command::Undo).unwrap());
+    assert!(doc.apply(Command::Redo).unwrap());
+}
+
+#[test]
 fn switching_the_model_keeps_handles() {
     let mut doc = spot(ShapeModel::EdgeSprings);
     let (top, bottom) = extremes(&doc, 4);

@@ -90,6 +90,23 @@ fn fix_selection_makes_a_handle_and_undo_redo_take_it_back() {
 }
 
 #[test]
+fn undo_or_redo_with_nothing_to_take_back_leaves_a_converged_shape_alone() {
+    let mut harness = editor(spot_with_selection());
+    harness.get_by_label("Fix selection").click();
+    step_until(&mut harness, EditorApp::is_converged);
+    let solves = harness.state().solves_applied();
+    let status = harness.state().solve_status().to_owned();
+    // Nothing to redo: no new solve starts (it would run up to the iteration limit again).
+    harness.key_press_modifiers(egui::Modifiers::COMMAND | egui::Modifiers::SHIFT, egui::Key::Z);
+    harness.step();
+    assert!(harness.state().is_converged(), "still converged");
+    settle(&mut harness);
+    assert_eq!(harness.state().solves_applied(), solves);
+    assert_eq!(harness.state().solve_status(), status);
+    assert_eq!(num_handles(harness.state()), 1);
+}
+
+#[test]
 fn the_weight_slider_sets_the_group_weight_and_undo_restores_it() {
     let mut harness = editor(spot_with_selection());
     let before = harness.state().document().groups()[0].weight;

@@ -36,6 +36,14 @@ const SLOW_FRAME: Duration = Duration::from_millis(33);
 /// resolution returns with the first frame after the drag.
 const INTERACTIVE_SCALE: f32 = 0.5;
 
+/// How long the previous frame kept the renderer busy, from the gap between the starts of the
+/// last two frames: only when the previous frame asked for the next one at once (`back_to_back`,
+/// so the gap holds no idle time waiting for input) and less the time it spent waiting for the
+/// solver (not drawing).
+fn frame_busy(gap: Option<Duration>, waited: Duration, back_to_back: bool) -> Option<Duration> {
+    gap.filter(|_| back_to_back).map(|gap| gap.saturating_sub(waited))
+}
+
 /// The 3D view's resolution scale for this frame: reduced from the first slow frame of an
 /// interaction until it ends (not back and forth within one), full otherwise.
 fn render_scale(interacting: bool, reduced_so_far: bool, last_frame: Option<Duration>) -> (f32, bool) {
@@ -158,6 +166,10 @@ struct View {
     on_screen: VecDeque<f64>,
     /// The 3D view is drawn at [`INTERACTIVE_SCALE`] for the interaction under way.
     reduced_resolution: bool,
+    /// How long the previous frame took to draw, when known (see [`frame_busy`]), and how long
+    /// the current one has waited for the solver so far.
+    last_frame_busy: Option<Duration>,
+    waited: Duration,
 }
 
 /// Options of the editor window.
@@ -255,6 +267,8 @@ impl EditorApp {
                 painted_change: None,
                 on_screen: VecDeque::new(),
                 reduced_resolution: false,
+                last_frame_busy: None,
+                waited: Duration::ZERO,
             },
             document,
             mesh_path: path,
@@ -380,7 +394,9 @@ impl EditorApp {
             let solve = command.changes_solve();
             let fixes = matches!(command, Command::FixSelection | Command::PinFreePieces);
             match self.document.apply(command) {
-                Ok(()) => {
+                Ok(changed_state) => {
+                    // Undo with nothing to undo, a weight set to what it was: nothing to solve.
+                    let solve = solve && changed_state;
                     if solve {
                         // An earlier message (an error, "opened…") no longer describes the state.
                         self.view.status.clear();
@@ -1165,7 +1181,9 @@ impl EditorApp {
     fn await_first_update(&mut self) {
         let (Some(worker), Some((seq, since))) = (&self.worker, self.view.change_since) else { return };
         if let Some(left) = FIRST_UPDATE_WAIT.checked_sub(since.elapsed()) {
+            let start = Instant::now();
             worker.wait_for(seq, left);
+            self.view.waited += start.elapsed();
         }
     }
 
@@ -1257,12 +1275,7 @@ impl EditorApp {
         // Handle and gizmo drags, orbit and pan redraw the mesh every frame (box select does not).
         let interacting = self.document.is_dragging()
             || matches!(self.view.gesture, Some(Gesture::Orbit | Gesture::Pan | Gesture::Grab { .. }));
-        let mut starts = self.view.frames.iter().rev();
-        let last_frame = match (starts.next(), starts.next()) {
-            (Some(now), Some(before)) => Some(now.duration_since(*before)),
-            _ => None,
-        };
-        let (scale, reduced) = render_scale(interacting, self.view.reduced_resolution, last_frame);
+        let (scale, reduced) = render_scale(interacting, self.view.reduced_resolution, self.view.last_frame_busy);
         self.view.reduced_resolution = reduced;
         let pixels = slot.painter.ctx().pixels_per_point() * scale;
         let size = ((viewport.x * pixels) as u32, (viewport.y * pixels) as u32);
@@ -1380,6 +1393,13 @@ fn spawn_worker(ctx: &egui::Context) -> Option<SolverWorker> {
 impl eframe::App for EditorApp {
     fn ui(&mut self, ui: &mut egui::Ui, frame: &mut eframe::Frame) {
         self.view.frames.push_back(Instant::now());
+        let mut starts = self.view.frames.iter().rev();
+        let gap = match (starts.next(), starts.next()) {
+            (Some(now), Some(before)) => Some(now.duration_since(*before)),
+            _ => None,
+        };
+        let waited = std::mem::take(&mut self.view.waited);
+        self.view.last_frame_busy = frame_busy(gap, waited, ui.ctx().requested_repaint_last_pass());
         if let Some(since) = self.view.painted_change.take() {
             push_bounded(&mut self.view.on_screen, since.elapsed().as_secs_f64() * 1e3);
         }
@@ -1441,8 +1461,9 @@ impl EditorApp {
             // Best effort: a closed stderr must not stop the editor.
             let _ = writeln!(
                 std::io::stderr().lock(),
-                "stats: {} frames/s, {} updates/s, {:.1} ms per iteration; change to the UI pass showing it: {}, to the screen: {} ({} changes); {}",
+                "stats: {} frames/s{}, {} updates/s, {:.1} ms per iteration; change to the UI pass showing it: {}, to the screen: {} ({} changes); {}",
                 count(&self.view.frames),
+                if self.view.reduced_resolution { " (3D view at half resolution)" } else { "" },
                 count(&self.view.solves),
                 self.view.progress.ms_per_iteration,
                 summary(&self.view.latencies),
@@ -1495,5 +1516,21 @@ mod tests {
         assert_eq!(render_scale(true, false, slow), (INTERACTIVE_SCALE, true));
         assert_eq!(render_scale(true, true, fast), (INTERACTIVE_SCALE, true), "no flicker within a drag");
         assert_eq!(render_scale(false, true, slow), (1.0, false), "full again once it ends");
+    }
+
+    #[test]
+    fn a_frame_counts_as_slow_only_for_its_own_drawing() {
+        let ms = Duration::from_millis;
+        // Idle before the press (no repaint was pending): not the renderer's time.
+        assert_eq!(frame_busy(Some(ms(2000)), ms(0), false), None);
+        assert_eq!(frame_busy(None, ms(0), true), None);
+        // Frames back to back: the gap is the frame's.
+        assert_eq!(frame_busy(Some(ms(55)), ms(0), true), Some(ms(55)));
+        // Waiting up to 50 ms for the solver's first answer is not drawing: a fast renderer
+        // that waited 45 ms of a 50 ms frame drew for 5 ms.
+        let busy = frame_busy(Some(ms(50)), ms(45), true);
+        assert_eq!(busy, Some(ms(5)));
+        assert_eq!(render_scale(true, false, busy), (1.0, false));
+        assert_eq!(frame_busy(Some(ms(40)), ms(45), true), Some(ms(0)));
     }
 }
