@@ -528,8 +528,8 @@ impl Converger {
                 // The solver's own stopping test (it stopped this chunk on it), or a round-off E
                 // when there is no previous energy to compare with.
                 result.converged = match (previous, job.last_energy) {
-                    (Some(p), Some(e)) if tolerance > 0.0 => is_converged(p, e, tolerance),
-                    (_, Some(e)) => e <= ENERGY_FLOOR,
+                    (Some(p), Some(e)) if tolerance > 0.0 => is_converged(p, e, tolerance, report.energy_floor),
+                    (_, Some(e)) => e <= report.energy_floor.max(ENERGY_FLOOR),
                     _ => false,
                 };
                 result.finished = result.converged || job.done >= job.request.iterations;
