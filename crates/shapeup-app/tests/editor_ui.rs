@@ -405,7 +405,7 @@ fn a_free_piece_shows_the_banner_keeps_the_shape_and_pin_free_pieces_clears_it()
     settle(&mut harness);
     let banner = harness.state().banner().unwrap().to_owned();
     assert!(banner.starts_with("solve failed"), "banner: {banner}");
-    harness.get_by_label("1 of 2 pieces have no handle");
+    harness.get_by_label("1 of 2 pieces has no handle");
     assert!(harness.state().document().positions() == &rest[..], "a failed solve keeps the last good shape");
     assert_eq!(harness.state().solves_applied(), 0);
     let frame = render(&mut harness);
@@ -418,7 +418,7 @@ fn a_free_piece_shows_the_banner_keeps_the_shape_and_pin_free_pieces_clears_it()
     settle(&mut harness);
     assert_eq!(harness.state().document().num_free_pieces(), 0);
     harness.get_by_label("0 of 2 pieces have no handle");
-    assert!(harness.query_by_label("1 of 2 pieces have no handle").is_none());
+    assert!(harness.query_by_label("1 of 2 pieces has no handle").is_none());
     // The held sheet follows its handle up; the pinned one stays at rest.
     step_until(&mut harness, |app| (app.document().positions()[0].z - 0.3).abs() < 1e-2);
     let positions = harness.state().document().positions();
@@ -511,6 +511,43 @@ fn opening_with_unsaved_changes_asks_first_and_cancel_keeps_the_document() {
     settle(&mut harness);
     assert!(harness.query_by_label("Discard changes and open").is_none());
     assert_opened_bunny_scene(&mut harness, solves_before);
+}
+
+/// Asks the window to close (the title bar's close button) and runs one frame; returns the
+/// viewport commands that frame sent.
+fn request_close(harness: &mut Harness<'_, EditorApp>) -> Vec<egui::ViewportCommand> {
+    harness.input_mut().viewports.entry(egui::ViewportId::ROOT).or_default().events.push(egui::ViewportEvent::Close);
+    harness.step();
+    harness.output().viewport_output.get(&egui::ViewportId::ROOT).map(|v| v.commands.clone()).unwrap_or_default()
+}
+
+#[test]
+fn closing_with_unsaved_changes_asks_first() {
+    let mut harness = editor(spot_with_selection());
+    // Nothing to lose: the window closes.
+    assert!(!request_close(&mut harness).contains(&egui::ViewportCommand::CancelClose));
+    assert!(!harness.state().is_confirming_close());
+
+    harness.get_by_label("Fix selection").click();
+    settle(&mut harness);
+    assert!(request_close(&mut harness).contains(&egui::ViewportCommand::CancelClose), "the close is held");
+    settle(&mut harness);
+    assert!(harness.state().is_confirming_close());
+    harness.get_by_label("Quit without saving?");
+    harness.get_by_label("Cancel").click();
+    settle(&mut harness);
+    assert!(harness.query_by_label("Quit without saving?").is_none());
+    assert_eq!(num_handles(harness.state()), 1, "the session goes on");
+
+    assert!(request_close(&mut harness).contains(&egui::ViewportCommand::CancelClose));
+    settle(&mut harness);
+    harness.get_by_label("Discard changes and quit").click();
+    harness.step();
+    let commands =
+        harness.output().viewport_output.get(&egui::ViewportId::ROOT).map(|v| v.commands.clone()).unwrap_or_default();
+    assert!(commands.contains(&egui::ViewportCommand::Close), "{commands:?}");
+    // The close that follows goes through.
+    assert!(!request_close(&mut harness).contains(&egui::ViewportCommand::CancelClose));
 }
 
 // ---- 4. The Dynamics panel ----

@@ -36,6 +36,11 @@ const SLOW_FRAME: Duration = Duration::from_millis(33);
 /// resolution returns with the first frame after the drag.
 const INTERACTIVE_SCALE: f32 = 0.5;
 
+/// "1 vertex", "2 vertices".
+fn count(n: usize, one: &str, many: &str) -> String {
+    format!("{n} {}", if n == 1 { one } else { many })
+}
+
 /// How long the previous frame kept the renderer busy, from the gap between the starts of the
 /// last two frames: only when the previous frame asked for the next one at once (`back_to_back`,
 /// so the gap holds no idle time waiting for input) and less the time it spent waiting for the
@@ -147,6 +152,10 @@ struct View {
     scene_input: String,
     /// A path to open once the user agrees to drop unsaved changes.
     confirm_open: Option<PathBuf>,
+    /// The window's close was asked for with unsaved changes: ask before closing.
+    confirm_close: bool,
+    /// The user agreed to close without saving.
+    close_confirmed: bool,
     /// The next click on the mesh selects the connected piece under it.
     pick_piece: bool,
     /// Whether Tetrahedralize can be ticked for this mesh (computed once per mesh).
@@ -255,6 +264,8 @@ impl EditorApp {
                 export_input: "deformed.obj".into(),
                 scene_input: scene_name_for(&path),
                 confirm_open: None,
+                confirm_close: false,
+                close_confirmed: false,
                 pick_piece: false,
                 tetrahedralize: tetrahedralize_available(&document),
                 energy_history: VecDeque::new(),
@@ -731,7 +742,7 @@ impl EditorApp {
     }
 
     fn selection_section(&mut self, ui: &mut egui::Ui, commands: &mut Vec<Command>) {
-        ui.label(format!("{} vertices selected", self.document.num_selected()));
+        ui.label(format!("{} selected", count(self.document.num_selected(), "vertex", "vertices")));
         ui.horizontal_wrapped(|ui| {
             if ui.button("Fix selection").on_hover_text("a handle holding the selected vertices").clicked() {
                 commands.push(Command::FixSelection);
@@ -751,7 +762,11 @@ impl EditorApp {
         let free = self.document.num_free_pieces();
         ui.horizontal_wrapped(|ui| {
             if pieces > 1 || free > 0 {
-                let text = format!("{free} of {pieces} pieces have no handle");
+                let text = match (free, pieces) {
+                    (1, 1) => "the mesh has no handle".to_owned(),
+                    (1, _) => format!("1 of {pieces} pieces has no handle"),
+                    _ => format!("{free} of {pieces} pieces have no handle"),
+                };
                 if free > 0 && self.document.state().has_handles() {
                     ui.colored_label(Color32::from_rgb(200, 90, 0), text)
                         .on_hover_text("a piece without a handle has no defined position: the solve fails");
@@ -967,10 +982,10 @@ impl EditorApp {
         }
         let p = &self.view.progress;
         ui.label(format!(
-            "{} vertices, {} triangles, {} pieces\n{:.1} ms per iteration (last update: local {:.1} ms, global {:.1} ms)\n{} updates/s, {} frames/s",
-            self.document.num_vertices(),
-            self.document.triangles().len(),
-            self.document.pieces().count,
+            "{}, {}, {}\n{:.1} ms per iteration (last update: local {:.1} ms, global {:.1} ms)\n{} updates/s, {} frames/s",
+            count(self.document.num_vertices(), "vertex", "vertices"),
+            count(self.document.triangles().len(), "triangle", "triangles"),
+            count(self.document.pieces().count, "piece", "pieces"),
             p.ms_per_iteration,
             p.local_ms,
             p.global_ms,
@@ -1026,6 +1041,44 @@ impl EditorApp {
             }
             None => {}
         }
+    }
+
+    /// Closing the window with unsaved changes asks first (as opening another mesh does).
+    fn confirm_close(&mut self, ctx: &egui::Context) {
+        if ctx.input(|i| i.viewport().close_requested()) && self.document.is_modified() && !self.view.close_confirmed {
+            ctx.send_viewport_cmd(egui::ViewportCommand::CancelClose);
+            self.view.confirm_close = true;
+        }
+        if !self.view.confirm_close {
+            return;
+        }
+        let mut choice = None;
+        egui::Modal::new(egui::Id::unique("confirm-close")).show(ctx, |ui| {
+            ui.label("Quit without saving?");
+            ui.label("This session has unsaved changes (save the scene to keep them).");
+            ui.horizontal(|ui| {
+                if ui.button("Discard changes and quit").clicked() {
+                    choice = Some(true);
+                }
+                if ui.button("Cancel").clicked() {
+                    choice = Some(false);
+                }
+            });
+        });
+        match choice {
+            Some(true) => {
+                self.view.confirm_close = false;
+                self.view.close_confirmed = true;
+                ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+            }
+            Some(false) => self.view.confirm_close = false,
+            None => {}
+        }
+    }
+
+    /// Whether the window is asking to confirm quitting with unsaved changes.
+    pub fn is_confirming_close(&self) -> bool {
+        self.view.confirm_close
     }
 
     // ---- Viewport ----
@@ -1433,6 +1486,7 @@ impl eframe::App for EditorApp {
         self.poll_worker();
         self.paint(frame, &slot);
         self.confirm_open_modal(ui.ctx());
+        self.confirm_close(ui.ctx());
         self.record_latency();
         if self.options.print_stats {
             self.print_stats(ui.ctx());
