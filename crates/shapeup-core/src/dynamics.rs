@@ -98,8 +98,11 @@ pub enum DynamicsError {
 /// What one time step did.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct StepReport {
-    /// E(q) = Σ w_i ‖C_i q − p_i(q)‖² after the step (constraints only, without k or inertia).
-    pub energy: f64,
+    /// E(q) = Σ w_i ‖C_i q − p_i(q)‖² after the step (constraints only, without k or inertia)
+    /// when the iterations computed it (a tolerance, or Anderson acceleration, whose safeguard
+    /// needs it); `None` after plain iterations, which skip it: [`Simulation::energy`] computes
+    /// it when wanted.
+    pub energy: Option<f64>,
     /// Iterations run (fewer than asked when the tolerance stopped them).
     pub iterations: usize,
     /// Seconds in local steps.
@@ -242,8 +245,13 @@ impl Simulation {
         }
         self.system.set_inertial_target(&self.target)?;
         self.next.copy_from_slice(&self.target);
-        // 2. Local-global iterations on the inertia + constraint energy.
-        let report = self.system.solve(&mut self.next, self.params.iterations, self.params.tolerance)?;
+        // 2. Local-global iterations on the inertia + constraint energy; E only if they need it.
+        let needs_energy = self.params.tolerance > 0.0 || self.system.params().is_accelerated();
+        let report = if needs_energy {
+            self.system.solve(&mut self.next, self.params.iterations, self.params.tolerance)?
+        } else {
+            self.system.iterate(&mut self.next, self.params.iterations)?
+        };
         // 3. Velocity update with damping, then the new positions.
         let keep = (1.0 - self.params.damping) / h;
         for ((v, x), q) in self.velocities.iter_mut().zip(&mut self.positions).zip(&self.next) {
@@ -252,13 +260,22 @@ impl Simulation {
         }
         self.steps += 1;
         Ok(StepReport {
-            energy: report.energies.last().copied().unwrap_or(0.0),
-            iterations: report.energies.len(),
+            energy: report.energies.last().copied(),
+            iterations: if needs_energy { report.energies.len() } else { self.params.iterations },
             local_seconds: report.local_seconds,
             global_seconds: report.global_seconds,
             setup_seconds: report.setup_seconds,
             total_seconds: started.elapsed().as_secs_f64(),
         })
+    }
+
+    /// E(x_n) = Σ w_i ‖C_i x_n − p_i(x_n)‖² at the current positions (constraints only, without
+    /// k or inertia): one local step.
+    ///
+    /// # Errors
+    /// [`SolveError`] from the solver.
+    pub fn energy(&mut self) -> Result<f64, SolveError> {
+        Ok(self.system.energy(&self.positions)?.total)
     }
 
     /// Positions x_n (working frame).

@@ -256,3 +256,34 @@ fn bad_settings_are_refused() {
     let err = Simulation::new(system, negative, mesh.positions.clone(), DynamicsParams::default()).unwrap_err();
     assert!(err.to_string().contains("vertex 4"), "{err}");
 }
+
+/// A plain step without a tolerance skips E (the peers' work, no more) and lands on the same
+/// positions, bit for bit, as the iterations that evaluate it; `Simulation::energy` then gives
+/// the E those would have reported.
+#[test]
+fn a_plain_step_skips_the_energy_and_moves_the_same() {
+    let mesh = generate::cloth_grid(12, 10, 1.0, 0.8);
+    let kinds = [("triangle_strain", 10.0), ("bending", 10.0)];
+    let plain = DynamicsParams::default();
+    // A tolerance no iteration meets: the same iterations, with E after each.
+    let measured = DynamicsParams { tolerance: 1e-300, ..plain };
+    let (mut fast, _) = simulation_with(&mesh, &kinds, plain, Acceleration::None);
+    let (mut full, _) = simulation_with(&mesh, &kinds, measured, Acceleration::None);
+    for sim in [&mut fast, &mut full] {
+        sim.set_state(&mesh.positions, &swirl(&mesh.positions)).unwrap();
+    }
+    for _ in 0..15 {
+        let a = fast.step().unwrap();
+        let b = full.step().unwrap();
+        assert_eq!(a.energy, None, "plain iterations do not evaluate E");
+        assert_eq!(a.iterations, 10);
+        assert_eq!(b.iterations, 10);
+        assert_eq!(fast.positions(), full.positions(), "the same iterations");
+        let e = fast.energy().unwrap();
+        let reported = b.energy.unwrap();
+        assert!((e - reported).abs() <= 1e-12 * reported, "E {e} vs {reported}");
+    }
+    // Anderson acceleration needs E for its safeguard: reported.
+    let (mut accelerated, _) = simulation_with(&mesh, &kinds, plain, Acceleration::Anderson);
+    assert!(accelerated.step().unwrap().energy.is_some());
+}

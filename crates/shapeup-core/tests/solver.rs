@@ -516,3 +516,26 @@ fn a_shape_at_its_minimum_converges_on_its_round_off_floor() {
         assert!(*report.energies.last().unwrap() > 1e6 * report.energy_floor, "{report:?}");
     }
 }
+
+/// `iterate` runs the plain iteration without energies: the same q as a plain `solve`, bit for
+/// bit, whatever the acceleration setting, and chunks of it equal one run.
+#[test]
+fn iterate_equals_the_plain_solve_without_energies() {
+    let mesh = spot();
+    let (low, high) = ends(&mesh, 1);
+    let shapes = [("triangle_strain", 10.0), ("bending", 10.0)];
+    let mut reference = system(&mesh, &shapes, &low, &high, |p| p + DVec3::X * 0.2);
+    reference.set_params(SolverParams { acceleration: Acceleration::None, ..SolverParams::default() });
+    let mut expected = mesh.positions.clone();
+    let report = reference.solve(&mut expected, 12, 0.0).unwrap();
+    assert_eq!(report.energies.len(), 12);
+    for acceleration in ACCELERATIONS {
+        let mut s = system(&mesh, &shapes, &low, &high, |p| p + DVec3::X * 0.2);
+        s.set_params(SolverParams { acceleration, ..SolverParams::default() });
+        let mut q = mesh.positions.clone();
+        let report = s.iterate(&mut q, 5).unwrap();
+        assert!(report.energies.is_empty());
+        s.iterate(&mut q, 7).unwrap();
+        assert_eq!(q, expected, "{acceleration:?}");
+    }
+}

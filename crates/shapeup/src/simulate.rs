@@ -193,8 +193,8 @@ pub fn run(args: &SimulateArgs<'_>) -> Result<()> {
     } else {
         ProgressBar::hidden()
     };
-    let (mut energies, mut local, mut global, mut setup) =
-        (Vec::with_capacity(args.frames.min(1 << 20)), 0.0, 0.0, 0.0);
+    let (mut energies, mut local, mut global, mut setup, mut energy_seconds) =
+        (Vec::with_capacity(args.frames.min(1 << 20)), 0.0, 0.0, 0.0, 0.0);
     let h = simulation.params().time_step;
     let spinning = loaded.spinning_handles()?;
     let mut steps = || -> Result<()> {
@@ -207,7 +207,21 @@ pub fn run(args: &SimulateArgs<'_>) -> Result<()> {
             let step = simulation
                 .step()
                 .with_context(|| format!("{}: step {k} of {} failed", args.scene.display(), args.frames))?;
-            energies.push(step.energy);
+            if args.report.is_some() {
+                // Only a report needs E: plain iterations skip it (one more local step per step).
+                let energy = match step.energy {
+                    Some(e) => e,
+                    None => {
+                        let t = Instant::now();
+                        let e = simulation
+                            .energy()
+                            .with_context(|| format!("{}: energy after step {k}", args.scene.display()))?;
+                        energy_seconds += t.elapsed().as_secs_f64();
+                        e
+                    }
+                };
+                energies.push(energy);
+            }
             local += step.local_seconds;
             global += step.global_seconds;
             setup += step.setup_seconds;
@@ -254,6 +268,7 @@ pub fn run(args: &SimulateArgs<'_>) -> Result<()> {
                 "setup_s": loaded.build_seconds + setup,
                 "local_s": local,
                 "global_s": global,
+                "energy_s": energy_seconds,
                 "total_s": total,
             },
         });

@@ -45,6 +45,13 @@ pub struct SolverParams {
     pub anderson_window: usize,
 }
 
+impl SolverParams {
+    /// Whether iterations are accelerated (Anderson with a window of at least 1).
+    pub fn is_accelerated(&self) -> bool {
+        self.acceleration == Acceleration::Anderson && self.anderson_window > 0
+    }
+}
+
 /// [`SolverParams::anderson_window`] by default: the m of Peng et al. 2018's experiments.
 pub const DEFAULT_ANDERSON_WINDOW: usize = 5;
 
@@ -565,6 +572,39 @@ impl System {
         self.solve_with(q, iterations, tolerance, |_, _| ControlFlow::Continue(()))
     }
 
+    /// `iterations` plain local-global iterations from q without evaluating E: each a local
+    /// step at q then a global step, the work of ShapeOp's and the DGP core's loops, and no
+    /// more. For fixed-count runs that need no energy (a time step without a tolerance or a
+    /// report): [`System::solve`] adds a local step at the result and E after every iteration.
+    /// Whatever [`SolverParams::acceleration`] says, the iteration is the plain one (the
+    /// acceleration's safeguard needs E). `report.energies` stays empty.
+    ///
+    /// # Errors
+    /// As [`System::step`].
+    pub fn iterate(&mut self, q: &mut [DVec3], iterations: usize) -> Result<SolveReport, SolveError> {
+        self.check_length(q)?;
+        let mut report = SolveReport::default();
+        let t = Instant::now();
+        self.prepare()?;
+        report.setup_seconds = t.elapsed().as_secs_f64();
+        // Plain iterates are not the accelerated run's: a later accelerated solve starts afresh.
+        self.map_changed = true;
+        for k in 0..iterations {
+            let t = Instant::now();
+            if k == 0 {
+                let at_last_projection = self.projected_at.as_slice() == &q[..];
+                self.project_unless_current(q, at_last_projection);
+            } else {
+                self.project(q);
+            }
+            report.local_seconds += t.elapsed().as_secs_f64();
+            let t = Instant::now();
+            self.global_step(q)?;
+            report.global_seconds += t.elapsed().as_secs_f64();
+        }
+        Ok(report)
+    }
+
     /// [`System::solve`], calling `after_iteration(k, E_k)` after iteration k (from 1): it can
     /// report progress, or stop the solve with [`ControlFlow::Break`] (a newer target in an
     /// editor, an interrupt), leaving q at that iteration's result. The report then holds the
@@ -598,7 +638,7 @@ impl System {
         }
         report.energy_floor = self.energy_floor();
         match self.params.acceleration {
-            Acceleration::Anderson if self.params.anderson_window > 0 => {
+            Acceleration::Anderson if self.params.is_accelerated() => {
                 if !continuing {
                     self.anderson.reset();
                 }
