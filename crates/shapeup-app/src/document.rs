@@ -20,7 +20,9 @@ use shapeup_core::constraints::{BuildContext, Constraint, Params, Position, Sele
 use shapeup_core::geometry::{RestGeometry, WorkingFrame};
 use shapeup_core::io::read_mesh;
 use shapeup_core::mesh::Mesh;
-use shapeup_core::scene::{GroupSpec, MeshSettings, Scene, SelectionSpec, SolverSettings, Targets};
+use shapeup_core::scene::{
+    GroupSpec, MeshSettings, Scene, SelectionSpec, SolverSettings, Targets, hardened, take_hard,
+};
 use shapeup_core::solver::{Acceleration, ConstraintGroup, GroupId, SolveError, SolveReport, SolverParams, System};
 use std::fmt;
 use std::ops::ControlFlow;
@@ -312,7 +314,11 @@ fn build_group(rest: &Rest, group: &Group) -> Result<ConstraintGroup, EditorErro
         let working = group.targets.iter().map(|&t| rest.frame.to_working(t)).collect();
         let position = Position::new(vertices, working)
             .ok_or_else(|| constraint_error("a handle needs one target per vertex, at least one".into()))?;
-        vec![Box::new(position)]
+        let position = ConstraintGroup::new(group.name.clone(), group.weight, vec![Box::new(position)]);
+        // A handle read from a scene keeps its `hard` key.
+        let options = group.source.as_ref().map(|s| s.options.clone()).unwrap_or_default();
+        let (hard, _) = take_hard(&options).map_err(constraint_error)?;
+        return hardened(position, hard).map_err(constraint_error);
     } else {
         let selection = match &group.vertices {
             None => Selection::All,
@@ -725,7 +731,8 @@ impl Document {
                 weight: spec.weight,
                 vertices,
                 targets,
-                source: (role == GroupRole::Other).then(|| Arc::new(spec.clone())),
+                // Other groups keep their scene entry; handles their options (`hard`).
+                source: (role == GroupRole::Other || !spec.options.is_empty()).then(|| Arc::new(spec.clone())),
             });
         }
         let kinds: Vec<&str> = groups.iter().filter(|g| g.role == GroupRole::Shape).map(|g| g.kind.as_str()).collect();

@@ -395,6 +395,7 @@ fn scene_groups_become_editor_groups() {
         name = "top"
         box = {{ min = [-10, 0.6, -10], max = [10, 10, 10] }}
         translate = [0.0, 0.1, 0.0]
+        hard = true
         [[constraints]]
         type = "floor"
         height = -0.5
@@ -406,16 +407,21 @@ fn scene_groups_become_editor_groups() {
     let roles: Vec<GroupRole> = doc.groups().iter().map(|g| g.role).collect();
     assert_eq!(roles, [GroupRole::Shape, GroupRole::Handle, GroupRole::Other]);
     assert_eq!(doc.groups()[0].weight, 5.0);
-    let top = &doc.groups()[1];
+    let top = doc.groups()[1].clone();
     let mesh = read_mesh(Path::new(SPOT)).unwrap().mesh;
     for (&v, t) in top.vertices.as_ref().unwrap().iter().zip(&top.targets) {
         assert!(mesh.positions[v as usize].y >= 0.6);
         assert_eq!(*t, mesh.positions[v as usize] + DVec3::new(0.0, 0.1, 0.0));
     }
     doc.solve(5).unwrap();
-    // The floor keeps its option when saved.
+    // The hard handle holds its vertices exactly.
+    for (&v, t) in top.vertices.as_ref().unwrap().iter().zip(&top.targets) {
+        assert!((doc.positions()[v as usize] - *t).length() < 1e-12);
+    }
+    // The floor keeps its option when saved, the handle its `hard`.
     let saved = doc.to_scene(SPOT);
     assert_eq!(saved.groups[2].options.get("height").and_then(|h| h.as_f64()), Some(-0.5));
+    assert_eq!(saved.groups[1].options.get("hard").and_then(|h| h.as_bool()), Some(true));
 }
 
 #[test]

@@ -287,3 +287,28 @@ fn a_plain_step_skips_the_energy_and_moves_the_same() {
     let (mut accelerated, _) = simulation_with(&mesh, &kinds, plain, Acceleration::Anderson);
     assert!(accelerated.step().unwrap().energy.is_some());
 }
+
+/// Hard pins in dynamic mode: the pinned corners stay exactly where they are while the cloth
+/// falls around them (they leave the system; the rest keeps its inertia).
+#[test]
+fn hard_pins_hold_a_falling_cloth_exactly() {
+    let mesh = generate::cloth_grid(10, 10, 1.0, 1.0);
+    for acceleration in [Acceleration::None, Acceleration::Anderson] {
+        let (mut sim, _) =
+            simulation_with(&mesh, &[("triangle_strain", 10.0)], DynamicsParams::default(), acceleration);
+        let corners = [0u32, 9];
+        let pins =
+            Position::new(corners.to_vec(), corners.iter().map(|&v| mesh.positions[v as usize]).collect()).unwrap();
+        sim.system_mut().add_group(ConstraintGroup::new("pins", 1.0, vec![Box::new(pins)]).with_hard(true)).unwrap();
+        let mut lowest = f64::INFINITY;
+        for _ in 0..60 {
+            sim.step().unwrap();
+            lowest = lowest.min(sim.positions()[95].y);
+        }
+        for &c in &corners {
+            assert_eq!(sim.positions()[c as usize], mesh.positions[c as usize], "{acceleration:?}");
+            assert_eq!(sim.velocities()[c as usize], DVec3::ZERO);
+        }
+        assert!(lowest < mesh.positions[95].y - 0.5, "the free edge swung down (lowest y {lowest})");
+    }
+}

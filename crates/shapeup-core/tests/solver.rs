@@ -539,3 +539,92 @@ fn iterate_equals_the_plain_solve_without_energies() {
         assert_eq!(q, expected, "{acceleration:?}");
     }
 }
+
+/// Hard handles (libigl's `min_quad_with_fixed`): held vertices leave the system and sit exactly
+/// on their targets; a soft handle of growing weight tends to the hard result (error ∝ 1/w);
+/// moving hard targets refactors nothing and equals a fresh system with those targets.
+#[test]
+fn hard_handles_hold_exactly_and_are_the_limit_of_stiff_soft_ones() {
+    let mesh = spot();
+    let (low, high) = ends(&mesh, 1);
+    let shapes = [("triangle_strain", 10.0), ("bending", 10.0)];
+    let moved = |p: DVec3| p + DVec3::new(0.2, 0.05, 0.0);
+    let plain = SolverParams { acceleration: Acceleration::None, ..SolverParams::default() };
+    // `high` hard (group 3: after the two shape groups and `low`).
+    let run = |weight: Option<f64>, iterations: usize| {
+        let mut s = system(&mesh, &shapes, &low, &high, moved);
+        s.set_params(plain);
+        let high_id = shapeup_core::solver::GroupId(3);
+        match weight {
+            None => s.set_hard(high_id, true).unwrap(),
+            Some(w) => s.set_multiplier(high_id, w).unwrap(),
+        }
+        // Both start with the handle on its targets (a hard solve puts it there first).
+        let mut q = mesh.positions.clone();
+        for &v in &high {
+            q[v] = moved(q[v]);
+        }
+        s.solve(&mut q, iterations, 0.0).unwrap();
+        (q, s)
+    };
+    let (hard, s) = run(None, 20);
+    for &v in &high {
+        assert_eq!(hard[v], moved(mesh.positions[v]), "vertex {v} exactly on its target");
+    }
+    assert_eq!(s.num_solved_vertices(), mesh.num_vertices() - high.len(), "held vertices leave the system");
+    let gap = |w: f64| max_distance(&run(Some(w), 20).0, &hard);
+    // Measured: 8.6e-3 at w = 1e2, 3.8e-5 at 1e6, 3.9e-7 at 1e8, 3.9e-9 at 1e10.
+    let (g6, g8) = (gap(1e6), gap(1e8));
+    assert!(g8 < 2e-2 * g6 && g8 < 1e-6, "soft → hard as w → ∞: {g6:e} at 1e6, {g8:e} at 1e8");
+
+    // Moving hard targets: the right-hand side only.
+    let (mut q, mut s) = run(None, 5);
+    let factorizations = s.factorizations();
+    let targets: Vec<DVec3> = high.iter().map(|&v| mesh.positions[v] + DVec3::new(-0.1, 0.1, 0.05)).collect();
+    s.set_position_targets(shapeup_core::solver::GroupId(3), &targets).unwrap();
+    s.solve(&mut q, 15, 0.0).unwrap();
+    assert_eq!(s.factorizations(), factorizations, "no refactorization");
+    for (&v, t) in high.iter().zip(&targets) {
+        assert_eq!(q[v], *t);
+    }
+    let mut fresh = system(&mesh, &shapes, &low, &high, moved);
+    fresh.set_params(plain);
+    fresh.set_hard(shapeup_core::solver::GroupId(3), true).unwrap();
+    let mut expected = mesh.positions.clone();
+    fresh.solve(&mut expected, 5, 0.0).unwrap();
+    fresh.set_position_targets(shapeup_core::solver::GroupId(3), &targets).unwrap();
+    fresh.solve(&mut expected, 15, 0.0).unwrap();
+    assert!(max_distance(&q, &expected) < 1e-12);
+
+    // Accelerated, the energy still never increases.
+    let mut s = system(&mesh, &shapes, &low, &high, moved);
+    s.set_hard(shapeup_core::solver::GroupId(3), true).unwrap();
+    let mut q = mesh.positions.clone();
+    let report = s.solve(&mut q, 40, 0.0).unwrap();
+    for w in report.energies.windows(2) {
+        assert!(w[1] <= w[0] * (1.0 + 1e-12), "E rose {} -> {}", w[0], w[1]);
+    }
+    // Only groups that hold points can be hard.
+    let err = s.set_hard(shapeup_core::solver::GroupId(0), true).unwrap_err();
+    assert!(err.to_string().contains("cannot be hard"), "{err}");
+}
+
+/// A piece whose only anchor is a hard handle is anchored; a piece of hard vertices only leaves
+/// the system entirely.
+#[test]
+fn a_hard_handle_anchors_its_piece() {
+    let mesh = grid(6);
+    let rest = RestGeometry::new(mesh.positions.clone(), mesh.triangles.clone(), vec![]);
+    let mut s = System::new(mesh.num_vertices(), SolverParams::default());
+    s.add_group(shape_group("edge_spring", 1.0, &rest)).unwrap();
+    s.add_group(handle("corner", &[0, 5], vec![mesh.positions[0], mesh.positions[5] + DVec3::Y * 0.1]).with_hard(true))
+        .unwrap();
+    let mut q = mesh.positions.clone();
+    s.solve(&mut q, 10, 0.0).unwrap();
+    assert_eq!(q[5], mesh.positions[5] + DVec3::Y * 0.1);
+    assert!(q[20].y > 0.0, "the sheet follows the lifted corner");
+}
+
+fn max_distance(a: &[DVec3], b: &[DVec3]) -> f64 {
+    a.iter().zip(b).map(|(p, q)| (*p - *q).length()).fold(0.0, f64::max)
+}

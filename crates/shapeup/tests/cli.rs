@@ -292,6 +292,29 @@ fn deform_keeps_the_mesh_and_moves_the_handles() {
     );
 }
 
+/// `hard = true` holds the handles exactly (the output's handle vertices are their targets, to
+/// the file's printed precision), and is refused where it cannot apply.
+#[test]
+fn hard_handles_hold_their_vertices_exactly() {
+    let ws = Workspace::new();
+    let rest = spot();
+    let body = handle_body(1.0).replace("name = \"moved\"\n", "name = \"moved\"\nhard = true\n");
+    let scene = ws.scene("spot.toml", &toml_scene(Path::new(SPOT), "", &body));
+    let (out_mesh, _, _) = deform_ok(&ws, &scene, "spot.obj", &[]);
+    let (_, moved, _) = spot_classes(&rest);
+    let t = DVec3::from(HEAD_TRANSLATE);
+    let worst = moved.iter().map(|&i| (out_mesh.positions[i] - rest.positions[i] - t).length()).fold(0.0, f64::max);
+    assert!(worst < 1e-9, "a hard handle is off its target by {worst}");
+
+    let ws = Workspace::new();
+    ws.spot_scene_fails(&body.replace("hard = true", "hard = \"yes\""), &["moved", "hard", "true or false"]);
+    let ws = Workspace::new();
+    ws.spot_scene_fails(
+        &body.replace("name = \"shape\"\n", "name = \"shape\"\nhard = true\n"),
+        &["shape", "hard", "edge_spring"],
+    );
+}
+
 #[test]
 fn deform_writes_obj_ply_and_stl() {
     let ws = Workspace::new();

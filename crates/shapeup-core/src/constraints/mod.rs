@@ -74,6 +74,13 @@ pub trait Constraint: Any + Send + Sync + Debug {
     fn kind(&self) -> &'static str;
     /// The vertices the constraint reads (every column of its rows).
     fn vertices(&self) -> &[u32];
+    /// The vertices this constraint pulls to points and those points, when it can hold them
+    /// there exactly instead (a position handle): what a hard group fixes
+    /// ([`ConstraintGroup::hard`](crate::solver::ConstraintGroup::hard)). `None` (the default):
+    /// the constraint cannot be hard.
+    fn held_points(&self) -> Option<(&[u32], &[DVec3])> {
+        None
+    }
     /// The element weight ω_i (rest length, area, volume, … as in the math reference).
     fn element_weight(&self) -> f64;
     /// Number of rows k_i of C_i; fixed after construction.

@@ -42,6 +42,9 @@ impl Constraint for Position {
     fn vertices(&self) -> &[u32] {
         &self.vertices
     }
+    fn held_points(&self) -> Option<(&[u32], &[DVec3])> {
+        Some((&self.vertices, &self.targets))
+    }
     fn element_weight(&self) -> f64 {
         1.0
     }

@@ -10,6 +10,7 @@ use crate::mesh::Mesh;
 use crate::solver::{ConstraintGroup, GroupId, SolveError, SolveReport, SolverParams, System};
 use crate::warnings::Warnings;
 use glam::DVec3;
+use serde_json::{Map, Value};
 use std::time::Instant;
 
 /// A scene with its mesh loaded and its constraints built: ready to solve.
@@ -173,11 +174,12 @@ fn build_group(
     frame: &WorkingFrame,
 ) -> Result<ConstraintGroup, String> {
     let picked = spec.selection.resolve(&mesh.positions)?;
+    let (hard, options) = take_hard(&spec.options)?;
     let constraints = if spec.kind == "position" {
-        if !spec.options.is_empty() {
-            let keys: Vec<&str> = spec.options.keys().map(String::as_str).collect();
+        if !options.is_empty() {
+            let keys: Vec<&str> = options.keys().map(String::as_str).collect();
             return Err(format!(
-                "unknown key \"{}\" for a position constraint (allowed: vertices, box, sphere, translate, rotate, targets)",
+                "unknown key \"{}\" for a position constraint (allowed: vertices, box, sphere, translate, rotate, targets, hard)",
                 keys[0]
             ));
         }
@@ -194,9 +196,37 @@ fn build_group(
             _ => Selection::from_indices(mesh.num_vertices(), &picked),
         };
         let ctx = BuildContext { rest, selection: &selection, frame };
-        build_constraints(&spec.kind, &ctx, Params::new(spec.options.clone())).map_err(|e| e.to_string())?
+        build_constraints(&spec.kind, &ctx, Params::new(options)).map_err(|e| e.to_string())?
     };
-    Ok(ConstraintGroup::new(spec.name.clone(), spec.weight, constraints))
+    hardened(ConstraintGroup::new(spec.name.clone(), spec.weight, constraints), hard)
+}
+
+/// A group's `hard` key (default `false`) and its other options.
+///
+/// # Errors
+/// A `hard` that is not `true` or `false`.
+pub fn take_hard(options: &Map<String, Value>) -> Result<(bool, Map<String, Value>), String> {
+    let mut rest = options.clone();
+    let hard = match rest.remove("hard") {
+        None => false,
+        Some(Value::Bool(b)) => b,
+        Some(other) => return Err(format!("\"hard\" must be true or false, found {other}")),
+    };
+    Ok((hard, rest))
+}
+
+/// `group` made hard when asked, if its constraints can hold their vertices exactly.
+///
+/// # Errors
+/// A hard group of a type without [`held_points`](crate::constraints::Constraint::held_points).
+pub fn hardened(group: ConstraintGroup, hard: bool) -> Result<ConstraintGroup, String> {
+    if hard && group.constraints.iter().any(|c| c.held_points().is_none()) {
+        return Err(format!(
+            "\"hard = true\" is for groups that hold vertices at points (position), not {}",
+            group.kind
+        ));
+    }
+    Ok(group.with_hard(hard))
 }
 
 /// Targets (input frame) of a position group's vertices: explicit, or rest rotated about the

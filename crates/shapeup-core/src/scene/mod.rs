@@ -8,7 +8,7 @@
 mod build;
 mod write;
 
-pub use build::{LoadedScene, SpinningHandle};
+pub use build::{LoadedScene, SpinningHandle, hardened, take_hard};
 
 use crate::mesh::Mesh;
 use crate::solver::{Acceleration, Factorization, MAX_ANDERSON_WINDOW, SolverParams};

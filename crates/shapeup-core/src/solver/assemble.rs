@@ -3,7 +3,9 @@
 //!
 //! Vertices that no constraint touches and that have no inertia (static mode, or a massless
 //! vertex in dynamic mode) are left out of the system (they keep their positions); the others
-//! are renumbered densely ("solved" vertices).
+//! are renumbered densely ("solved" vertices). Vertices held by a hard group are left out
+//! too: their positions are known, so their columns of C move to the right-hand side
+//! (min_quad_with_fixed's elimination).
 
 use super::SolveError;
 use crate::constraints::{Constraint, RowSink};
@@ -57,18 +59,32 @@ pub(crate) struct Assembly {
     pub lhs_row_idx: Vec<u32>,
     /// Per group: Σ_{i in group} ω_i C_iᵀC_i on the pattern (without the multiplier).
     pub group_lhs: Vec<Vec<f64>>,
+    /// Per vertex: held by a hard group (empty when none is).
+    pub fixed: Vec<bool>,
 }
 
 impl Assembly {
     /// Stacks the rows of `groups` (each a list of constraints) over `n` vertices; a vertex
-    /// with positive `inertia` is in the system even if no constraint touches it.
-    pub fn new(n: usize, groups: &[&[Box<dyn Constraint>]], inertia: Option<&[f64]>) -> Self {
-        let mut a = Assembly { c_ptr: vec![0], ..Default::default() };
+    /// with positive `inertia` is in the system even if no constraint touches it. A vertex
+    /// marked in `fixed` (empty: none) is never solved; a group marked in `hard` adds no rows
+    /// (it is what fixes them).
+    pub fn new(
+        n: usize,
+        groups: &[&[Box<dyn Constraint>]],
+        hard: &[bool],
+        fixed: Vec<bool>,
+        inertia: Option<&[f64]>,
+    ) -> Self {
+        let mut a = Assembly { c_ptr: vec![0], fixed, ..Default::default() };
         let mut sink = RowSink::default();
         for (g, constraints) in groups.iter().enumerate() {
             let start = a.row_weight.len();
             let mut offsets = Vec::with_capacity(constraints.len() + 1);
             offsets.push(0);
+            if hard.get(g).copied().unwrap_or(false) {
+                a.groups.push(GroupRows { start, offsets });
+                continue;
+            }
             for c in constraints.iter() {
                 sink.entries.clear();
                 c.rows(&mut sink);
@@ -127,6 +143,9 @@ impl Assembly {
         for &v in &self.c_col {
             touched[v as usize] = true;
         }
+        for (t, _) in touched.iter_mut().zip(&self.fixed).filter(|(_, f)| **f) {
+            *t = false;
+        }
         self.solved_index = vec![u32::MAX; n];
         for (v, _) in touched.iter().enumerate().filter(|(_, t)| **t) {
             self.solved_index[v] = self.solved.len() as u32;
@@ -144,21 +163,29 @@ impl Assembly {
         self.row_weight.len()
     }
 
+    /// Whether vertex `v` is held by a hard group.
+    pub fn is_fixed(&self, v: usize) -> bool {
+        self.fixed.get(v).copied().unwrap_or(false)
+    }
+
     fn build_transpose(&mut self) {
         let ns = self.num_solved();
         let mut count = vec![0usize; ns + 1];
+        // Columns of fixed vertices are not in Cᵀ's solved rows (they go to the right-hand side).
         for &v in &self.c_col {
-            count[self.solved_index[v as usize] as usize + 1] += 1;
+            if let Some(s) = self.solved(v) {
+                count[s + 1] += 1;
+            }
         }
         for i in 0..ns {
             count[i + 1] += count[i];
         }
         let mut next = count.clone();
-        self.ct_row = vec![0; self.c_col.len()];
-        self.ct_base = vec![0.0; self.c_col.len()];
+        self.ct_row = vec![0; count[ns]];
+        self.ct_base = vec![0.0; count[ns]];
         for r in 0..self.num_rows() {
             for k in self.c_ptr[r]..self.c_ptr[r + 1] {
-                let s = self.solved_index[self.c_col[k] as usize] as usize;
+                let Some(s) = self.solved(self.c_col[k]) else { continue };
                 self.ct_row[next[s]] = r as u32;
                 self.ct_base[next[s]] = self.row_weight[r] * self.c_val[k];
                 next[s] += 1;
@@ -180,9 +207,8 @@ impl Assembly {
                 for k in self.ct_ptr[b]..self.ct_ptr[b + 1] {
                     let r = self.ct_row[k] as usize;
                     for &v in &self.c_col[self.c_ptr[r]..self.c_ptr[r + 1]] {
-                        let a = self.solved_index[v as usize];
-                        if a as usize >= b {
-                            rows.push(a);
+                        if let Some(a) = self.solved(v).filter(|&a| a >= b) {
+                            rows.push(a as u32);
                         }
                     }
                 }
@@ -209,9 +235,9 @@ impl Assembly {
         for r in self.groups[g].range() {
             let (lo, hi) = (self.c_ptr[r], self.c_ptr[r + 1]);
             for a in lo..hi {
-                let sa = self.solved_index[self.c_col[a] as usize] as usize;
+                let Some(sa) = self.solved(self.c_col[a]) else { continue };
                 for b in lo..hi {
-                    let sb = self.solved_index[self.c_col[b] as usize] as usize;
+                    let Some(sb) = self.solved(self.c_col[b]) else { continue };
                     if sa >= sb {
                         let slot = self.slot(sa, sb);
                         values[slot] += self.row_weight[r] * self.c_val[a] * self.c_val[b];
@@ -220,6 +246,12 @@ impl Assembly {
             }
         }
         values
+    }
+
+    /// The solved index of vertex `v`, if it is solved.
+    fn solved(&self, v: u32) -> Option<usize> {
+        let s = self.solved_index[v as usize];
+        (s != u32::MAX).then_some(s as usize)
     }
 
     /// Index of entry (row, col), row ≥ col, in the lower-triangle storage.
@@ -236,7 +268,8 @@ impl Assembly {
         let ns = self.num_solved();
         let links: Vec<Vec<u32>> = (0..self.num_rows())
             .map(|r| {
-                self.c_col[self.c_ptr[r]..self.c_ptr[r + 1]].iter().map(|&v| self.solved_index[v as usize]).collect()
+                let row = &self.c_col[self.c_ptr[r]..self.c_ptr[r + 1]];
+                row.iter().filter_map(|&v| self.solved(v).map(|s| s as u32)).collect()
             })
             .collect();
         let (piece, count) = connected_pieces(ns, links.iter().map(|l| l.as_slice()));
@@ -246,9 +279,11 @@ impl Assembly {
             let sum: f64 = vals.iter().sum();
             let scale: f64 = vals.iter().map(|v| v.abs()).sum();
             let weight = self.row_weight[r] * multipliers[self.row_group[r] as usize];
+            // A row through a fixed vertex ties its free vertices to a known point.
+            let touches_fixed = self.c_col[self.c_ptr[r]..self.c_ptr[r + 1]].iter().any(|&v| self.is_fixed(v as usize));
             if let Some(&v) = link.first()
                 && weight > 0.0
-                && sum.abs() > 1e-9 * scale
+                && (touches_fixed || sum.abs() > 1e-9 * scale)
             {
                 anchored[piece[v as usize] as usize] = true;
             }

@@ -96,6 +96,12 @@ pub struct ConstraintGroup {
     pub multiplier: f64,
     /// The constraints.
     pub constraints: Vec<Box<dyn Constraint>>,
+    /// Hold the group's vertices exactly at their points instead of pulling them there
+    /// (default `false`): they leave the linear system, which then covers the other vertices
+    /// only, and moving the points changes only the right-hand side (libigl's
+    /// `min_quad_with_fixed`). Only for constraints with [`Constraint::held_points`] (position
+    /// groups); the multiplier then plays no part and the group adds nothing to E.
+    pub hard: bool,
 }
 
 impl ConstraintGroup {
@@ -103,7 +109,13 @@ impl ConstraintGroup {
     /// its first constraint.
     pub fn new(name: impl Into<String>, multiplier: f64, constraints: Vec<Box<dyn Constraint>>) -> Self {
         let kind = constraints.first().map(|c| c.kind()).unwrap_or("empty").to_string();
-        ConstraintGroup { name: name.into(), kind, multiplier, constraints }
+        ConstraintGroup { name: name.into(), kind, multiplier, constraints, hard: false }
+    }
+
+    /// The group made hard (or soft again): see [`ConstraintGroup::hard`].
+    pub fn with_hard(mut self, hard: bool) -> Self {
+        self.hard = hard;
+        self
     }
 
     /// Total number of rows of its constraints.
@@ -167,6 +179,14 @@ pub enum SolveError {
         name: String,
         /// What is wrong.
         problem: String,
+    },
+    /// A hard group of a type that cannot hold its vertices exactly.
+    #[error("group \"{name}\" cannot be hard: only position groups hold their vertices exactly, not {kind}")]
+    NotHardable {
+        /// Group name.
+        name: String,
+        /// Its constraint type.
+        kind: String,
     },
     /// Positions of the wrong length.
     #[error("expected {expected} positions, got {found}")]
@@ -280,6 +300,13 @@ pub struct System {
     inertial_rhs: Vec<DVec3>,
     /// The inertial target s (all vertices), kept to rebuild `inertial_rhs` after re-assembly.
     inertial_target: Vec<DVec3>,
+    /// Vertices held by hard groups and where (the last hard group holding a vertex wins).
+    held: Vec<(u32, DVec3)>,
+    /// Numeric factorizations so far.
+    factorizations: u64,
+    /// What does not change between iterations per solved vertex: μ s (dynamic mode) minus the
+    /// fixed vertices' share, −Σ_r w_r c_{r,v} Σ_{f fixed} c_{r,f} x_f; empty when neither.
+    constant_rhs: Vec<DVec3>,
 }
 
 impl System {
@@ -307,6 +334,9 @@ impl System {
             inertia: None,
             inertial_rhs: Vec::new(),
             inertial_target: Vec::new(),
+            held: Vec::new(),
+            factorizations: 0,
+            constant_rhs: Vec::new(),
         }
     }
 
@@ -353,8 +383,64 @@ impl System {
         self.inertial_target.clear();
         self.inertial_target.extend_from_slice(target);
         self.update_inertial_rhs();
+        self.update_constant_rhs();
         self.map_changed = true;
         Ok(())
+    }
+
+    /// [`System::constant_rhs`](Self) from the inertial part and the held vertices' points.
+    fn update_constant_rhs(&mut self) {
+        self.constant_rhs.clear();
+        let a = &self.assembly;
+        if !self.assembled || (self.inertia.is_none() && self.held.is_empty()) {
+            return;
+        }
+        self.constant_rhs.resize(a.num_solved(), DVec3::ZERO);
+        if self.inertia.is_some() {
+            self.constant_rhs.copy_from_slice(&self.inertial_rhs);
+        }
+        if self.held.is_empty() {
+            return;
+        }
+        let mut at = vec![DVec3::ZERO; self.num_vertices];
+        for &(v, x) in &self.held {
+            at[v as usize] = x;
+        }
+        // Per row, the fixed vertices' part of C_r x; then minus Cᵀ W of it per solved vertex.
+        let fixed_part: Vec<DVec3> = (0..a.num_rows())
+            .map(|r| {
+                (a.c_ptr[r]..a.c_ptr[r + 1])
+                    .filter(|&k| a.is_fixed(a.c_col[k] as usize))
+                    .map(|k| a.c_val[k] * at[a.c_col[k] as usize])
+                    .sum()
+            })
+            .collect();
+        for (v, b) in self.constant_rhs.iter_mut().enumerate() {
+            for k in a.ct_ptr[v]..a.ct_ptr[v + 1] {
+                *b -= self.ct_weighted[k] * fixed_part[a.ct_row[k] as usize];
+            }
+        }
+    }
+
+    /// Moves the held vertices of `q` to their points.
+    fn pin_held(&self, q: &mut [DVec3]) {
+        for &(v, x) in &self.held {
+            q[v as usize] = x;
+        }
+    }
+
+    /// The hard groups' vertices and points, in slot order.
+    fn collect_held(&self) -> Result<Vec<(u32, DVec3)>, SolveError> {
+        let mut held = Vec::new();
+        for group in self.slots.iter().flatten().filter(|g| g.hard) {
+            for c in &group.constraints {
+                let (vertices, points) = c
+                    .held_points()
+                    .ok_or_else(|| SolveError::NotHardable { name: group.name.clone(), kind: group.kind.clone() })?;
+                held.extend(vertices.iter().copied().zip(points.iter().copied()));
+            }
+        }
+        Ok(held)
     }
 
     /// μ_i s_i per solved vertex (zero where no target was set).
@@ -436,6 +522,22 @@ impl System {
         Ok(())
     }
 
+    /// Makes a group hard or soft again ([`ConstraintGroup::hard`]); the next solve re-assembles.
+    ///
+    /// # Errors
+    /// Unknown group, or [`SolveError::NotHardable`] for a group that cannot hold its vertices.
+    pub fn set_hard(&mut self, id: GroupId, hard: bool) -> Result<(), SolveError> {
+        let group = self.slots.get_mut(id.0 as usize).and_then(Option::as_mut).ok_or(SolveError::UnknownGroup(id.0))?;
+        if hard && group.constraints.iter().any(|c| c.held_points().is_none()) {
+            return Err(SolveError::NotHardable { name: group.name.clone(), kind: group.kind.clone() });
+        }
+        if group.hard != hard {
+            group.hard = hard;
+            self.mark(Stale::Pattern);
+        }
+        Ok(())
+    }
+
     /// Moves the targets of a position group (working frame); no refactorization is needed.
     ///
     /// # Errors
@@ -453,7 +555,15 @@ impl System {
         if !position.set_targets(targets) {
             return Err(bad(format!("has {expected} vertices but {} targets were given", targets.len())));
         }
-        self.retargeted.push(id.0 as usize);
+        if group.hard {
+            // Held points: only the right-hand side changes.
+            if self.assembled {
+                self.held = self.collect_held()?;
+                self.update_constant_rhs();
+            }
+        } else {
+            self.retargeted.push(id.0 as usize);
+        }
         self.map_changed = true;
         Ok(())
     }
@@ -484,7 +594,18 @@ impl System {
         if lists.iter().all(|l| l.is_empty()) && self.inertia.is_none() {
             return Err(SolveError::NoConstraints);
         }
-        self.assembly = Assembly::new(self.num_vertices, &lists, self.inertia.as_deref());
+        let hard: Vec<bool> = self.order.iter().map(|&s| self.slots[s].as_ref().is_some_and(|g| g.hard)).collect();
+        self.held = self.collect_held()?;
+        let mut fixed = Vec::new();
+        if !self.held.is_empty() {
+            fixed = vec![false; self.num_vertices];
+            for &(v, _) in &self.held {
+                *fixed
+                    .get_mut(v as usize)
+                    .ok_or(SolveError::WrongLength { expected: self.num_vertices, found: v as usize + 1 })? = true;
+            }
+        }
+        self.assembly = Assembly::new(self.num_vertices, &lists, &hard, fixed, self.inertia.as_deref());
         let rows = self.assembly.num_rows();
         self.projections = vec![DVec3::ZERO; rows];
         self.projected_at.clear();
@@ -494,6 +615,7 @@ impl System {
         self.assembled = true;
         self.update_weights();
         self.update_inertial_rhs();
+        self.update_constant_rhs();
         Ok(())
     }
 
@@ -533,6 +655,7 @@ impl System {
             );
         }
         self.update_weights();
+        self.update_constant_rhs();
         let mut values = vec![0.0; self.assembly.lhs_row_idx.len()];
         for (group, &gk) in self.assembly.group_lhs.iter().zip(&g) {
             values.iter_mut().zip(group).for_each(|(v, x)| *v += gk * x);
@@ -544,6 +667,7 @@ impl System {
         }
         if let Some(factor) = self.factor.as_mut() {
             factor.factorize(&values).map_err(SolveError::Singular)?;
+            self.factorizations += 1;
         }
         self.stale = Stale::Fresh;
         Ok(())
@@ -556,6 +680,7 @@ impl System {
     pub fn step(&mut self, q: &mut [DVec3]) -> Result<(), SolveError> {
         self.check_length(q)?;
         self.prepare()?;
+        self.pin_held(q);
         // Local step: P_i = p_i(q) for every constraint, in parallel.
         self.project(q);
         // Global step: solve (Σ w_i C_iᵀC_i) q = Σ w_i C_iᵀ P_i for x, y and z.
@@ -586,6 +711,7 @@ impl System {
         let mut report = SolveReport::default();
         let t = Instant::now();
         self.prepare()?;
+        self.pin_held(q);
         report.setup_seconds = t.elapsed().as_secs_f64();
         // Plain iterates are not the accelerated run's: a later accelerated solve starts afresh.
         self.map_changed = true;
@@ -624,6 +750,7 @@ impl System {
         let t = Instant::now();
         let map_changed = std::mem::take(&mut self.map_changed);
         self.prepare()?;
+        self.pin_held(q);
         report.setup_seconds = t.elapsed().as_secs_f64();
         // Compared once: the projections were computed at this q (false after a re-assembly).
         let at_last_projection = self.projected_at.as_slice() == &q[..];
@@ -796,7 +923,7 @@ impl System {
     /// Every projection into the buffer (assembled, not necessarily factored).
     fn project(&mut self, q: &[DVec3]) {
         for (&slot, rows) in self.order.iter().zip(&self.assembly.groups) {
-            if let Some(group) = &self.slots[slot] {
+            if let Some(group) = self.slots[slot].as_ref().filter(|g| !g.hard) {
                 local::project_all(&group.constraints, &rows.offsets, q, &mut self.projections[rows.range()]);
             }
         }
@@ -814,7 +941,9 @@ impl System {
             return;
         }
         for (&slot, rows) in self.order.iter().zip(&self.assembly.groups) {
-            if let (true, Some(group)) = (self.retargeted.contains(&slot), &self.slots[slot]) {
+            if let (true, Some(group)) =
+                (self.retargeted.contains(&slot), self.slots[slot].as_ref().filter(|g| !g.hard))
+            {
                 local::project_all(&group.constraints, &rows.offsets, q, &mut self.projections[rows.range()]);
             }
         }
@@ -830,8 +959,8 @@ impl System {
     pub fn global_step(&mut self, q: &mut [DVec3]) -> Result<(), SolveError> {
         self.check_length(q)?;
         self.prepare()?;
-        let inertial = self.inertia.is_some().then_some(self.inertial_rhs.as_slice());
-        global::right_hand_side(&self.assembly, &self.ct_weighted, &self.projections, inertial, &mut self.rhs);
+        let constant = (!self.constant_rhs.is_empty()).then_some(self.constant_rhs.as_slice());
+        global::right_hand_side(&self.assembly, &self.ct_weighted, &self.projections, constant, &mut self.rhs);
         if let Some(factor) = self.factor.as_mut() {
             factor.solve_in_place(&mut self.rhs);
         }
@@ -839,6 +968,7 @@ impl System {
             return Err(SolveError::NonFinite);
         }
         global::scatter(&self.assembly, &self.rhs, q);
+        self.pin_held(q);
         Ok(())
     }
 
@@ -876,10 +1006,18 @@ impl System {
         }
     }
 
-    /// Whether vertex `v` is in the linear system (some constraint touches it); `false` before
-    /// the first solve or energy evaluation.
+    /// Whether the solve sets vertex `v`: it is in the linear system (some constraint touches
+    /// it) or held by a hard group; `false` before the first solve or energy evaluation (the
+    /// others keep their positions).
     pub fn is_solved(&self, v: usize) -> bool {
-        self.assembled && self.assembly.solved_index.get(v).is_some_and(|&s| s != u32::MAX)
+        self.assembled
+            && (self.assembly.solved_index.get(v).is_some_and(|&s| s != u32::MAX) || self.assembly.is_fixed(v))
+    }
+
+    /// Numeric factorizations of the global matrix so far (a diagnostic: moving targets, hard
+    /// or soft, never adds one; a new weight does).
+    pub fn factorizations(&self) -> u64 {
+        self.factorizations
     }
 
     /// Number of vertices in the linear system (those some constraint touches), once assembled.
