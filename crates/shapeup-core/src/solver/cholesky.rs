@@ -1,6 +1,7 @@
 //! Sparse Cholesky factorization of the global matrix: the only file that names faer.
 //!
-//! The symbolic analysis (fill-reducing AMD ordering, elimination tree, supernodes) runs once
+//! The symbolic analysis (fill-reducing ordering: AMD, or nested dissection for dense patterns;
+//! elimination tree, supernodes) runs once
 //! per sparsity pattern; the numeric factorization reuses it and writes into the same L buffer
 //! when only the values change (weights, time step); solves are in place on an n×3 right side.
 //!
@@ -117,6 +118,14 @@ impl std::fmt::Debug for SparseCholesky {
     }
 }
 
+/// `Auto` orders by nested dissection when the lower triangle of A has more than this many
+/// entries per column (a triangle mesh's one ring has about 4, its two rings about 10, a tet
+/// mesh's one ring about 8)...
+const ND_MIN_ENTRIES_PER_COLUMN: usize = 6;
+
+/// ...and the system has at least this many vertices (below, AMD is as good and cheaper).
+const ND_MIN_VERTICES: usize = 1000;
+
 /// `Auto` keeps the simplicial layout while nnz(L) ≤ this many entries per column.
 const SIMPLICIAL_MAX_FILL: usize = 64;
 
@@ -141,6 +150,17 @@ impl SparseCholesky {
         let symbolic = match layout {
             Factorization::Simplicial => analyze_with(SupernodalThreshold::FORCE_SIMPLICIAL, SymmetricOrdering::Amd)?,
             Factorization::Supernodal => analyze_with(SupernodalThreshold::FORCE_SUPERNODAL, SymmetricOrdering::Amd)?,
+            Factorization::Auto if n >= ND_MIN_VERTICES && row_idx.len() > ND_MIN_ENTRIES_PER_COLUMN * n => {
+                // A dense pattern (2-ring from bending/smoothing, tetrahedra): nested
+                // dissection and supernodes (see `ordering.rs`); AMD if METIS fails.
+                match super::ordering::nested_dissection(n, &col_ptr, &row_idx) {
+                    Some((fwd, inv)) => {
+                        let perm = faer::perm::PermRef::new_checked(&fwd, &inv, n);
+                        analyze_with(SupernodalThreshold::FORCE_SUPERNODAL, SymmetricOrdering::Custom(perm))?
+                    }
+                    None => analyze_with(SupernodalThreshold::FORCE_SUPERNODAL, SymmetricOrdering::Amd)?,
+                }
+            }
             Factorization::Auto => {
                 // A sparse factor (springs, strain, iso: 1-ring patterns) solves faster in the
                 // simplicial layout; a denser one (2-ring patterns from bending/smoothing)

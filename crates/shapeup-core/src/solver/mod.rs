@@ -18,6 +18,7 @@ mod assemble;
 mod cholesky;
 mod global;
 mod local;
+mod ordering;
 
 pub use cholesky::{FactorError, Factorization};
 
