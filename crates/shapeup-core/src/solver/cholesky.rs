@@ -64,12 +64,18 @@ pub(crate) struct SparseCholesky {
 
 /// L (lower triangle, diagonal first in each column) in compressed sparse columns, in the
 /// factor's permuted order, with the permutation and a work buffer for the right side.
+/// Entries that are exactly zero after a factorization (the supernodes' padding: 13 % of the
+/// bunny's two-ring factor) are left out, so solves do not read them.
 struct SolveColumns {
+    /// The supernodal pattern as compressed columns: rows, and where each value sits in the
+    /// supernodal storage.
+    full_col_ptr: Vec<u32>,
+    full_row_idx: Vec<u32>,
+    source: Vec<u32>,
+    /// The non-zero entries of the current factor.
     col_ptr: Vec<u32>,
     row_idx: Vec<u32>,
     values: Vec<f64>,
-    /// Where each value sits in the supernodal storage.
-    source: Vec<u32>,
     /// Row i of P b is b[forward[i]].
     forward: Vec<u32>,
     work: Vec<f64>,
@@ -103,7 +109,32 @@ impl SolveColumns {
                 col_ptr.push(row_idx.len() as u32);
             }
         }
-        SolveColumns { values: vec![0.0; row_idx.len()], col_ptr, row_idx, source, forward, work: vec![0.0; 3 * n] }
+        SolveColumns {
+            values: Vec::with_capacity(row_idx.len()),
+            col_ptr: Vec::with_capacity(n + 1),
+            row_idx: Vec::with_capacity(row_idx.len()),
+            full_col_ptr: col_ptr,
+            full_row_idx: row_idx,
+            source,
+            forward,
+            work: vec![0.0; 3 * n],
+        }
+    }
+
+    /// Gathers the non-zero entries of a new factor (the diagonal always: it is positive).
+    fn gather(&mut self, l_values: &[f64]) {
+        (self.col_ptr.clear(), self.row_idx.clear(), self.values.clear());
+        self.col_ptr.push(0);
+        for j in 0..self.full_col_ptr.len() - 1 {
+            for k in self.full_col_ptr[j] as usize..self.full_col_ptr[j + 1] as usize {
+                let v = l_values[self.source[k] as usize];
+                if v != 0.0 {
+                    self.row_idx.push(self.full_row_idx[k]);
+                    self.values.push(v);
+                }
+            }
+            self.col_ptr.push(self.row_idx.len() as u32);
+        }
     }
 }
 
@@ -239,7 +270,7 @@ impl SparseCholesky {
                 LltError::NonPositivePivot { index } => FactorError::NotPositiveDefinite(index),
             })?;
         if let Some(columns) = &mut self.columns {
-            columns.values.iter_mut().zip(&columns.source).for_each(|(v, &k)| *v = self.l_values[k as usize]);
+            columns.gather(&self.l_values);
         }
         self.factored = true;
         Ok(())
