@@ -123,7 +123,9 @@ impl SolveColumns {
 
     /// Gathers the non-zero entries of a new factor (the diagonal always: it is positive).
     fn gather(&mut self, l_values: &[f64]) {
-        (self.col_ptr.clear(), self.row_idx.clear(), self.values.clear());
+        self.col_ptr.clear();
+        self.row_idx.clear();
+        self.values.clear();
         self.col_ptr.push(0);
         for j in 0..self.full_col_ptr.len() - 1 {
             for k in self.full_col_ptr[j] as usize..self.full_col_ptr[j + 1] as usize {
