@@ -183,10 +183,14 @@ fn main() -> ExitCode {
     }
 }
 
+/// The most worker threads `--threads` accepts: far beyond any core count a solve can use (each
+/// thread costs a stack; tens of thousands exhaust the machine before the first iteration).
+const MAX_THREADS: usize = 1024;
+
 fn run(cli: Cli) -> Result<()> {
     if let Some(n) = cli.threads {
-        if n == 0 {
-            bail!("--threads must be at least 1");
+        if !(1..=MAX_THREADS).contains(&n) {
+            bail!("--threads must be between 1 and {MAX_THREADS}, found {n}");
         }
         rayon::ThreadPoolBuilder::new()
             .num_threads(n)
@@ -211,6 +215,9 @@ fn run(cli: Cli) -> Result<()> {
         }
         #[cfg(feature = "gui")]
         Command::View { input, screenshot, size, stats } => view::run(input, screenshot, size, stats),
+        Command::Bench { iterations: 0, .. } => {
+            bail!("--iterations must be at least 1 (a benchmark of no iterations measures nothing)")
+        }
         Command::Bench { dynamic: true, iterations, scenarios, .. } => bench_dynamic(iterations, &scenarios),
         Command::Bench { mesh, iterations, scenarios, converge: true, reference_iterations, .. } => {
             bench_converge(mesh, iterations, reference_iterations, &scenarios)
@@ -274,7 +281,7 @@ fn deform(
             .iter()
             .filter_map(|&id| loaded.system.group(id))
             .map(|g| {
-                serde_json::json!({"name": g.name, "type": g.kind, "weight": g.multiplier, "constraints": g.constraints.len()})
+                serde_json::json!({"name": g.name, "type": g.kind, "weight": g.multiplier, "constraints": g.constraints.len(), "hard": g.hard})
             })
             .collect();
         let (nnz_a, nnz_l) = loaded.system.factor_sizes();

@@ -300,7 +300,9 @@ fn hard_handles_hold_their_vertices_exactly() {
     let rest = spot();
     let body = handle_body(1.0).replace("name = \"moved\"\n", "name = \"moved\"\nhard = true\n");
     let scene = ws.scene("spot.toml", &toml_scene(Path::new(SPOT), "", &body));
-    let (out_mesh, _, _) = deform_ok(&ws, &scene, "spot.obj", &[]);
+    let (out_mesh, report, _) = deform_ok(&ws, &scene, "spot.obj", &[]);
+    let hard: Vec<bool> = report["groups"].as_array().unwrap().iter().map(|g| g["hard"].as_bool().unwrap()).collect();
+    assert_eq!(hard, [false, false, true], "the report marks the hard group");
     let (_, moved, _) = spot_classes(&rest);
     let t = DVec3::from(HEAD_TRANSLATE);
     let worst = moved.iter().map(|&i| (out_mesh.positions[i] - rest.positions[i] - t).length()).fold(0.0, f64::max);
@@ -823,14 +825,18 @@ fn scene_with_an_unknown_extension() {
 }
 
 #[test]
-fn threads_0_is_rejected() {
+fn threads_0_and_absurd_thread_counts_are_rejected() {
     let ws = Workspace::new();
     let scene = ws.scene("spot.toml", &toml_scene(Path::new(SPOT), "", SHAPE_AND_HANDLE));
     let o = ws.out("result.obj");
-    ws.expect_failure(
-        &[OsStr::new("deform"), scene.as_os_str(), "-o".as_ref(), o.as_os_str(), "--threads".as_ref(), "0".as_ref()],
-        &["threads"],
-    );
+    for n in ["0", "99999"] {
+        ws.expect_failure(
+            &[OsStr::new("deform"), scene.as_os_str(), "-o".as_ref(), o.as_os_str(), "--threads".as_ref(), n.as_ref()],
+            &["threads", n],
+        );
+    }
+    // A benchmark of no iterations measures nothing.
+    ws.expect_failure(&["bench", "--mesh", SPOT, "--iterations", "0"], &["iterations"]);
 }
 
 #[test]
