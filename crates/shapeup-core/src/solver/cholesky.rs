@@ -5,11 +5,12 @@
 //! per sparsity pattern; the numeric factorization reuses it and writes into the same L buffer
 //! when only the values change (weights, time step); solves are in place on an n×3 right side.
 //!
-//! A supernodal factor is also copied, after each numeric factorization, into plain compressed
-//! columns for the solves: the per-iteration solve with three right-hand sides is faster
-//! column by column than through dense supernodal blocks (on the bunny with strain + bending,
-//! 13.5 against 18.6 ms per global step), while the supernodal factorization stays 0.35 s
-//! faster than a simplicial one. The copy costs one pass over L per factorization.
+//! Solves walk L in compressed columns for the three coordinates at once (`triangular.rs`): a
+//! simplicial factor is already stored so; a supernodal one is copied, after each numeric
+//! factorization, into compressed columns without its zero padding. On the bunny with strain +
+//! bending the column walk beat faer's supernodal solve (13.5 against 18.6 ms per global step),
+//! while the supernodal factorization stays 0.35 s faster than a simplicial one. The copy costs
+//! one pass over L per factorization.
 
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::{LltError, LltRegularization};
@@ -18,11 +19,10 @@ use faer::sparse::linalg::cholesky::{
     CholeskySymbolicParams, LltRef, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
     factorize_symbolic_cholesky,
 };
-use faer::sparse::linalg::triangular_solve::{
-    solve_lower_triangular_in_place, solve_lower_triangular_transpose_in_place,
-};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Side};
+
+use super::triangular::{LowerColumns, solve_llt};
 
 /// Which factorization layout to use.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
@@ -60,11 +60,14 @@ pub(crate) struct SparseCholesky {
     factored: bool,
     /// A supernodal L in compressed columns, for the solves (see the module doc).
     columns: Option<SolveColumns>,
+    /// Row i of P b is b[forward[i]].
+    forward: Vec<u32>,
+    /// The permuted right-hand side, a vertex's three coordinates side by side.
+    work: Vec<[f64; 4]>,
 }
 
-/// L (lower triangle, diagonal first in each column) in compressed sparse columns, in the
-/// factor's permuted order, with the permutation and a work buffer for the right side.
-/// Entries that are exactly zero after a factorization (the supernodes' padding: 13 % of the
+/// A supernodal L (lower triangle, diagonal first in each column) in compressed sparse columns,
+/// in the factor's permuted order. Entries that are exactly zero after a factorization (the supernodes' padding: 13 % of the
 /// bunny's two-ring factor) are left out, so solves do not read them.
 struct SolveColumns {
     /// The supernodal pattern as compressed columns: rows, and where each value sits in the
@@ -76,15 +79,12 @@ struct SolveColumns {
     col_ptr: Vec<u32>,
     row_idx: Vec<u32>,
     values: Vec<f64>,
-    /// Row i of P b is b[forward[i]].
-    forward: Vec<u32>,
-    work: Vec<f64>,
 }
 
 impl SolveColumns {
     /// The compressed-column pattern of a supernodal factor: column j of supernode s holds the
     /// diagonal block's rows j.. and then the rows below the block.
-    fn new(s: &faer::sparse::linalg::cholesky::supernodal::SymbolicSupernodalCholesky<u32>, forward: Vec<u32>) -> Self {
+    fn new(s: &faer::sparse::linalg::cholesky::supernodal::SymbolicSupernodalCholesky<u32>) -> Self {
         let n = s.nrows();
         let capacity = s.len_val();
         let (mut col_ptr, mut row_idx, mut source) =
@@ -116,8 +116,6 @@ impl SolveColumns {
             full_col_ptr: col_ptr,
             full_row_idx: row_idx,
             source,
-            forward,
-            work: vec![0.0; 3 * n],
         }
     }
 
@@ -215,18 +213,20 @@ impl SparseCholesky {
             .or(symbolic.solve_in_place_scratch::<f64>(3, SOLVE_PAR));
         let mem = MemBuffer::try_new(scratch).map_err(|e| FactorError::Other(format!("{e:?}")))?;
         let columns = match symbolic.raw() {
+            // u32 positions: a factor beyond 4 G entries (32 GB) is out of reach anyway.
             SymbolicCholeskyRaw::Supernodal(s) => {
-                let forward = match symbolic.perm() {
-                    Some(p) => p.arrays().0.to_vec(),
-                    None => (0..n as u32).collect(),
-                };
-                // u32 positions: a factor beyond 4 G entries (32 GB) is out of reach anyway.
-                (symbolic.len_val() <= u32::MAX as usize).then(|| SolveColumns::new(s, forward))
+                (symbolic.len_val() <= u32::MAX as usize).then(|| SolveColumns::new(s))
             }
             SymbolicCholeskyRaw::Simplicial(_) => None,
         };
+        let forward = match symbolic.perm() {
+            Some(p) => p.arrays().0.to_vec(),
+            None => (0..n as u32).collect(),
+        };
         Ok(SparseCholesky {
             columns,
+            forward,
+            work: vec![[0.0; 4]; n],
             n,
             l_values: vec![0.0; symbolic.len_val()],
             col_ptr,
@@ -279,31 +279,37 @@ impl SparseCholesky {
     }
 
     /// Solves A X = B in place for B given column-major as `rhs` (n×k, k = rhs.len() / n,
-    /// k ≤ 3): X = Pᵀ L⁻ᵀ L⁻¹ P B.
+    /// k ≤ 3): X = Pᵀ L⁻ᵀ L⁻¹ P B, one pass over L forward and one backward for all k columns.
     pub fn solve_in_place(&mut self, rhs: &mut [f64]) {
         debug_assert!(self.factored);
         let n = self.n;
         if n == 0 {
             return;
         }
-        let Some(c) = self.columns.as_mut().filter(|_| rhs.len() <= 3 * n) else { return self.solve_with_faer(rhs) };
-        let k = rhs.len() / n.max(1);
-        let work = &mut c.work[..rhs.len()];
-        for (w, b) in work.chunks_exact_mut(n).zip(rhs.chunks_exact(n)) {
-            w.iter_mut().zip(&c.forward).for_each(|(w, &i)| *w = b[i as usize]);
+        let k = rhs.len() / n;
+        if k > 3 || k * n != rhs.len() {
+            return self.solve_with_faer(rhs);
         }
-        let pattern = SymbolicSparseColMatRef::new_checked(n, n, &c.col_ptr, None, &c.row_idx);
-        let l = SparseColMatRef::<u32, f64>::new(pattern, &c.values);
-        solve_lower_triangular_in_place(l, Conj::No, MatMut::from_column_major_slice_mut(work, n, k), SOLVE_PAR);
-        let work = &mut c.work[..rhs.len()];
-        solve_lower_triangular_transpose_in_place(
-            l,
-            Conj::No,
-            MatMut::from_column_major_slice_mut(work, n, k),
-            SOLVE_PAR,
-        );
-        for (w, b) in c.work.chunks_exact(n).zip(rhs.chunks_exact_mut(n)) {
-            w.iter().zip(&c.forward).for_each(|(w, &i)| b[i as usize] = *w);
+        let l = match (self.symbolic.raw(), &self.columns) {
+            (SymbolicCholeskyRaw::Simplicial(s), _) => {
+                LowerColumns { col_ptr: s.col_ptr(), row_idx: s.row_idx(), values: &self.l_values }
+            }
+            (SymbolicCholeskyRaw::Supernodal(_), Some(c)) => {
+                LowerColumns { col_ptr: &c.col_ptr, row_idx: &c.row_idx, values: &c.values }
+            }
+            (SymbolicCholeskyRaw::Supernodal(_), None) => return self.solve_with_faer(rhs),
+        };
+        for (w, &i) in self.work.iter_mut().zip(&self.forward) {
+            *w = [0.0; 4];
+            for c in 0..k {
+                w[c] = rhs[c * n + i as usize];
+            }
+        }
+        solve_llt(l, &mut self.work);
+        for (w, &i) in self.work.iter().zip(&self.forward) {
+            for c in 0..k {
+                rhs[c * n + i as usize] = w[c];
+            }
         }
     }
 
@@ -393,7 +399,7 @@ mod tests {
     }
 
     #[test]
-    fn the_column_copy_of_a_supernodal_factor_solves_as_faer_does() {
+    fn the_column_solves_equal_faers_on_every_layout() {
         for layout in [Factorization::Supernodal, Factorization::Auto, Factorization::Simplicial] {
             for n in [1, 2, 7, 300, 3000] {
                 let (cp, ri, v) = mesh_like(n, n as u64);

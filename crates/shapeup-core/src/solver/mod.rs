@@ -19,6 +19,7 @@ mod cholesky;
 mod global;
 mod local;
 mod ordering;
+mod triangular;
 
 pub use cholesky::{FactorError, Factorization};
 
