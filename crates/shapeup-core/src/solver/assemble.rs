@@ -47,12 +47,10 @@ pub(crate) struct Assembly {
     pub groups: Vec<GroupRows>,
     /// Group of each row.
     pub row_group: Vec<u32>,
-    /// Cᵀ by solved vertex: entries `ct_ptr[v]..ct_ptr[v+1]` are (row, ω·coeff).
+    /// Cᵀ by solved vertex: entries `ct_ptr[v]..ct_ptr[v+1]` are rows (the matrix's pattern).
     pub ct_ptr: Vec<usize>,
     /// Row of each entry of Cᵀ.
     pub ct_row: Vec<u32>,
-    /// ω·coeff of each entry of Cᵀ (the group multiplier is applied in `ct_weighted`).
-    pub ct_base: Vec<f64>,
     /// Lower triangle of the global matrix, CSC over solved vertices: column pointers.
     pub lhs_col_ptr: Vec<u32>,
     /// Row index of each stored entry (sorted within a column, diagonal first).
@@ -182,12 +180,10 @@ impl Assembly {
         }
         let mut next = count.clone();
         self.ct_row = vec![0; count[ns]];
-        self.ct_base = vec![0.0; count[ns]];
         for r in 0..self.num_rows() {
             for k in self.c_ptr[r]..self.c_ptr[r + 1] {
                 let Some(s) = self.solved(self.c_col[k]) else { continue };
                 self.ct_row[next[s]] = r as u32;
-                self.ct_base[next[s]] = self.row_weight[r] * self.c_val[k];
                 next[s] += 1;
             }
         }

@@ -62,8 +62,6 @@ pub(crate) struct SparseCholesky {
     columns: Option<SolveColumns>,
     /// Row i of P b is b[forward[i]].
     forward: Vec<u32>,
-    /// The permuted right-hand side, a vertex's three coordinates side by side.
-    work: Vec<[f64; 4]>,
 }
 
 /// A supernodal L (lower triangle, diagonal first in each column) in compressed sparse columns,
@@ -210,7 +208,7 @@ impl SparseCholesky {
         };
         let scratch = symbolic
             .factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default())
-            .or(symbolic.solve_in_place_scratch::<f64>(3, SOLVE_PAR));
+            .or(symbolic.solve_in_place_scratch::<f64>(4, SOLVE_PAR));
         let mem = MemBuffer::try_new(scratch).map_err(|e| FactorError::Other(format!("{e:?}")))?;
         let columns = match symbolic.raw() {
             // u32 positions: a factor beyond 4 G entries (32 GB) is out of reach anyway.
@@ -226,7 +224,6 @@ impl SparseCholesky {
         Ok(SparseCholesky {
             columns,
             forward,
-            work: vec![[0.0; 4]; n],
             n,
             l_values: vec![0.0; symbolic.len_val()],
             col_ptr,
@@ -278,18 +275,16 @@ impl SparseCholesky {
         Ok(())
     }
 
-    /// Solves A X = B in place for B given column-major as `rhs` (n×k, k = rhs.len() / n,
-    /// k ≤ 3): X = Pᵀ L⁻ᵀ L⁻¹ P B, one pass over L forward and one backward for all k columns.
-    pub fn solve_in_place(&mut self, rhs: &mut [f64]) {
-        debug_assert!(self.factored);
-        let n = self.n;
-        if n == 0 {
-            return;
-        }
-        let k = rhs.len() / n;
-        if k > 3 || k * n != rhs.len() {
-            return self.solve_with_faer(rhs);
-        }
+    /// The fill-reducing permutation: row i of P b is b[`permutation()[i]`].
+    pub fn permutation(&self) -> &[u32] {
+        &self.forward
+    }
+
+    /// Solves L Lᵀ y = x in place for a right-hand side already in the factor's permuted order
+    /// (x = P b, y = P A⁻¹ b), a vertex's coordinates side by side (the fourth lane is solved
+    /// too and may be ignored): one pass over L forward and one backward for all of them.
+    pub fn solve_permuted_in_place(&mut self, x: &mut [[f64; 4]]) {
+        debug_assert!(self.factored && x.len() == self.n);
         let l = match (self.symbolic.raw(), &self.columns) {
             (SymbolicCholeskyRaw::Simplicial(s), _) => {
                 LowerColumns { col_ptr: s.col_ptr(), row_idx: s.row_idx(), values: &self.l_values }
@@ -297,18 +292,45 @@ impl SparseCholesky {
             (SymbolicCholeskyRaw::Supernodal(_), Some(c)) => {
                 LowerColumns { col_ptr: &c.col_ptr, row_idx: &c.row_idx, values: &c.values }
             }
-            (SymbolicCholeskyRaw::Supernodal(_), None) => return self.solve_with_faer(rhs),
+            (SymbolicCholeskyRaw::Supernodal(_), None) => return self.solve_permuted_with_faer(x),
         };
-        for (w, &i) in self.work.iter_mut().zip(&self.forward) {
-            *w = [0.0; 4];
-            for c in 0..k {
-                w[c] = rhs[c * n + i as usize];
+        solve_llt(l, x);
+    }
+
+    /// [`SparseCholesky::solve_permuted_in_place`] through faer's solve (a supernodal factor too
+    /// large for the compressed-column copy).
+    fn solve_permuted_with_faer(&mut self, x: &mut [[f64; 4]]) {
+        let n = self.n;
+        let mut b = vec![0.0; 4 * n];
+        for (xi, &v) in x.iter().zip(&self.forward) {
+            for c in 0..4 {
+                b[c * n + v as usize] = xi[c];
             }
         }
-        solve_llt(l, &mut self.work);
-        for (w, &i) in self.work.iter().zip(&self.forward) {
+        self.solve_with_faer(&mut b);
+        for (xi, &v) in x.iter_mut().zip(&self.forward) {
+            for c in 0..4 {
+                xi[c] = b[c * n + v as usize];
+            }
+        }
+    }
+
+    /// Solves A X = B in place for B given column-major as `rhs` (n×k, k = rhs.len() / n,
+    /// k ≤ 4): X = Pᵀ L⁻ᵀ L⁻¹ P B.
+    #[cfg(test)]
+    pub fn solve_in_place(&mut self, rhs: &mut [f64]) {
+        let n = self.n;
+        let k = rhs.len() / n.max(1);
+        assert!(k <= 4 && k * n == rhs.len());
+        let mut x: Vec<[f64; 4]> = self
+            .forward
+            .iter()
+            .map(|&i| std::array::from_fn(|c| if c < k { rhs[c * n + i as usize] } else { 0.0 }))
+            .collect();
+        self.solve_permuted_in_place(&mut x);
+        for (xi, &i) in x.iter().zip(&self.forward) {
             for c in 0..k {
-                rhs[c * n + i as usize] = w[c];
+                rhs[c * n + i as usize] = xi[c];
             }
         }
     }

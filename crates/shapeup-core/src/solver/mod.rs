@@ -274,8 +274,8 @@ pub struct System {
     order: Vec<usize>,
     assembly: Assembly,
     factor: Option<SparseCholesky>,
-    /// w_r · coeff for each entry of Cᵀ (multipliers applied).
-    ct_weighted: Vec<f64>,
+    /// Where each entry of C goes in the right-hand side, with its weight.
+    rhs_map: global::RhsMap,
     /// Projections P, one row per constraint row.
     projections: Vec<DVec3>,
     /// The q the projections were computed at (empty when they are stale): a solve that starts
@@ -293,15 +293,20 @@ pub struct System {
     mixed_iterate: Vec<DVec3>,
     /// C q, for energies.
     cq: Vec<DVec3>,
-    /// Right-hand side / solution, column-major (x, y, z) over solved vertices.
-    rhs: Vec<f64>,
+    /// Right-hand side / solution over solved vertices in the factor's permuted order, a
+    /// vertex's x, y, z side by side.
+    rhs: Vec<[f64; 4]>,
+    /// Per extra thread, its share of the right-hand side (kept between iterations).
+    rhs_partials: Vec<Vec<[f64; 4]>>,
     assembled: bool,
     /// Inertia weight μ_i of every vertex (dynamic mode), or `None` (static mode).
     inertia: Option<Vec<f64>>,
-    /// μ_i s_i per solved vertex, the inertial part of the right-hand side.
-    inertial_rhs: Vec<DVec3>,
-    /// The inertial target s (all vertices), kept to rebuild `inertial_rhs` after re-assembly.
+    /// The inertial target s (all vertices), kept to rebuild `constant_rhs` after re-assembly.
     inertial_target: Vec<DVec3>,
+    /// The held vertices' share of the right-hand side per solved vertex,
+    /// −Σ_r w_r c_{r,v} Σ_{f fixed} c_{r,f} x_f; empty when no vertex is held. Recomputed only
+    /// when held points, weights or the assembly change, not on every time step.
+    held_rhs: Vec<DVec3>,
     /// Vertices held by hard groups and where (the last hard group holding a vertex wins).
     held: Vec<(u32, DVec3)>,
     /// Numeric factorizations so far.
@@ -322,7 +327,7 @@ impl System {
             order: Vec::new(),
             assembly: Assembly::default(),
             factor: None,
-            ct_weighted: Vec::new(),
+            rhs_map: global::RhsMap::default(),
             projections: Vec::new(),
             projected_at: Vec::new(),
             retargeted: Vec::new(),
@@ -332,10 +337,11 @@ impl System {
             mixed_iterate: Vec::new(),
             cq: Vec::new(),
             rhs: Vec::new(),
+            rhs_partials: Vec::new(),
             assembled: false,
             inertia: None,
-            inertial_rhs: Vec::new(),
             inertial_target: Vec::new(),
+            held_rhs: Vec::new(),
             held: Vec::new(),
             factorizations: 0,
             constant_rhs: Vec::new(),
@@ -384,44 +390,60 @@ impl System {
         self.check_length(target)?;
         self.inertial_target.clear();
         self.inertial_target.extend_from_slice(target);
-        self.update_inertial_rhs();
         self.update_constant_rhs();
         self.map_changed = true;
         Ok(())
     }
 
-    /// [`System::constant_rhs`](Self) from the inertial part and the held vertices' points.
+    /// [`System::constant_rhs`](Self): μ s (dynamic mode) plus the held vertices' share, in one
+    /// pass over the solved vertices (this runs once per time step).
     fn update_constant_rhs(&mut self) {
         self.constant_rhs.clear();
         let a = &self.assembly;
-        if !self.assembled || (self.inertia.is_none() && self.held.is_empty()) {
-            return;
-        }
-        self.constant_rhs.resize(a.num_solved(), DVec3::ZERO);
-        if self.inertia.is_some() {
-            self.constant_rhs.copy_from_slice(&self.inertial_rhs);
-        }
-        if self.held.is_empty() {
-            return;
-        }
-        let mut at = vec![DVec3::ZERO; self.num_vertices];
-        for &(v, x) in &self.held {
-            at[v as usize] = x;
-        }
-        // Per row, the fixed vertices' part of C_r x; then minus Cᵀ W of it per solved vertex.
-        let fixed_part: Vec<DVec3> = (0..a.num_rows())
-            .map(|r| {
-                (a.c_ptr[r]..a.c_ptr[r + 1])
-                    .filter(|&k| a.is_fixed(a.c_col[k] as usize))
-                    .map(|k| a.c_val[k] * at[a.c_col[k] as usize])
-                    .sum()
-            })
-            .collect();
-        for (v, b) in self.constant_rhs.iter_mut().enumerate() {
-            for k in a.ct_ptr[v]..a.ct_ptr[v + 1] {
-                *b -= self.ct_weighted[k] * fixed_part[a.ct_row[k] as usize];
+        match (&self.inertia, self.held_rhs.is_empty()) {
+            _ if !self.assembled => {}
+            (None, true) => {}
+            (None, false) => self.constant_rhs.extend_from_slice(&self.held_rhs),
+            (Some(mu), held_is_empty) => {
+                let target = &self.inertial_target;
+                self.constant_rhs.extend(a.solved.iter().enumerate().map(|(s, &v)| {
+                    let v = v as usize;
+                    let inertial = mu[v] * target.get(v).copied().unwrap_or(DVec3::ZERO);
+                    if held_is_empty { inertial } else { inertial + self.held_rhs[s] }
+                }));
             }
         }
+    }
+
+    /// [`System::held_rhs`](Self) from the held vertices' points and the current weights, then
+    /// the constant right-hand side.
+    fn update_held_rhs(&mut self) {
+        self.held_rhs.clear();
+        let a = &self.assembly;
+        if self.assembled && !self.held.is_empty() {
+            let mut at = vec![DVec3::ZERO; self.num_vertices];
+            for &(v, x) in &self.held {
+                at[v as usize] = x;
+            }
+            // Per row, the fixed vertices' part of C_r x; then minus Cᵀ W of it per solved vertex.
+            let fixed_part: Vec<DVec3> = (0..a.num_rows())
+                .map(|r| {
+                    (a.c_ptr[r]..a.c_ptr[r + 1])
+                        .filter(|&k| a.is_fixed(a.c_col[k] as usize))
+                        .map(|k| a.c_val[k] * at[a.c_col[k] as usize])
+                        .sum()
+                })
+                .collect();
+            self.held_rhs.resize(a.num_solved(), DVec3::ZERO);
+            for (r, fixed) in fixed_part.iter().enumerate().filter(|(_, f)| **f != DVec3::ZERO) {
+                for k in a.c_ptr[r]..a.c_ptr[r + 1] {
+                    if let Some(b) = self.held_rhs.get_mut(a.solved_index[a.c_col[k] as usize] as usize) {
+                        *b -= self.rhs_map.weighted[k] * *fixed;
+                    }
+                }
+            }
+        }
+        self.update_constant_rhs();
     }
 
     /// Moves the held vertices of `q` to their points.
@@ -443,18 +465,6 @@ impl System {
             }
         }
         Ok(held)
-    }
-
-    /// μ_i s_i per solved vertex (zero where no target was set).
-    fn update_inertial_rhs(&mut self) {
-        let a = &self.assembly;
-        self.inertial_rhs.clear();
-        if let Some(mu) = &self.inertia {
-            self.inertial_rhs.extend(a.solved.iter().map(|&v| {
-                let v = v as usize;
-                mu[v] * self.inertial_target.get(v).copied().unwrap_or(DVec3::ZERO)
-            }));
-        }
     }
 
     /// Number of vertices.
@@ -561,7 +571,7 @@ impl System {
             // Held points: only the right-hand side changes.
             if self.assembled {
                 self.held = self.collect_held()?;
-                self.update_constant_rhs();
+                self.update_held_rhs();
             }
         } else {
             self.retargeted.push(id.0 as usize);
@@ -612,21 +622,42 @@ impl System {
         self.projections = vec![DVec3::ZERO; rows];
         self.projected_at.clear();
         self.cq = vec![DVec3::ZERO; rows];
-        self.rhs = vec![0.0; 3 * self.assembly.num_solved()];
+        self.rhs = vec![[0.0; 4]; self.assembly.num_solved()];
         self.factor = None;
         self.assembled = true;
         self.update_weights();
-        self.update_inertial_rhs();
-        self.update_constant_rhs();
+        self.update_held_rhs();
         Ok(())
     }
 
-    /// Applies the current multipliers to Cᵀ W.
+    /// Applies the current multipliers to W C: g · w_r · c_rk per entry of C.
     fn update_weights(&mut self) {
         let g = self.multipliers();
         let a = &self.assembly;
-        self.ct_weighted =
-            (0..a.ct_row.len()).map(|k| a.ct_base[k] * g[a.row_group[a.ct_row[k] as usize] as usize]).collect();
+        self.rhs_map.weighted.clear();
+        for r in 0..a.num_rows() {
+            let w = g[a.row_group[r] as usize] * a.row_weight[r];
+            self.rhs_map.weighted.extend(a.c_val[a.c_ptr[r]..a.c_ptr[r + 1]].iter().map(|c| w * c));
+        }
+    }
+
+    /// Where each entry of C lands in the factor's permuted right-hand side (after a new
+    /// symbolic analysis).
+    fn update_rhs_slots(&mut self) {
+        let (a, Some(factor)) = (&self.assembly, &self.factor) else { return };
+        let forward = factor.permutation();
+        let mut position = vec![u32::MAX; a.num_solved()];
+        for (i, &s) in forward.iter().enumerate() {
+            position[s as usize] = i as u32;
+        }
+        let map = &mut self.rhs_map;
+        map.slot = a
+            .c_col
+            .iter()
+            .map(|&v| position.get(a.solved_index[v as usize] as usize).copied().unwrap_or(u32::MAX))
+            .collect();
+        map.solved = forward.to_vec();
+        map.vertex = forward.iter().map(|&s| a.solved[s as usize]).collect();
     }
 
     /// Brings the factorization up to date: re-assembly and symbolic analysis after the
@@ -655,9 +686,10 @@ impl System {
                 )
                 .map_err(SolveError::Singular)?,
             );
+            self.update_rhs_slots();
         }
         self.update_weights();
-        self.update_constant_rhs();
+        self.update_held_rhs();
         let mut values = vec![0.0; self.assembly.lhs_row_idx.len()];
         for (group, &gk) in self.assembly.group_lhs.iter().zip(&g) {
             values.iter_mut().zip(group).for_each(|(v, x)| *v += gk * x);
@@ -709,28 +741,32 @@ impl System {
     /// # Errors
     /// As [`System::step`].
     pub fn iterate(&mut self, q: &mut [DVec3], iterations: usize) -> Result<SolveReport, SolveError> {
-        self.check_length(q)?;
-        let mut report = SolveReport::default();
-        let t = Instant::now();
-        self.prepare()?;
-        self.pin_held(q);
-        report.setup_seconds = t.elapsed().as_secs_f64();
+        let (mut report, at_last_projection) = self.begin_solve(q)?;
         // Plain iterates are not the accelerated run's: a later accelerated solve starts afresh.
         self.map_changed = true;
         for k in 0..iterations {
-            let t = Instant::now();
-            if k == 0 {
-                let at_last_projection = self.projected_at.as_slice() == &q[..];
-                self.project_unless_current(q, at_last_projection);
-            } else {
-                self.project(q);
-            }
-            report.local_seconds += t.elapsed().as_secs_f64();
-            let t = Instant::now();
-            self.global_step(q)?;
-            report.global_seconds += t.elapsed().as_secs_f64();
+            timed(&mut report.local_seconds, || match k {
+                0 => self.project_unless_current(q, at_last_projection),
+                _ => self.project(q),
+            });
+            timed(&mut report.global_seconds, || self.global_step(q))?;
         }
         Ok(report)
+    }
+
+    /// What every solve does first: checks q's length, brings the factorization up to date and
+    /// puts the held vertices on their points (timed as setup). Also says whether the last
+    /// projections were computed at this very q (false after a re-assembly), compared once.
+    fn begin_solve(&mut self, q: &mut [DVec3]) -> Result<(SolveReport, bool), SolveError> {
+        self.check_length(q)?;
+        let mut report = SolveReport::default();
+        timed(&mut report.setup_seconds, || {
+            self.prepare()?;
+            self.pin_held(q);
+            Ok::<_, SolveError>(())
+        })?;
+        let at_last_projection = self.projected_at.as_slice() == &q[..];
+        Ok((report, at_last_projection))
     }
 
     /// [`System::solve`], calling `after_iteration(k, E_k)` after iteration k (from 1): it can
@@ -747,20 +783,11 @@ impl System {
         tolerance: f64,
         mut after_iteration: impl FnMut(usize, f64) -> ControlFlow<()>,
     ) -> Result<SolveReport, SolveError> {
-        self.check_length(q)?;
-        let mut report = SolveReport::default();
-        let t = Instant::now();
         let map_changed = std::mem::take(&mut self.map_changed);
-        self.prepare()?;
-        self.pin_held(q);
-        report.setup_seconds = t.elapsed().as_secs_f64();
-        // Compared once: the projections were computed at this q (false after a re-assembly).
-        let at_last_projection = self.projected_at.as_slice() == &q[..];
+        let (mut report, at_last_projection) = self.begin_solve(q)?;
         // Whether this solve continues the last one: same map, starting where it stopped.
         let continuing = !map_changed && at_last_projection;
-        let t = Instant::now();
-        self.project_unless_current(q, at_last_projection);
-        report.local_seconds += t.elapsed().as_secs_f64();
+        timed(&mut report.local_seconds, || self.project_unless_current(q, at_last_projection));
         let energy = self.energy_of_projections(q);
         if !energy.is_finite() {
             return Err(SolveError::NonFiniteEnergy);
@@ -790,12 +817,8 @@ impl System {
         report: &mut SolveReport,
     ) -> Result<(), SolveError> {
         for _ in 0..iterations {
-            let t = Instant::now();
-            self.global_step(q)?;
-            report.global_seconds += t.elapsed().as_secs_f64();
-            let t = Instant::now();
-            self.project(q);
-            report.local_seconds += t.elapsed().as_secs_f64();
+            timed(&mut report.global_seconds, || self.global_step(q))?;
+            timed(&mut report.local_seconds, || self.project(q));
             let energy = self.energy_of_projections(q);
             let (converged, stop) = record_iteration(report, &mut previous, energy, tolerance, after_iteration)?;
             if converged || stop {
@@ -846,10 +869,8 @@ impl System {
     ) -> Result<(), SolveError> {
         let mut objective = previous + self.inertial_energy(q);
         for _ in 0..iterations {
-            let t = Instant::now();
             plain.copy_from_slice(q);
-            self.global_step(plain)?;
-            report.global_seconds += t.elapsed().as_secs_f64();
+            timed(&mut report.global_seconds, || self.global_step(plain))?;
             let t = Instant::now();
             let is_mixed = self.anderson.mix(q, plain, mixed);
             self.project(mixed);
@@ -961,15 +982,22 @@ impl System {
     pub fn global_step(&mut self, q: &mut [DVec3]) -> Result<(), SolveError> {
         self.check_length(q)?;
         self.prepare()?;
-        let constant = (!self.constant_rhs.is_empty()).then_some(self.constant_rhs.as_slice());
-        global::right_hand_side(&self.assembly, &self.ct_weighted, &self.projections, constant, &mut self.rhs);
-        if let Some(factor) = self.factor.as_mut() {
-            factor.solve_in_place(&mut self.rhs);
+        let Some(factor) = self.factor.as_mut() else { return Ok(()) };
+        let map = &self.rhs_map;
+        // b = the constant part (inertia, held vertices), then Σ w Cᵀ P, in the factor's order.
+        if self.constant_rhs.is_empty() {
+            self.rhs.fill([0.0; 4]);
+        } else {
+            for (b, &s) in self.rhs.iter_mut().zip(&map.solved) {
+                let c = self.constant_rhs[s as usize];
+                *b = [c.x, c.y, c.z, 0.0];
+            }
         }
-        if !self.rhs.iter().all(|x| x.is_finite()) {
+        global::right_hand_side(&self.assembly, map, &self.projections, &mut self.rhs, &mut self.rhs_partials);
+        factor.solve_permuted_in_place(&mut self.rhs);
+        if !global::scatter(map, &self.rhs, q) {
             return Err(SolveError::NonFinite);
         }
-        global::scatter(&self.assembly, &self.rhs, q);
         self.pin_held(q);
         Ok(())
     }
@@ -1032,6 +1060,14 @@ impl System {
     pub fn factor_sizes(&self) -> (usize, usize) {
         self.factor.as_ref().map_or((0, 0), |f| (f.nnz(), f.nnz_l()))
     }
+}
+
+/// Runs `f`, adding its wall time in seconds to `seconds`.
+fn timed<T>(seconds: &mut f64, f: impl FnOnce() -> T) -> T {
+    let t = Instant::now();
+    let result = f();
+    *seconds += t.elapsed().as_secs_f64();
+    result
 }
 
 /// After an iteration with energy E: records it and says whether it met the tolerance (against
