@@ -22,18 +22,21 @@ pub(crate) struct RhsMap {
     pub solved: Vec<u32>,
 }
 
-/// Entries of C per part below which the right-hand side is formed by one thread: a second
-/// part costs a pass to clear its buffer and one to add it, which on the bunny (2 cores) only
-/// paid for strain + bending's 634 k entries (1.06 → 0.72 ms), not springs' 210 k (0.26 →
-/// 0.36 ms).
-const MIN_ENTRIES_PER_PART: usize = 1 << 18;
+/// Entries of C per part of the right-hand side, and the most parts. The number of parts is a
+/// function of the problem alone, not of the thread count, so that every thread count sums in
+/// the same order and gets the same bits (Anderson acceleration's accept/reject decisions
+/// amplify a last-bit difference to 1e-8 over 50 iterations). A part costs a pass to clear its
+/// buffer and one to add it: on the bunny at 2 threads the split paid for strain + bending's
+/// 634 k entries (1.06 → 0.72 ms) but not for springs' 210 k (0.26 → 0.36 ms).
+const ENTRIES_PER_PART: usize = 1 << 18;
+const MAX_PARTS: usize = 4;
 
 /// b = Σ_r w_r c_rᵀ P_r added into `out` (permuted order, a vertex's x, y, z side by side; the
 /// caller starts it from the constant part). Rows are walked in order and their entries added
 /// into b: P and C stream through memory, and b, a few hundred kilobytes, stays in cache; the
 /// gather by vertex it replaces (b_v = Σ over Cᵀ's column v) read P at random and took 3–4 ns
-/// an entry on the bunny. With several threads each takes a block of rows into its own
-/// `partials` buffer (kept between calls), summed into `out` at the end.
+/// an entry on the bunny. Large problems are split into blocks of rows, each added into its
+/// own `partials` buffer (kept between calls) in parallel, then summed into `out` in order.
 pub(crate) fn right_hand_side(
     a: &Assembly,
     map: &RhsMap,
@@ -42,7 +45,7 @@ pub(crate) fn right_hand_side(
     partials: &mut Vec<Vec<[f64; 4]>>,
 ) {
     let entries = a.c_ptr.last().copied().unwrap_or(0);
-    let parts = rayon::current_num_threads().min(entries / MIN_ENTRIES_PER_PART).max(1);
+    let parts = (entries / ENTRIES_PER_PART).clamp(1, MAX_PARTS);
     if parts == 1 {
         add_rows(a, map, p, 0..a.num_rows(), out);
         return;
