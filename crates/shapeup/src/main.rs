@@ -292,9 +292,10 @@ fn deform(
             "constraints": loaded.system.num_constraints(),
             "groups": groups,
             "iterations": solve.energies.len(),
+            "initial_energy": solve.initial_energy,
             "energy": solve.energies,
-            // |E_k − E_{k−1}| / E_{k−1}; none for the first iteration (E_0 is not recorded).
-            "relative_change": relative_changes(&solve.energies),
+            // |E_k − E_{k−1}| / E_{k−1}, from E_0 = initial_energy.
+            "relative_change": relative_changes(solve.initial_energy, &solve.energies),
             "acceleration": loaded.system.params().acceleration,
             "anderson_rejected": solve.rejected,
             "factor": {"nnz_lower": nnz_a, "nnz_l": nnz_l},
@@ -311,8 +312,9 @@ fn deform(
         write_atomic(path, |w| w.write_all(text.as_bytes()))?;
     }
     print_warnings(&warnings);
-    let first = solve.energies.first().copied().unwrap_or(0.0);
-    let last = solve.energies.last().copied().unwrap_or(0.0);
+    // From the energy at the start: with 0 iterations that is also the energy at the end.
+    let first = solve.initial_energy;
+    let last = solve.energies.last().copied().unwrap_or(first);
     let mut out = std::io::stdout().lock();
     writeln!(
         out,
@@ -378,7 +380,7 @@ fn bench_dynamic(steps: usize, names: &[String]) -> Result<()> {
     use shapeup_core::bench::DynamicScenario;
     let scenarios = pick_scenarios(names, &DynamicScenario::ALL, DynamicScenario::name)?;
     let mut out = std::io::stdout().lock();
-    writeln!(out, "{} threads; {steps} time steps per scenario after 3 warm-up steps", rayon::current_num_threads())?;
+    writeln!(out, "{}; {steps} time steps per scenario after 3 warm-up steps", threads_label())?;
     writeln!(
         out,
         "{:<14} {:>9} {:>7} {:>11} {:>9} {:>10} {:>11} {:>9} {:>9}",
@@ -462,12 +464,12 @@ fn bench(mesh: Option<PathBuf>, iterations: usize, names: &[String], factorizati
     let mut out = std::io::stdout().lock();
     writeln!(
         out,
-        "{}: {} vertices, {} triangles; load {:.3} s; {} threads; {iterations} plain iterations",
+        "{}: {} vertices, {} triangles; load {:.3} s; {}; {iterations} plain iterations",
         path.display(),
         loaded.mesh.num_vertices(),
         loaded.mesh.num_triangles(),
         load_s,
-        rayon::current_num_threads()
+        threads_label()
     )?;
     writeln!(
         out,
@@ -504,10 +506,19 @@ fn bench(mesh: Option<PathBuf>, iterations: usize, names: &[String], factorizati
 }
 
 /// |E_k − E_{k−1}| / E_{k−1} after each iteration; `None` for the first.
-fn relative_changes(energies: &[f64]) -> Vec<Option<f64>> {
-    std::iter::once(None)
-        .chain(energies.windows(2).map(|e| Some(if e[0] == e[1] { 0.0 } else { (e[0] - e[1]).abs() / e[0].abs() })))
-        .take(energies.len())
+/// "1 thread", "2 threads": the worker threads this run uses.
+fn threads_label() -> String {
+    match rayon::current_num_threads() {
+        1 => "1 thread".to_owned(),
+        n => format!("{n} threads"),
+    }
+}
+
+fn relative_changes(initial: f64, energies: &[f64]) -> Vec<f64> {
+    std::iter::once(initial)
+        .chain(energies.iter().copied())
+        .zip(energies)
+        .map(|(before, &after)| if before == after { 0.0 } else { (before - after).abs() / before.abs() })
         .collect()
 }
 
@@ -543,10 +554,10 @@ fn bench_converge(mesh: Option<PathBuf>, iterations: usize, reference: usize, na
     let mut out = std::io::stdout().lock();
     writeln!(
         out,
-        "{}: {} vertices; {} threads; E* = lowest energy of {reference} accelerated iterations; runs capped at {iterations} iterations",
+        "{}: {} vertices; {}; E* = lowest energy of {reference} accelerated iterations; runs capped at {iterations} iterations",
         path.display(),
         loaded.mesh.num_vertices(),
-        rayon::current_num_threads()
+        threads_label()
     )?;
     writeln!(
         out,

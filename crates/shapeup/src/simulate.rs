@@ -204,9 +204,10 @@ pub fn run(args: &SimulateArgs<'_>) -> Result<()> {
             for handle in &spinning {
                 simulation.system_mut().set_position_targets(handle.id, &handle.targets_at(k as f64 * h))?;
             }
+            // The cause in the same line: only the outermost message is printed.
             let step = simulation
                 .step()
-                .with_context(|| format!("{}: step {k} of {} failed", args.scene.display(), args.frames))?;
+                .map_err(|e| anyhow::anyhow!("{}: step {k} of {} failed: {e}", args.scene.display(), args.frames))?;
             if args.report.is_some() {
                 // Only a report needs E: plain iterations skip it (one more local step per step).
                 let energy = match step.energy {
@@ -215,7 +216,7 @@ pub fn run(args: &SimulateArgs<'_>) -> Result<()> {
                         let t = Instant::now();
                         let e = simulation
                             .energy()
-                            .with_context(|| format!("{}: energy after step {k}", args.scene.display()))?;
+                            .map_err(|e| anyhow::anyhow!("{}: energy after step {k}: {e}", args.scene.display()))?;
                         energy_seconds += t.elapsed().as_secs_f64();
                         e
                     }

@@ -617,6 +617,31 @@ fn energy_of_the_deform_output_matches_the_report() {
     }
 }
 
+/// The report starts from the energy of the starting shape (`initial_energy`, what `shapeup
+/// energy` gives for the input), and the printed line goes from it; with 0 iterations both ends
+/// are that energy (it printed "E 0 -> 0").
+#[test]
+fn the_report_and_the_summary_start_from_the_initial_energy() {
+    let ws = Workspace::new();
+    let scene = ws.scene("spot.toml", &toml_scene(Path::new(SPOT), "", &handle_body(1.0)));
+    let rest = printed_energy(&shapeup(["energy".as_ref(), scene.as_os_str(), OsStr::new(SPOT)]).success());
+    assert!(rest > 0.0, "the moved handle's energy at rest is {rest}");
+    for n in ["0", "3"] {
+        let (_, r, out) = deform_ok(&ws, &scene, &format!("spot{n}.obj"), &["--iterations", n]);
+        let initial = r["initial_energy"].as_f64().unwrap_or_else(|| panic!("no initial_energy: {r}"));
+        assert!(relative_difference(initial, rest) < 1e-9, "--iterations {n}: initial {initial}, energy {rest}");
+        let e = energies(&r);
+        let change = r["relative_change"].as_array().unwrap_or_else(|| panic!("no relative_change: {r}"));
+        assert_eq!(change.len(), e.len(), "{r}");
+        if let Some(&e1) = e.first() {
+            let first = change[0].as_f64().unwrap_or_else(|| panic!("first relative change: {r}"));
+            assert!(relative_difference(first, (initial - e1).abs() / initial) < 1e-9, "{r}");
+        }
+        let summary = format!("E {initial:.6e} -> {:.6e}", e.last().copied().unwrap_or(initial));
+        assert!(out.stdout.contains(&summary), "--iterations {n}: expected {summary:?}\n{}", out.describe());
+    }
+}
+
 #[test]
 fn energy_rejects_positions_with_another_vertex_count() {
     let ws = Workspace::new();

@@ -161,6 +161,11 @@ pub struct BuildContext<'a> {
     pub frame: &'a WorkingFrame,
 }
 
+/// "an" before a vowel ("an edge_spring", "an iso_one_ring"), else "a".
+fn indefinite_article(word: &str) -> &'static str {
+    if word.starts_with(['a', 'e', 'i', 'o', 'u']) { "an" } else { "a" }
+}
+
 /// An error building constraints from a scene entry or the editor.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ConstraintError {
@@ -168,7 +173,7 @@ pub enum ConstraintError {
     #[error("unknown constraint type \"{0}\" (known: {known})", known = type_names().join(", "))]
     UnknownType(String),
     /// An option that this constraint type does not take.
-    #[error("unknown key \"{key}\" for a {kind} constraint{hint}", hint = hint_for(&allowed_hint(allowed)))]
+    #[error("unknown key \"{key}\" for {article} {kind} constraint{hint}", article = indefinite_article(kind), hint = hint_for(&allowed_hint(allowed)))]
     UnknownOption {
         /// Constraint type.
         kind: &'static str,

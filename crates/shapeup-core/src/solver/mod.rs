@@ -245,6 +245,9 @@ pub fn is_converged(previous: f64, energy: f64, tolerance: f64, floor: f64) -> b
 /// What a [`System::solve`] did.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct SolveReport {
+    /// E at the start, before the first iteration (0 from [`System::iterate`], which computes
+    /// no energies).
+    pub initial_energy: f64,
     /// E after each iteration.
     pub energies: Vec<f64>,
     /// Seconds spent in local steps.
@@ -792,6 +795,7 @@ impl System {
         if !energy.is_finite() {
             return Err(SolveError::NonFiniteEnergy);
         }
+        report.initial_energy = energy;
         report.energy_floor = self.energy_floor();
         match self.params.acceleration {
             Acceleration::Anderson if self.params.is_accelerated() => {
