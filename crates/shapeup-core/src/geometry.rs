@@ -48,18 +48,15 @@ pub fn cotangent(a: DVec3, b: DVec3, c: DVec3) -> Option<f64> {
 /// three or more). A zero-area triangle ([`is_degenerate_triangle`]) adds no term.
 pub fn cotan_weights(positions: &[DVec3], triangles: &[[u32; 3]], topology: &Topology) -> Vec<f64> {
     let mut weights = vec![0.0; topology.edges.len()];
-    for t in triangles {
+    for (t, edges) in triangles.iter().zip(&topology.triangle_edges) {
         let p = t.map(|v| positions[v as usize]);
         if is_degenerate_triangle(p[0], p[1], p[2]) {
             continue;
         }
         for k in 0..3 {
-            let (i, j, o) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
-            if let (Some(e), Some(cot)) = (
-                topology.edge_index(i, j),
-                cotangent(positions[i as usize], positions[j as usize], positions[o as usize]),
-            ) {
-                weights[e] += 0.5 * cot;
+            // Edge k joins corners k and k + 1; the angle opposite it is at corner k + 2.
+            if let Some(cot) = cotangent(p[k], p[(k + 1) % 3], p[(k + 2) % 3]) {
+                weights[edges[k] as usize] += 0.5 * cot;
             }
         }
     }

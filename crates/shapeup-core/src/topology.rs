@@ -1,7 +1,7 @@
 //! Connectivity of a triangle mesh: unique edges, ordered one-rings, boundary flags and
 //! connected pieces. Built once per mesh ([`Topology::new`]); positions play no part.
 
-use std::collections::HashMap;
+use rayon::prelude::*;
 
 /// Connectivity derived from a mesh's triangles, computed eagerly.
 #[derive(Debug, Clone, Default)]
@@ -18,12 +18,14 @@ pub struct Topology {
     pub in_triangle: Vec<bool>,
     /// Indices of the triangles around each vertex.
     pub vertex_triangles: Vec<Vec<u32>>,
+    /// For triangle t = (a, b, c), the indices in [`Topology::edges`] of its edges ab, bc, ca.
+    pub triangle_edges: Vec<[u32; 3]>,
 }
 
 impl Topology {
     /// Builds the connectivity of `n` vertices and `triangles`. [O(m log m)]
     pub fn new(n: usize, triangles: &[[u32; 3]]) -> Self {
-        let (edges, edge_triangle_count) = unique_edges(triangles);
+        let (edges, edge_triangle_count, triangle_edges) = indexed_edges(triangles);
         let boundary = boundary_vertices(n, &edges, &edge_triangle_count);
         let vertex_triangles = vertex_triangles(n, triangles);
         let in_triangle = vertex_triangles.iter().map(|t| !t.is_empty()).collect();
@@ -34,6 +36,7 @@ impl Topology {
             boundary,
             in_triangle,
             vertex_triangles,
+            triangle_edges,
         }
     }
 
@@ -65,15 +68,24 @@ pub fn tetrahedron_edges(tetrahedra: &[[u32; 4]]) -> Vec<[u32; 2]> {
 /// Unique undirected edges of `triangles` (`[i, j]`, `i < j`, sorted) and, for each, the number
 /// of triangles it belongs to. An edge of three or more triangles counts them all.
 pub fn unique_edges(triangles: &[[u32; 3]]) -> (Vec<[u32; 2]>, Vec<u32>) {
-    let mut all: Vec<[u32; 2]> = triangles
+    let (edges, counts, _) = indexed_edges(triangles);
+    (edges, counts)
+}
+
+/// [`unique_edges`], and for each triangle (a, b, c) the indices of its edges ab, bc, ca, found
+/// by the same sort (no search per corner). [O(m log m)]
+pub fn indexed_edges(triangles: &[[u32; 3]]) -> (Vec<[u32; 2]>, Vec<u32>, Vec<[u32; 3]>) {
+    let mut all: Vec<([u32; 2], u32)> = triangles
         .iter()
-        .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
-        .map(|(a, b)| [a.min(b), a.max(b)])
+        .enumerate()
+        .flat_map(|(t, tri)| (0..3).map(move |k| (tri[k], tri[(k + 1) % 3], (3 * t + k) as u32)))
+        .map(|(a, b, corner)| ([a.min(b), a.max(b)], corner))
         .collect();
-    all.sort_unstable();
+    all.par_sort_unstable();
     let mut edges: Vec<[u32; 2]> = Vec::with_capacity(all.len() / 2 + 1);
     let mut counts: Vec<u32> = Vec::with_capacity(all.len() / 2 + 1);
-    for e in all {
+    let mut triangle_edges = vec![[0u32; 3]; triangles.len()];
+    for (e, corner) in all {
         if edges.last() == Some(&e) {
             if let Some(c) = counts.last_mut() {
                 *c += 1;
@@ -82,8 +94,9 @@ pub fn unique_edges(triangles: &[[u32; 3]]) -> (Vec<[u32; 2]>, Vec<u32>) {
             edges.push(e);
             counts.push(1);
         }
+        triangle_edges[corner as usize / 3][corner as usize % 3] = (edges.len() - 1) as u32;
     }
-    (edges, counts)
+    (edges, counts, triangle_edges)
 }
 
 /// The triangles around each vertex: index t is in list i when triangle t has corner i.
@@ -120,11 +133,12 @@ pub fn one_rings(n: usize, triangles: &[[u32; 3]]) -> Vec<Vec<u32>> {
             links[t[k] as usize].push((t[(k + 1) % 3], t[(k + 2) % 3]));
         }
     }
-    links.iter().map(|l| order_fan(l)).collect()
+    links.par_iter().map(|l| order_fan(l)).collect()
 }
 
 /// Chains the directed links (b → c) of one vertex into a cyclic order, or returns the sorted
-/// unique neighbours when they do not form one fan.
+/// unique neighbours when they do not form one fan. [O(k log k) for k links: sorted arrays and
+/// binary searches, no hash map, so that a vertex of huge degree costs no more than its size]
 fn order_fan(links: &[(u32, u32)]) -> Vec<u32> {
     let mut sorted: Vec<u32> = links.iter().flat_map(|&(b, c)| [b, c]).collect();
     sorted.sort_unstable();
@@ -132,20 +146,22 @@ fn order_fan(links: &[(u32, u32)]) -> Vec<u32> {
     if links.is_empty() {
         return sorted;
     }
-    let mut next: HashMap<u32, u32> = HashMap::with_capacity(links.len());
-    for &(b, c) in links {
-        if next.insert(b, c).is_some() {
-            return sorted; // two triangles leave b the same way: not a single fan
-        }
+    let mut by_start = links.to_vec();
+    by_start.sort_unstable();
+    if by_start.windows(2).any(|w| w[0].0 == w[1].0) {
+        return sorted; // two triangles leave b the same way: not a single fan
     }
+    let next = |v: u32| by_start.binary_search_by_key(&v, |&(b, _)| b).ok().map(|k| by_start[k].1);
     // Start at a neighbour with no incoming link (the boundary), else anywhere on the cycle.
-    let start = sorted.iter().copied().find(|v| !links.iter().any(|&(_, c)| c == *v)).unwrap_or(links[0].0);
+    let mut ends: Vec<u32> = links.iter().map(|&(_, c)| c).collect();
+    ends.sort_unstable();
+    let start = sorted.iter().copied().find(|v| ends.binary_search(v).is_err()).unwrap_or(links[0].0);
     let mut ring = Vec::with_capacity(sorted.len());
     let mut v = start;
     loop {
         ring.push(v);
-        match next.get(&v) {
-            Some(&w) if w != start && ring.len() < sorted.len() => v = w,
+        match next(v) {
+            Some(w) if w != start && ring.len() < sorted.len() => v = w,
             _ => break,
         }
     }
@@ -249,6 +265,39 @@ mod tests {
         assert!((1..7).all(|v| topo.boundary[v]));
         // A boundary vertex's ring starts at the boundary: 1's ring is 2, 0, 6 (ccw).
         assert_eq!(topo.one_rings[1], vec![2, 0, 6]);
+    }
+
+    #[test]
+    fn triangle_edges_name_each_triangles_edges() {
+        let tris = [[0, 1, 2], [1, 0, 3], [0, 1, 4], [2, 1, 5], [5, 6, 2]];
+        let topo = Topology::new(7, &tris);
+        for (t, tri) in tris.iter().enumerate() {
+            for k in 0..3 {
+                let (a, b) = (tri[k], tri[(k + 1) % 3]);
+                assert_eq!(
+                    topo.edges[topo.triangle_edges[t][k] as usize],
+                    [a.min(b), a.max(b)],
+                    "triangle {t} edge {k}"
+                );
+                assert_eq!(topo.edge_index(a, b), Some(topo.triangle_edges[t][k] as usize));
+            }
+        }
+    }
+
+    /// A vertex of high degree whose links do not chain (here: every second triangle turned) gets
+    /// its sorted neighbours, and one that does gets its fan order, both in time linear-log in
+    /// the degree.
+    #[test]
+    fn a_high_degree_fan_is_ordered_or_sorted() {
+        let k = 20_000u32;
+        let fan: Vec<[u32; 3]> = (0..k).map(|i| [0, 1 + i, 1 + (i + 1) % k]).collect();
+        let ring = &Topology::new(k as usize + 1, &fan).one_rings[0];
+        assert_eq!(ring.len(), k as usize);
+        assert!(ring.windows(2).all(|w| w[1] == 1 + w[0] % k), "not in fan order");
+        let broken: Vec<[u32; 3]> =
+            fan.iter().enumerate().map(|(i, t)| if i % 2 == 0 { *t } else { [t[0], t[2], t[1]] }).collect();
+        let ring = &Topology::new(k as usize + 1, &broken).one_rings[0];
+        assert_eq!(*ring, (1..=k).collect::<Vec<u32>>());
     }
 
     #[test]
