@@ -7,10 +7,10 @@
 //!
 //! Solves walk L in compressed columns for the three coordinates at once (`triangular.rs`): a
 //! simplicial factor is already stored so; a supernodal one is copied, after each numeric
-//! factorization, into compressed columns without its zero padding. On the bunny with strain +
-//! bending the column walk beat faer's supernodal solve (13.5 against 18.6 ms per global step),
-//! while the supernodal factorization stays 0.35 s faster than a simplicial one. The copy costs
-//! one pass over L per factorization.
+//! factorization, into compressed columns without its zero padding. The automatic layout is
+//! supernodal: it factors faster (dense blocks; the bunny's springs 34 against 61 ms, strain +
+//! bending 0.35 s faster), and with the solves on the copy the layout no longer changes the
+//! solve. The copy costs one pass over L per factorization.
 
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::{LltError, LltRegularization};
@@ -28,7 +28,8 @@ use super::triangular::{LowerColumns, solve_llt};
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Factorization {
-    /// Simplicial when the factor is sparse (≤ 64 entries per column), else supernodal.
+    /// Supernodal, ordered by nested dissection for dense patterns (two rings, tetrahedra) and
+    /// by AMD otherwise.
     #[default]
     Auto,
     /// Column-by-column: slower to factor, often faster to solve on small, sparse systems.
@@ -65,29 +66,30 @@ pub(crate) struct SparseCholesky {
 }
 
 /// A supernodal L (lower triangle, diagonal first in each column) in compressed sparse columns,
-/// in the factor's permuted order. Entries that are exactly zero after a factorization (the supernodes' padding: 13 % of the
-/// bunny's two-ring factor) are left out, so solves do not read them.
+/// in the factor's permuted order. Entries that are exactly zero after a factorization (the
+/// supernodes' padding: 13 % of the bunny's two-ring factor) are left out, so solves do not read
+/// them. The copy is rebuilt from the supernodal structure at each factorization: keeping its
+/// full pattern between them would cost 8 more bytes per entry.
+#[derive(Default)]
 struct SolveColumns {
-    /// The supernodal pattern as compressed columns: rows, and where each value sits in the
-    /// supernodal storage.
-    full_col_ptr: Vec<u32>,
-    full_row_idx: Vec<u32>,
-    source: Vec<u32>,
-    /// The non-zero entries of the current factor.
     col_ptr: Vec<u32>,
     row_idx: Vec<u32>,
     values: Vec<f64>,
 }
 
 impl SolveColumns {
-    /// The compressed-column pattern of a supernodal factor: column j of supernode s holds the
-    /// diagonal block's rows j.. and then the rows below the block.
-    fn new(s: &faer::sparse::linalg::cholesky::supernodal::SymbolicSupernodalCholesky<u32>) -> Self {
-        let n = s.nrows();
-        let capacity = s.len_val();
-        let (mut col_ptr, mut row_idx, mut source) =
-            (Vec::with_capacity(n + 1), Vec::with_capacity(capacity), Vec::with_capacity(capacity));
-        col_ptr.push(0);
+    /// Gathers the non-zero entries of a new supernodal factor: column j of supernode s holds
+    /// the diagonal block's rows j.. and then the rows below the block (the diagonal always: it
+    /// is positive).
+    fn gather(
+        &mut self,
+        s: &faer::sparse::linalg::cholesky::supernodal::SymbolicSupernodalCholesky<u32>,
+        l_values: &[f64],
+    ) {
+        self.col_ptr.clear();
+        self.row_idx.clear();
+        self.values.clear();
+        self.col_ptr.push(0);
         for k in 0..s.n_supernodes() {
             let (first, end) = (s.supernode_begin()[k] as usize, s.supernode_end()[k] as usize);
             let width = end - first;
@@ -95,43 +97,16 @@ impl SolveColumns {
             let ld = width + below.len();
             let base = s.col_ptr_for_val()[k] as usize;
             for j in 0..width {
-                let column = base + j * ld;
-                for i in j..width {
-                    row_idx.push((first + i) as u32);
-                    source.push((column + i) as u32);
+                let column = &l_values[base + j * ld..base + (j + 1) * ld];
+                let rows = (first + j..first + width).map(|r| r as u32).chain(below.iter().copied());
+                for (r, &v) in rows.zip(&column[j..]) {
+                    if v != 0.0 || r as usize == first + j {
+                        self.row_idx.push(r);
+                        self.values.push(v);
+                    }
                 }
-                for (i, &r) in below.iter().enumerate() {
-                    row_idx.push(r);
-                    source.push((column + width + i) as u32);
-                }
-                col_ptr.push(row_idx.len() as u32);
+                self.col_ptr.push(self.row_idx.len() as u32);
             }
-        }
-        SolveColumns {
-            values: Vec::with_capacity(row_idx.len()),
-            col_ptr: Vec::with_capacity(n + 1),
-            row_idx: Vec::with_capacity(row_idx.len()),
-            full_col_ptr: col_ptr,
-            full_row_idx: row_idx,
-            source,
-        }
-    }
-
-    /// Gathers the non-zero entries of a new factor (the diagonal always: it is positive).
-    fn gather(&mut self, l_values: &[f64]) {
-        self.col_ptr.clear();
-        self.row_idx.clear();
-        self.values.clear();
-        self.col_ptr.push(0);
-        for j in 0..self.full_col_ptr.len() - 1 {
-            for k in self.full_col_ptr[j] as usize..self.full_col_ptr[j + 1] as usize {
-                let v = l_values[self.source[k] as usize];
-                if v != 0.0 {
-                    self.row_idx.push(self.full_row_idx[k]);
-                    self.values.push(v);
-                }
-            }
-            self.col_ptr.push(self.row_idx.len() as u32);
         }
     }
 }
@@ -154,9 +129,6 @@ const ND_MIN_ENTRIES_PER_COLUMN: usize = 6;
 
 /// ...and the system has at least this many vertices (below, AMD is as good and cheaper).
 const ND_MIN_VERTICES: usize = 1000;
-
-/// `Auto` keeps the simplicial layout while nnz(L) ≤ this many entries per column.
-const SIMPLICIAL_MAX_FILL: usize = 64;
 
 /// The per-iteration solve is sequential: on small machines faer's parallel solve was measured
 /// slower (stack-notes §1), and the local step already uses the cores.
@@ -190,21 +162,10 @@ impl SparseCholesky {
                     None => analyze_with(SupernodalThreshold::FORCE_SUPERNODAL, SymmetricOrdering::Amd)?,
                 }
             }
-            Factorization::Auto => {
-                // A sparse factor (springs, strain, iso: 1-ring patterns) solves faster in the
-                // simplicial layout; a denser one (2-ring patterns from bending/smoothing)
-                // factors 10× faster supernodally. Measured on the bunny: see the README.
-                let simplicial = analyze_with(SupernodalThreshold::FORCE_SIMPLICIAL, SymmetricOrdering::Amd)?;
-                match simplicial.perm() {
-                    Some(perm) if simplicial.len_val() > SIMPLICIAL_MAX_FILL * n.max(1) => {
-                        // Reuse the AMD ordering: it is the costliest part of the analysis.
-                        let (fwd, inv) = perm.arrays();
-                        let perm = faer::perm::PermRef::new_checked(fwd, inv, n);
-                        analyze_with(SupernodalThreshold::FORCE_SUPERNODAL, SymmetricOrdering::Custom(perm))?
-                    }
-                    _ => simplicial,
-                }
-            }
+            // A sparse pattern (springs, strain, one-rings): AMD. Supernodal in every case: it
+            // factors faster (the bunny's springs: 34 against 61 ms), and the solves read the
+            // compressed-column copy either way.
+            Factorization::Auto => analyze_with(SupernodalThreshold::FORCE_SUPERNODAL, SymmetricOrdering::Amd)?,
         };
         let scratch = symbolic
             .factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default())
@@ -212,9 +173,7 @@ impl SparseCholesky {
         let mem = MemBuffer::try_new(scratch).map_err(|e| FactorError::Other(format!("{e:?}")))?;
         let columns = match symbolic.raw() {
             // u32 positions: a factor beyond 4 G entries (32 GB) is out of reach anyway.
-            SymbolicCholeskyRaw::Supernodal(s) => {
-                (symbolic.len_val() <= u32::MAX as usize).then(|| SolveColumns::new(s))
-            }
+            SymbolicCholeskyRaw::Supernodal(_) => (symbolic.len_val() <= u32::MAX as usize).then(SolveColumns::default),
             SymbolicCholeskyRaw::Simplicial(_) => None,
         };
         let forward = match symbolic.perm() {
@@ -268,8 +227,8 @@ impl SparseCholesky {
             .map_err(|e| match e {
                 LltError::NonPositivePivot { index } => FactorError::NotPositiveDefinite(index),
             })?;
-        if let Some(columns) = &mut self.columns {
-            columns.gather(&self.l_values);
+        if let (Some(columns), SymbolicCholeskyRaw::Supernodal(s)) = (&mut self.columns, self.symbolic.raw()) {
+            columns.gather(s, &self.l_values);
         }
         self.factored = true;
         Ok(())
@@ -427,6 +386,9 @@ mod tests {
                 let (cp, ri, v) = mesh_like(n, n as u64);
                 let mut chol = SparseCholesky::analyze(n, cp, ri, layout).unwrap();
                 assert_eq!(chol.columns.is_some(), chol.is_supernodal(), "{layout:?}");
+                if n >= 300 {
+                    assert_eq!(chol.is_supernodal(), layout != Factorization::Simplicial, "{layout:?} n={n}");
+                }
                 for round in 0..2 {
                     // The second round refactors with other values into the same buffers.
                     let values: Vec<f64> = v.iter().map(|x| x * (1.0 + round as f64)).collect();
