@@ -318,10 +318,10 @@ fn deform(
     let mut out = std::io::stdout().lock();
     writeln!(
         out,
-        "deformed {} vertices, {} constraints, {} iterations: E {first:.6e} -> {last:.6e}; wrote {} ({total:.2} s)",
+        "deformed {} vertices, {} constraints, {}: E {first:.6e} -> {last:.6e}; wrote {} ({total:.2} s)",
         loaded.mesh.num_vertices(),
         loaded.system.num_constraints(),
-        solve.energies.len(),
+        count(solve.energies.len(), "iteration"),
         output.display()
     )?;
     Ok(())
@@ -464,12 +464,13 @@ fn bench(mesh: Option<PathBuf>, iterations: usize, names: &[String], factorizati
     let mut out = std::io::stdout().lock();
     writeln!(
         out,
-        "{}: {} vertices, {} triangles; load {:.3} s; {}; {iterations} plain iterations",
+        "{}: {} vertices, {} triangles; load {:.3} s; {}; {}",
         path.display(),
         loaded.mesh.num_vertices(),
         loaded.mesh.num_triangles(),
         load_s,
-        threads_label()
+        threads_label(),
+        count(iterations, "plain iteration")
     )?;
     writeln!(
         out,
@@ -508,10 +509,12 @@ fn bench(mesh: Option<PathBuf>, iterations: usize, names: &[String], factorizati
 /// |E_k − E_{k−1}| / E_{k−1} after each iteration; `None` for the first.
 /// "1 thread", "2 threads": the worker threads this run uses.
 fn threads_label() -> String {
-    match rayon::current_num_threads() {
-        1 => "1 thread".to_owned(),
-        n => format!("{n} threads"),
-    }
+    count(rayon::current_num_threads(), "thread")
+}
+
+/// "1 iteration", "0 iterations", "2 iterations".
+fn count(n: usize, what: &str) -> String {
+    if n == 1 { format!("1 {what}") } else { format!("{n} {what}s") }
 }
 
 fn relative_changes(initial: f64, energies: &[f64]) -> Vec<f64> {

@@ -1144,6 +1144,31 @@ fn shipped_examples_deform() {
 
 // ---- simulate ----
 
+/// Plain time steps evaluate no energy, so an overflow (gravity 1e300) shows first in the
+/// report's energy: one line saying so and a non-zero exit, as the accelerated steps give,
+/// never `null` energies in a report.
+#[test]
+fn simulate_with_an_overflowing_energy_fails_with_or_without_acceleration() {
+    let ws = Workspace::new();
+    let scene = ws.scene(
+        "g300.toml",
+        "[mesh]\ngenerate = { kind = \"cloth\", vertices = [4, 4], size = [1.0, 1.0] }\n\
+         [solver]\nmode = \"dynamic\"\ngravity = [0.0, -1e300, 0.0]\n\
+         [[constraints]]\ntype = \"edge_spring\"\n",
+    );
+    for acceleration in ["anderson", "none"] {
+        let (dir, report) = (ws.out(&format!("g300-{acceleration}")), ws.out(&format!("g300-{acceleration}.json")));
+        let extra = ["--frames", "3", "--acceleration", acceleration, "--report", report.to_str().unwrap()];
+        let out = simulate_in(None, &scene, &dir, &extra);
+        let what = out.describe();
+        assert!(matches!(out.code, Some(c) if c != 0), "{acceleration}: expected a failure\n{what}");
+        let lines: Vec<&str> = out.stderr.lines().filter(|l| !l.trim().is_empty()).collect();
+        assert_eq!(lines.len(), 1, "{acceleration}: one line\n{what}");
+        assert!(lines[0].contains("g300.toml") && lines[0].contains("not a finite number"), "{acceleration}\n{what}");
+        assert!(!report.exists(), "{acceleration}: a report was written\n{what}");
+    }
+}
+
 /// A 3×3 cloth with no constraints falling under `gravity`: frame k must be the discrete free
 /// fall y_k = g h² k(k+1)/2 (x_{n+1} = x_n + h v_n + h² g from rest), in input units whether
 /// or not the scene works in the normalized frame.
