@@ -273,9 +273,11 @@ impl Simulation {
     /// k or inertia): one local step.
     ///
     /// # Errors
-    /// [`SolveError`] from the solver.
+    /// [`SolveError`] from the solver; [`SolveError::NonFiniteEnergy`] when E overflows (plain
+    /// steps evaluate no E, so an absurd gravity or time step shows first here).
     pub fn energy(&mut self) -> Result<f64, SolveError> {
-        Ok(self.system.energy(&self.positions)?.total)
+        let energy = self.system.energy(&self.positions)?.total;
+        if energy.is_finite() { Ok(energy) } else { Err(SolveError::NonFiniteEnergy) }
     }
 
     /// Positions x_n (working frame).

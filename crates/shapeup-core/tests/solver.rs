@@ -483,15 +483,20 @@ fn anderson_history_restarts_when_the_map_changes() {
     }
 }
 
+/// The bundled bunny in the working frame (radius 0.5), as a scene with `normalize` solves it.
+fn bunny_in_working_frame() -> Mesh {
+    let m = shapeup_core::io::read_mesh(&data("stanford-bunny.obj")).unwrap().mesh;
+    let f = WorkingFrame::fit(&m.positions);
+    Mesh::new(m.positions.iter().map(|&p| f.to_working(p)).collect(), m.triangles).unwrap()
+}
+
 /// At its minimum (the rest shape, handles unmoved), E is round-off that random-walks upwards
 /// by about 1 % per iteration, so the relative-change test and the absolute floor never end the
 /// solve (the 35k-vertex bunny with strain + bending: E 1e-20 → 2e-19 over 300 iterations); the
 /// system's own floor does, at once, while a moved handle's E stays far above it.
 #[test]
 fn a_shape_at_its_minimum_converges_on_its_round_off_floor() {
-    let m = shapeup_core::io::read_mesh(&data("stanford-bunny.obj")).unwrap().mesh;
-    let f = WorkingFrame::fit(&m.positions);
-    let mesh = Mesh::new(m.positions.iter().map(|&p| f.to_working(p)).collect(), m.triangles).unwrap();
+    let mesh = bunny_in_working_frame();
     let (low, high) = ends(&mesh, 1);
     let shapes = [("triangle_strain", 10.0), ("bending", 10.0)];
     for acceleration in ACCELERATIONS {
@@ -635,9 +640,7 @@ fn max_distance(a: &[DVec3], b: &[DVec3]) -> f64 {
 /// 1e-8 over 50 iterations, sees the same numbers.
 #[test]
 fn one_and_two_threads_give_the_same_bits() {
-    let m = shapeup_core::io::read_mesh(&data("stanford-bunny.obj")).unwrap().mesh;
-    let f = WorkingFrame::fit(&m.positions);
-    let mesh = Mesh::new(m.positions.iter().map(|&p| f.to_working(p)).collect(), m.triangles).unwrap();
+    let mesh = bunny_in_working_frame();
     let (low, high) = ends(&mesh, 1);
     let shapes = [("triangle_strain", 10.0), ("bending", 10.0)];
     let run = |threads: usize, acceleration: Acceleration| {

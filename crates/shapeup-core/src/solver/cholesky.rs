@@ -16,11 +16,10 @@ use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::{LltError, LltRegularization};
 use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::linalg::cholesky::{
-    CholeskySymbolicParams, LltRef, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
-    factorize_symbolic_cholesky,
+    CholeskySymbolicParams, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering, factorize_symbolic_cholesky,
 };
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
-use faer::{Conj, MatMut, Par, Side};
+use faer::{Par, Side};
 
 use super::triangular::{LowerColumns, solve_llt};
 
@@ -59,8 +58,9 @@ pub(crate) struct SparseCholesky {
     l_values: Vec<f64>,
     mem: MemBuffer,
     factored: bool,
-    /// A supernodal L in compressed columns, for the solves (see the module doc).
-    columns: Option<SolveColumns>,
+    /// A supernodal L in compressed columns, for the solves (see the module doc); empty for a
+    /// simplicial factor, which is stored so already.
+    columns: SolveColumns,
     /// Row i of P b is b[forward[i]].
     forward: Vec<u32>,
 }
@@ -169,19 +169,15 @@ impl SparseCholesky {
         };
         let scratch = symbolic
             .factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default())
-            .or(symbolic.solve_in_place_scratch::<f64>(4, SOLVE_PAR));
+            .or(symbolic.solve_in_place_scratch::<f64>(3, SOLVE_PAR));
         let mem = MemBuffer::try_new(scratch).map_err(|e| FactorError::Other(format!("{e:?}")))?;
-        let columns = match symbolic.raw() {
-            // u32 positions: a factor beyond 4 G entries (32 GB) is out of reach anyway.
-            SymbolicCholeskyRaw::Supernodal(_) => (symbolic.len_val() <= u32::MAX as usize).then(SolveColumns::default),
-            SymbolicCholeskyRaw::Simplicial(_) => None,
-        };
         let forward = match symbolic.perm() {
             Some(p) => p.arrays().0.to_vec(),
             None => (0..n as u32).collect(),
         };
         Ok(SparseCholesky {
-            columns,
+            // u32 positions suffice: faer's u32 symbolic factor already indexes its values so.
+            columns: SolveColumns::default(),
             forward,
             n,
             l_values: vec![0.0; symbolic.len_val()],
@@ -227,8 +223,8 @@ impl SparseCholesky {
             .map_err(|e| match e {
                 LltError::NonPositivePivot { index } => FactorError::NotPositiveDefinite(index),
             })?;
-        if let (Some(columns), SymbolicCholeskyRaw::Supernodal(s)) = (&mut self.columns, self.symbolic.raw()) {
-            columns.gather(s, &self.l_values);
+        if let SymbolicCholeskyRaw::Supernodal(s) = self.symbolic.raw() {
+            self.columns.gather(s, &self.l_values);
         }
         self.factored = true;
         Ok(())
@@ -244,34 +240,16 @@ impl SparseCholesky {
     /// too and may be ignored): one pass over L forward and one backward for all of them.
     pub fn solve_permuted_in_place(&mut self, x: &mut [[f64; 4]]) {
         debug_assert!(self.factored && x.len() == self.n);
-        let l = match (self.symbolic.raw(), &self.columns) {
-            (SymbolicCholeskyRaw::Simplicial(s), _) => {
+        let l = match self.symbolic.raw() {
+            SymbolicCholeskyRaw::Simplicial(s) => {
                 LowerColumns { col_ptr: s.col_ptr(), row_idx: s.row_idx(), values: &self.l_values }
             }
-            (SymbolicCholeskyRaw::Supernodal(_), Some(c)) => {
+            SymbolicCholeskyRaw::Supernodal(_) => {
+                let c = &self.columns;
                 LowerColumns { col_ptr: &c.col_ptr, row_idx: &c.row_idx, values: &c.values }
             }
-            (SymbolicCholeskyRaw::Supernodal(_), None) => return self.solve_permuted_with_faer(x),
         };
         solve_llt(l, x);
-    }
-
-    /// [`SparseCholesky::solve_permuted_in_place`] through faer's solve (a supernodal factor too
-    /// large for the compressed-column copy).
-    fn solve_permuted_with_faer(&mut self, x: &mut [[f64; 4]]) {
-        let n = self.n;
-        let mut b = vec![0.0; 4 * n];
-        for (xi, &v) in x.iter().zip(&self.forward) {
-            for c in 0..4 {
-                b[c * n + v as usize] = xi[c];
-            }
-        }
-        self.solve_with_faer(&mut b);
-        for (xi, &v) in x.iter_mut().zip(&self.forward) {
-            for c in 0..4 {
-                xi[c] = b[c * n + v as usize];
-            }
-        }
     }
 
     /// Solves A X = B in place for B given column-major as `rhs` (n×k, k = rhs.len() / n,
@@ -294,8 +272,12 @@ impl SparseCholesky {
         }
     }
 
-    /// [`SparseCholesky::solve_in_place`] with faer's solve on its own storage.
+    /// [`SparseCholesky::solve_in_place`] with faer's solve on its own storage (the tests'
+    /// reference).
+    #[cfg(test)]
     fn solve_with_faer(&mut self, rhs: &mut [f64]) {
+        use faer::sparse::linalg::cholesky::LltRef;
+        use faer::{Conj, MatMut};
         let k = rhs.len() / self.n.max(1);
         let b = MatMut::from_column_major_slice_mut(rhs, self.n, k);
         LltRef::<u32, f64>::new(&self.symbolic, &self.l_values).solve_in_place_with_conj(
@@ -385,7 +367,6 @@ mod tests {
             for n in [1, 2, 7, 300, 3000] {
                 let (cp, ri, v) = mesh_like(n, n as u64);
                 let mut chol = SparseCholesky::analyze(n, cp, ri, layout).unwrap();
-                assert_eq!(chol.columns.is_some(), chol.is_supernodal(), "{layout:?}");
                 if n >= 300 {
                     assert_eq!(chol.is_supernodal(), layout != Factorization::Simplicial, "{layout:?} n={n}");
                 }
@@ -393,6 +374,8 @@ mod tests {
                     // The second round refactors with other values into the same buffers.
                     let values: Vec<f64> = v.iter().map(|x| x * (1.0 + round as f64)).collect();
                     chol.factorize(&values).unwrap();
+                    let copied = if chol.is_supernodal() { n + 1 } else { 0 };
+                    assert_eq!(chol.columns.col_ptr.len(), copied, "{layout:?} n={n}: the column copy");
                     for k in 1..=3 {
                         let b: Vec<f64> = (0..k * n).map(|i| (i as f64 * 0.37).sin() + (i % 5) as f64).collect();
                         let mut reference = b.clone();

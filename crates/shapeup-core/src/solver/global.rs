@@ -16,10 +16,6 @@ pub(crate) struct RhsMap {
     pub slot: Vec<u32>,
     /// Per entry of C: g · w_r · c_rk (multiplier, element weight, coefficient).
     pub weighted: Vec<f64>,
-    /// Per permuted position: the original vertex it solves for.
-    pub vertex: Vec<u32>,
-    /// Per permuted position: the solved index (into the constant right-hand side).
-    pub solved: Vec<u32>,
 }
 
 /// Entries of C per part of the right-hand side, and the most parts. The number of parts is a
@@ -51,6 +47,7 @@ pub(crate) fn right_hand_side(
         return;
     }
     partials.resize_with(parts - 1, Vec::new);
+    let size = out.len();
     // Row blocks of about equal numbers of entries.
     let bounds: Vec<usize> =
         (0..=parts).map(|t| a.c_ptr.partition_point(|&k| k < entries * t / parts).min(a.num_rows())).collect();
@@ -59,7 +56,7 @@ pub(crate) fn right_hand_side(
             let rows = bounds[t + 1]..bounds[t + 2];
             scope.spawn(move |_| {
                 partial.clear();
-                partial.resize(map.vertex.len(), [0.0; 4]);
+                partial.resize(size, [0.0; 4]);
                 add_rows(a, map, p, rows, partial);
             });
         }
@@ -92,14 +89,15 @@ fn add_rows(a: &Assembly, map: &RhsMap, p: &[DVec3], rows: std::ops::Range<usize
     }
 }
 
-/// The solution (permuted order) back into the full position array; `false`, writing nothing,
-/// if it holds a NaN or an infinity.
-pub(crate) fn scatter(map: &RhsMap, solution: &[[f64; 4]], q: &mut [DVec3]) -> bool {
+/// The solution, in the factor's order (position i solves for solved vertex `forward[i]`),
+/// back into the full position array; `false`, writing nothing, if it holds a NaN or an
+/// infinity.
+pub(crate) fn scatter(a: &Assembly, forward: &[u32], solution: &[[f64; 4]], q: &mut [DVec3]) -> bool {
     if !solution.iter().all(|x| x[..3].iter().all(|c| c.is_finite())) {
         return false;
     }
-    for (x, &v) in solution.iter().zip(&map.vertex) {
-        q[v as usize] = DVec3::new(x[0], x[1], x[2]);
+    for (x, &s) in solution.iter().zip(forward) {
+        q[a.solved[s as usize] as usize] = DVec3::new(x[0], x[1], x[2]);
     }
     true
 }

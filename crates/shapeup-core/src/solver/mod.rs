@@ -653,14 +653,11 @@ impl System {
         for (i, &s) in forward.iter().enumerate() {
             position[s as usize] = i as u32;
         }
-        let map = &mut self.rhs_map;
-        map.slot = a
+        self.rhs_map.slot = a
             .c_col
             .iter()
             .map(|&v| position.get(a.solved_index[v as usize] as usize).copied().unwrap_or(u32::MAX))
             .collect();
-        map.solved = forward.to_vec();
-        map.vertex = forward.iter().map(|&s| a.solved[s as usize]).collect();
     }
 
     /// Brings the factorization up to date: re-assembly and symbolic analysis after the
@@ -987,19 +984,24 @@ impl System {
         self.check_length(q)?;
         self.prepare()?;
         let Some(factor) = self.factor.as_mut() else { return Ok(()) };
-        let map = &self.rhs_map;
         // b = the constant part (inertia, held vertices), then Σ w Cᵀ P, in the factor's order.
         if self.constant_rhs.is_empty() {
             self.rhs.fill([0.0; 4]);
         } else {
-            for (b, &s) in self.rhs.iter_mut().zip(&map.solved) {
+            for (b, &s) in self.rhs.iter_mut().zip(factor.permutation()) {
                 let c = self.constant_rhs[s as usize];
                 *b = [c.x, c.y, c.z, 0.0];
             }
         }
-        global::right_hand_side(&self.assembly, map, &self.projections, &mut self.rhs, &mut self.rhs_partials);
+        global::right_hand_side(
+            &self.assembly,
+            &self.rhs_map,
+            &self.projections,
+            &mut self.rhs,
+            &mut self.rhs_partials,
+        );
         factor.solve_permuted_in_place(&mut self.rhs);
-        if !global::scatter(map, &self.rhs, q) {
+        if !global::scatter(&self.assembly, factor.permutation(), &self.rhs, q) {
             return Err(SolveError::NonFinite);
         }
         self.pin_held(q);

@@ -138,6 +138,16 @@ mod tests {
         check_substitutions::<true>();
     }
 
+    /// M x = b to 1e-12 relative, each of the four lanes, M given entry by entry.
+    fn assert_solves(n: usize, m: impl Fn(usize, usize) -> f64, x: &[[f64; 4]], b: &[[f64; 4]], what: &str) {
+        for (i, bi) in b.iter().enumerate() {
+            for c in 0..4 {
+                let mx: f64 = (0..n).map(|j| m(i, j) * x[j][c]).sum();
+                assert!((mx - bi[c]).abs() < 1e-12 * (1.0 + bi[c].abs()), "{what}, n={n} row {i}: {mx} vs {}", bi[c]);
+            }
+        }
+    }
+
     fn check_substitutions<const FUSED: bool>() {
         for n in [1, 2, 3, 8, 17] {
             let (cp, ri, v) = dense_lower(n);
@@ -146,21 +156,11 @@ mod tests {
             // L y = b
             let mut y = b.clone();
             forward_substitute::<FUSED>(l, &mut y);
-            for (i, bi) in b.iter().enumerate() {
-                for c in 0..4 {
-                    let ly: f64 = (0..n).map(|j| entry(l, i, j) * y[j][c]).sum();
-                    assert!((ly - bi[c]).abs() < 1e-12 * (1.0 + bi[c].abs()), "n={n} row {i}: {ly} vs {}", bi[c]);
-                }
-            }
+            assert_solves(n, |i, j| entry(l, i, j), &y, &b, "L");
             // Lᵀ x = b
             let mut x = b.clone();
             back_substitute::<FUSED>(l, &mut x);
-            for (i, bi) in b.iter().enumerate() {
-                for c in 0..4 {
-                    let ltx: f64 = (0..n).map(|j| entry(l, j, i) * x[j][c]).sum();
-                    assert!((ltx - bi[c]).abs() < 1e-12 * (1.0 + bi[c].abs()), "n={n} row {i}: {ltx} vs {}", bi[c]);
-                }
-            }
+            assert_solves(n, |i, j| entry(l, j, i), &x, &b, "Lᵀ");
         }
     }
 }
