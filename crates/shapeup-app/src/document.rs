@@ -204,6 +204,8 @@ pub struct EditState {
     pub acceleration: Acceleration,
     /// Iterations Anderson acceleration mixes (the scene's `[solver] anderson_window`).
     pub anderson_window: usize,
+    /// Pairs L-BFGS keeps (the scene's `[solver] lbfgs_memory`).
+    pub lbfgs_memory: usize,
 }
 
 impl PartialEq for EditState {
@@ -215,6 +217,7 @@ impl PartialEq for EditState {
             && self.tolerance.to_bits() == other.tolerance.to_bits()
             && self.acceleration == other.acceleration
             && self.anderson_window == other.anderson_window
+            && self.lbfgs_memory == other.lbfgs_memory
     }
 }
 
@@ -368,6 +371,7 @@ impl Solver {
             iterations: state.iterations,
             acceleration: state.acceleration,
             anderson_window: state.anderson_window,
+            lbfgs_memory: state.lbfgs_memory,
             ..SolverParams::default()
         };
         match self.system.as_mut() {
@@ -634,6 +638,7 @@ impl Document {
                 tolerance: if solver_settings.tolerance > 0.0 { solver_settings.tolerance } else { DEFAULT_TOLERANCE },
                 acceleration: solver_settings.acceleration,
                 anderson_window: solver_settings.anderson_window,
+                lbfgs_memory: solver_settings.lbfgs_memory,
             },
             solver: Solver::new(),
             epoch_start: Arc::new(positions.clone()),
@@ -781,6 +786,7 @@ impl Document {
                 tolerance: self.state.tolerance,
                 acceleration: self.state.acceleration,
                 anderson_window: self.state.anderson_window,
+                lbfgs_memory: self.state.lbfgs_memory,
                 ..self.solver_settings
             },
             groups,

@@ -14,7 +14,7 @@ use shapeup_core::bench::{Scenario, load_scenario};
 use shapeup_core::io::{PlyEncoding, WriteFormat, read_mesh, write_atomic, write_mesh_with};
 use shapeup_core::scene::Scene;
 use shapeup_core::scene::SolverSettings;
-use shapeup_core::solver::{Acceleration, Factorization, MAX_ANDERSON_WINDOW, SolverParams};
+use shapeup_core::solver::{Acceleration, Factorization, MAX_ANDERSON_WINDOW, MAX_LBFGS_MEMORY, SolverParams};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -142,12 +142,15 @@ enum Command {
 /// Overrides of the scene's acceleration settings.
 #[derive(Args, Clone, Copy)]
 struct AccelerationArgs {
-    /// How iterates are combined: anderson or none (overrides the scene's `acceleration`).
+    /// How iterates are combined: lbfgs, anderson or none (overrides the scene's `acceleration`).
     #[arg(long, value_name = "KIND", value_parser = parse_acceleration)]
     acceleration: Option<Acceleration>,
     /// Iterations Anderson acceleration mixes, 1 to 50 (overrides `anderson_window`).
     #[arg(long, value_name = "M", value_parser = clap::value_parser!(u64).range(1..=MAX_ANDERSON_WINDOW as u64))]
     anderson_window: Option<u64>,
+    /// Pairs L-BFGS keeps, 1 to 50 (overrides `lbfgs_memory`).
+    #[arg(long, value_name = "M", value_parser = clap::value_parser!(u64).range(1..=MAX_LBFGS_MEMORY as u64))]
+    lbfgs_memory: Option<u64>,
 }
 
 impl AccelerationArgs {
@@ -158,15 +161,17 @@ impl AccelerationArgs {
         if let Some(m) = self.anderson_window {
             solver.anderson_window = usize::try_from(m).unwrap_or(MAX_ANDERSON_WINDOW);
         }
+        if let Some(m) = self.lbfgs_memory {
+            solver.lbfgs_memory = usize::try_from(m).unwrap_or(MAX_LBFGS_MEMORY);
+        }
     }
 }
 
 fn parse_acceleration(s: &str) -> Result<Acceleration, String> {
-    match s {
-        "anderson" => Ok(Acceleration::Anderson),
-        "none" => Ok(Acceleration::None),
-        _ => Err(format!("unknown acceleration \"{s}\" (anderson, none)")),
-    }
+    Acceleration::from_name(s).ok_or_else(|| {
+        let names: Vec<&str> = Acceleration::ALL.iter().map(|a| a.name()).collect();
+        format!("unknown acceleration \"{s}\" ({})", names.join(", "))
+    })
 }
 
 fn main() -> ExitCode {
@@ -297,7 +302,7 @@ fn deform(
             // |E_k − E_{k−1}| / E_{k−1}, from E_0 = initial_energy.
             "relative_change": relative_changes(solve.initial_energy, &solve.energies),
             "acceleration": loaded.system.params().acceleration,
-            "anderson_rejected": solve.rejected,
+            "rejected": solve.rejected,
             "factor": {"nnz_lower": nnz_a, "nnz_l": nnz_l},
             "warnings": warnings.to_json(),
             "timings": {
@@ -575,7 +580,7 @@ fn bench_converge(mesh: Option<PathBuf>, iterations: usize, reference: usize, na
         let mut scene = load_scenario(s, &loaded.mesh, path.clone())?;
         let star = convergence_run(&mut scene, Acceleration::Anderson, reference)?;
         let mut runs = Vec::new();
-        for acceleration in [Acceleration::None, Acceleration::Anderson] {
+        for acceleration in [Acceleration::None, Acceleration::Anderson, Acceleration::Lbfgs] {
             let mut scene = load_scenario(s, &loaded.mesh, path.clone())?;
             runs.push((acceleration, convergence_run(&mut scene, acceleration, iterations)?));
         }
@@ -589,7 +594,7 @@ fn bench_converge(mesh: Option<PathBuf>, iterations: usize, reference: usize, na
             };
             let name = match acceleration {
                 Acceleration::None => "plain",
-                Acceleration::Anderson => "anderson",
+                a => a.name(),
             };
             writeln!(
                 out,

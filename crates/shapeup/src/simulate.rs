@@ -222,6 +222,15 @@ pub fn run(args: &SimulateArgs<'_>) -> Result<()> {
                     }
                 };
                 energies.push(energy);
+                // The report's other energy: a rigid fall keeps E finite (even 0) while ½ m v²
+                // overflows, which JSON would write as null.
+                if !simulation.kinetic_energy().is_finite() {
+                    anyhow::bail!(
+                        "{}: step {k} of {}: the kinetic energy is not a finite number (velocities too large); check the gravity, time step and targets",
+                        args.scene.display(),
+                        args.frames
+                    );
+                }
             }
             local += step.local_seconds;
             global += step.global_seconds;

@@ -975,6 +975,7 @@ fn bench_converge_compares_time_to_a_converged_shape() {
         row[2].parse().unwrap_or_else(|_| panic!("{kind} did not reach 1 %\n{}", out.describe()))
     };
     assert!(first_cell("anderson") < first_cell("plain"), "{}", out.describe());
+    assert!(first_cell("lbfgs") < first_cell("plain"), "{}", out.describe());
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1156,7 +1157,7 @@ fn simulate_with_an_overflowing_energy_fails_with_or_without_acceleration() {
          [solver]\nmode = \"dynamic\"\ngravity = [0.0, -1e300, 0.0]\n\
          [[constraints]]\ntype = \"edge_spring\"\n",
     );
-    for acceleration in ["anderson", "none"] {
+    for acceleration in ["lbfgs", "anderson", "none"] {
         let (dir, report) = (ws.out(&format!("g300-{acceleration}")), ws.out(&format!("g300-{acceleration}.json")));
         let extra = ["--frames", "3", "--acceleration", acceleration, "--report", report.to_str().unwrap()];
         let out = simulate_in(None, &scene, &dir, &extra);

@@ -899,16 +899,19 @@ impl EditorApp {
         if response.changed() {
             commands.push(Command::SetIterations(cap));
         }
-        let mut anderson = self.document.acceleration() == Acceleration::Anderson;
-        if ui
-            .checkbox(&mut anderson, "Anderson acceleration")
-            .on_hover_text(
-                "mix the last iterations (Peng et al. 2018): the same shape in far fewer iterations; \
-                 a mixed step that does not lower the energy is replaced by a plain one",
-            )
-            .changed()
-        {
-            commands.push(Command::SetAcceleration(if anderson { Acceleration::Anderson } else { Acceleration::None }));
+        let current = self.document.acceleration();
+        let mut chosen = current;
+        egui::ComboBox::from_label("acceleration")
+            .selected_text(acceleration_label(current))
+            .show_ui(ui, |ui| {
+                for a in Acceleration::ALL {
+                    ui.selectable_value(&mut chosen, a, acceleration_label(a)).on_hover_text(acceleration_hint(a));
+                }
+            })
+            .response
+            .on_hover_text(acceleration_hint(current));
+        if chosen != current {
+            commands.push(Command::SetAcceleration(chosen));
         }
         ui.horizontal_wrapped(|ui| {
             if ui.button("Reset shape").on_hover_text("back to the rest shape (undoable)").clicked() {
@@ -1554,6 +1557,28 @@ pub fn run_window(document: Document, path: PathBuf, window: WindowOptions) -> R
         Box::new(move |cc| Ok(Box::new(EditorApp::with_options(cc, document, path, window)) as Box<dyn eframe::App>)),
     )
     .map_err(|e| e.to_string())
+}
+
+/// The editor's name for an acceleration.
+fn acceleration_label(a: Acceleration) -> &'static str {
+    match a {
+        Acceleration::Anderson => "Anderson",
+        Acceleration::Lbfgs => "L-BFGS",
+        Acceleration::None => "none (plain)",
+    }
+}
+
+/// What an acceleration does, in one hover line.
+fn acceleration_hint(a: Acceleration) -> &'static str {
+    match a {
+        Acceleration::Anderson => {
+            "mix the last iterations (Peng et al. 2018); a mixed step that does not lower the energy is replaced by a plain one"
+        }
+        Acceleration::Lbfgs => {
+            "quasi-Newton steps with the global matrix as first Hessian (Liu et al. 2017): the converged shape in the fewest iterations; a step that does not lower the energy enough is replaced by a plain one"
+        }
+        Acceleration::None => "plain local-global iterations: the energy decreases, slowly",
+    }
 }
 
 #[cfg(test)]

@@ -91,6 +91,7 @@ impl Scene {
             factorization: self.solver.factorization,
             acceleration: self.solver.acceleration,
             anderson_window: self.solver.anderson_window,
+            lbfgs_memory: self.solver.lbfgs_memory,
         };
         let mut system = System::new(mesh.num_vertices(), params);
         let mut group_ids = Vec::with_capacity(self.groups.len());

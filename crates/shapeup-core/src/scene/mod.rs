@@ -11,7 +11,7 @@ mod write;
 pub use build::{LoadedScene, SpinningHandle, hardened, take_hard};
 
 use crate::mesh::Mesh;
-use crate::solver::{Acceleration, Factorization, MAX_ANDERSON_WINDOW, SolverParams};
+use crate::solver::{Acceleration, Factorization, MAX_ANDERSON_WINDOW, MAX_LBFGS_MEMORY, SolverParams};
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 use serde_json::{Map, Value};
@@ -52,10 +52,12 @@ pub struct SolverSettings {
     pub density: f64,
     /// Sparse Cholesky layout: "auto" (default), "simplicial" or "supernodal".
     pub factorization: Factorization,
-    /// "anderson" (default) or "none": see [`Acceleration`].
+    /// "lbfgs" (default), "anderson" or "none": see [`Acceleration`].
     pub acceleration: Acceleration,
     /// Anderson acceleration: iterations mixed, m ≥ 1 (default 5).
     pub anderson_window: usize,
+    /// L-BFGS: pairs kept, m ≥ 1 (default 5).
+    pub lbfgs_memory: usize,
 }
 
 impl Default for SolverSettings {
@@ -73,6 +75,7 @@ impl Default for SolverSettings {
             factorization: Factorization::Auto,
             acceleration: SolverParams::default().acceleration,
             anderson_window: SolverParams::default().anderson_window,
+            lbfgs_memory: SolverParams::default().lbfgs_memory,
         }
     }
 }
@@ -511,6 +514,9 @@ fn validate_solver(s: &SolverSettings) -> Result<(), String> {
     }
     if !(1..=MAX_ANDERSON_WINDOW).contains(&s.anderson_window) {
         return Err(format!("anderson_window must be in 1..={MAX_ANDERSON_WINDOW}, found {}", s.anderson_window));
+    }
+    if !(1..=MAX_LBFGS_MEMORY).contains(&s.lbfgs_memory) {
+        return Err(format!("lbfgs_memory must be in 1..={MAX_LBFGS_MEMORY}, found {}", s.lbfgs_memory));
     }
     Ok(())
 }

@@ -3,7 +3,7 @@
 //! where it is read).
 
 use super::{Mode, Scene, SelectionSpec};
-use crate::solver::{Acceleration, Factorization};
+use crate::solver::Factorization;
 use serde_json::Value as Json;
 use std::fmt::Write as _;
 use toml::Value;
@@ -53,12 +53,9 @@ impl Scene {
             Factorization::Supernodal => "supernodal",
         };
         line(&mut out, "factorization", Value::String(factorization.into()));
-        let acceleration = match s.acceleration {
-            Acceleration::None => "none",
-            Acceleration::Anderson => "anderson",
-        };
-        line(&mut out, "acceleration", Value::String(acceleration.into()));
+        line(&mut out, "acceleration", Value::String(s.acceleration.name().into()));
         line(&mut out, "anderson_window", integer(s.anderson_window as u64));
+        line(&mut out, "lbfgs_memory", integer(s.lbfgs_memory as u64));
 
         for group in &self.groups {
             out.push_str("\n[[constraints]]\n");

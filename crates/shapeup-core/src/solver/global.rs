@@ -108,3 +108,11 @@ pub(crate) fn apply_c(a: &Assembly, q: &[DVec3], out: &mut [DVec3]) {
         *o = (a.c_ptr[r]..a.c_ptr[r + 1]).map(|k| a.c_val[k] * q[a.c_col[k] as usize]).sum();
     });
 }
+
+/// The solved vertices of q in the factor's order (the inverse of [`scatter`]), fourth lane 0.
+pub(crate) fn gather(a: &Assembly, forward: &[u32], q: &[DVec3], out: &mut [[f64; 4]]) {
+    for (o, &s) in out.iter_mut().zip(forward) {
+        let p = q[a.solved[s as usize] as usize];
+        *o = [p.x, p.y, p.z, 0.0];
+    }
+}
