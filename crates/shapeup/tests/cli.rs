@@ -642,6 +642,35 @@ fn the_report_and_the_summary_start_from_the_initial_energy() {
     }
 }
 
+/// Each acceleration, chosen by the flag or the scene key: the report names it and counts its
+/// rejected steps, E never increases, and L-BFGS (the default) ends lowest after 40 iterations;
+/// a memory outside 1..=50 is one line naming the key.
+#[test]
+fn each_acceleration_is_reported_and_keeps_the_energy_monotone() {
+    let ws = Workspace::new();
+    let scene = ws.scene("spot.toml", &toml_scene(Path::new(SPOT), "", &handle_body(1.0)));
+    let mut last = Vec::new();
+    for acceleration in ["none", "anderson", "lbfgs"] {
+        let extra = ["--iterations", "40", "--acceleration", acceleration];
+        let (_, r, _) = deform_ok(&ws, &scene, &format!("spot-{acceleration}.obj"), &extra);
+        assert_eq!(r["acceleration"], acceleration, "{r}");
+        let rejected = r["rejected"].as_u64().unwrap_or_else(|| panic!("no rejected count: {r}"));
+        assert!(acceleration != "none" || rejected == 0, "{r}");
+        let e = energies(&r);
+        assert!(e.windows(2).all(|w| w[1] <= w[0] * (1.0 + 1e-12)), "{acceleration}: E rose: {e:?}");
+        last.push(*e.last().unwrap());
+    }
+    assert!(last[2] < last[0], "L-BFGS {} vs plain {}", last[2], last[0]);
+    let (_, r, _) = deform_ok(&ws, &scene, "spot-default.obj", &["--iterations", "2"]);
+    assert_eq!(r["acceleration"], "lbfgs", "the default\n{r}");
+    let fresh = Workspace::new();
+    let body = handle_body(1.0).replace("iterations = 20", "iterations = 20\nlbfgs_memory = 51");
+    let bad = fresh.scene("bad.toml", &toml_scene(Path::new(SPOT), "", &body));
+    let out = fresh.out("bad.obj");
+    let args = [OsStr::new("deform"), bad.as_os_str(), OsStr::new("-o"), out.as_os_str()];
+    fresh.expect_failure(&args, &["bad.toml", "lbfgs_memory", "51"]);
+}
+
 #[test]
 fn energy_rejects_positions_with_another_vertex_count() {
     let ws = Workspace::new();
