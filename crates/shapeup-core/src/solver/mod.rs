@@ -340,13 +340,8 @@ pub struct System {
     map_changed: bool,
     anderson: Anderson,
     lbfgs: Lbfgs,
-    /// Scratch for L-BFGS over the solved vertices in the factor's order: x, g and the direction.
-    lbfgs_x: Vec<[f64; 4]>,
-    lbfgs_g: Vec<[f64; 4]>,
-    lbfgs_d: Vec<[f64; 4]>,
-    /// Scratch for the accelerated iteration: G(x) and the mixed iterate (n points each).
-    plain_iterate: Vec<DVec3>,
-    mixed_iterate: Vec<DVec3>,
+    /// The accelerated iterations' buffers, kept between solves.
+    scratch: Scratch,
     /// C q, for energies.
     cq: Vec<DVec3>,
     /// Right-hand side / solution over solved vertices in the factor's permuted order, a
@@ -390,11 +385,7 @@ impl System {
             map_changed: true,
             anderson: Anderson::default(),
             lbfgs: Lbfgs::default(),
-            lbfgs_x: Vec::new(),
-            lbfgs_g: Vec::new(),
-            lbfgs_d: Vec::new(),
-            plain_iterate: Vec::new(),
-            mixed_iterate: Vec::new(),
+            scratch: Scratch::default(),
             cq: Vec::new(),
             rhs: Vec::new(),
             rhs_partials: Vec::new(),
@@ -851,22 +842,26 @@ impl System {
         }
         report.initial_energy = energy;
         report.energy_floor = self.energy_floor();
-        match self.params.acceleration {
+        let run = Run { iterations, tolerance, initial_energy: energy };
+        // Taken out while a loop borrows the system, and put back whatever the outcome.
+        let mut scratch = std::mem::take(&mut self.scratch);
+        let result = match self.params.acceleration {
             Acceleration::Anderson if self.params.is_accelerated() => {
                 if !continuing {
                     self.anderson.reset();
                 }
-                self.iterate_anderson(q, iterations, tolerance, energy, &mut after_iteration, &mut report)?;
+                self.iterate_anderson(q, &mut scratch, run, &mut after_iteration, &mut report)
             }
             Acceleration::Lbfgs if self.params.is_accelerated() && self.factor.is_some() => {
                 if !continuing {
                     self.lbfgs.reset();
                 }
-                self.iterate_lbfgs(q, iterations, tolerance, energy, &mut after_iteration, &mut report)?;
+                self.iterate_lbfgs(q, &mut scratch, run, &mut after_iteration, &mut report)
             }
-            _ => self.iterate_plain(q, iterations, tolerance, energy, &mut after_iteration, &mut report)?,
-        }
-        Ok(report)
+            _ => self.iterate_plain(q, run, &mut after_iteration, &mut report),
+        };
+        self.scratch = scratch;
+        result.map(|()| report)
     }
 
     /// The plain iteration: global step from the last projections, then the local step at the
@@ -874,13 +869,12 @@ impl System {
     fn iterate_plain(
         &mut self,
         q: &mut [DVec3],
-        iterations: usize,
-        tolerance: f64,
-        mut previous: f64,
+        run: Run,
         after_iteration: &mut impl FnMut(usize, f64) -> ControlFlow<()>,
         report: &mut SolveReport,
     ) -> Result<(), SolveError> {
-        for _ in 0..iterations {
+        let (tolerance, mut previous) = (run.tolerance, run.initial_energy);
+        for _ in 0..run.iterations {
             timed(&mut report.global_seconds, || self.global_step(q))?;
             timed(&mut report.local_seconds, || self.project(q));
             let energy = self.energy_of_projections(q);
@@ -898,41 +892,19 @@ impl System {
     fn iterate_anderson(
         &mut self,
         q: &mut [DVec3],
-        iterations: usize,
-        tolerance: f64,
-        previous: f64,
+        scratch: &mut Scratch,
+        run: Run,
         after_iteration: &mut impl FnMut(usize, f64) -> ControlFlow<()>,
         report: &mut SolveReport,
     ) -> Result<(), SolveError> {
         let n = q.len();
         self.anderson.resize(n, self.params.anderson_window);
-        // Scratch kept in the system between solves, taken out while the loop borrows it.
-        let mut plain = std::mem::take(&mut self.plain_iterate);
-        let mut mixed = std::mem::take(&mut self.mixed_iterate);
+        let (plain, mixed) = (&mut scratch.plain, &mut scratch.mixed);
         plain.resize(n, DVec3::ZERO);
         mixed.resize(n, DVec3::ZERO);
-        let result =
-            self.anderson_loop(q, &mut plain, &mut mixed, iterations, tolerance, previous, after_iteration, report);
-        self.plain_iterate = plain;
-        self.mixed_iterate = mixed;
-        result
-    }
-
-    /// The iterations of [`System::iterate_anderson`], on its scratch buffers.
-    #[allow(clippy::too_many_arguments)]
-    fn anderson_loop(
-        &mut self,
-        q: &mut [DVec3],
-        plain: &mut [DVec3],
-        mixed: &mut [DVec3],
-        iterations: usize,
-        tolerance: f64,
-        mut previous: f64,
-        after_iteration: &mut impl FnMut(usize, f64) -> ControlFlow<()>,
-        report: &mut SolveReport,
-    ) -> Result<(), SolveError> {
+        let (tolerance, mut previous) = (run.tolerance, run.initial_energy);
         let mut objective = previous + self.inertial_energy(q);
-        for _ in 0..iterations {
+        for _ in 0..run.iterations {
             plain.copy_from_slice(q);
             timed(&mut report.global_seconds, || self.global_step(plain))?;
             let t = Instant::now();
@@ -975,45 +947,23 @@ impl System {
     fn iterate_lbfgs(
         &mut self,
         q: &mut [DVec3],
-        iterations: usize,
-        tolerance: f64,
-        previous: f64,
+        scratch: &mut Scratch,
+        run: Run,
         after_iteration: &mut impl FnMut(usize, f64) -> ControlFlow<()>,
         report: &mut SolveReport,
     ) -> Result<(), SolveError> {
         let solved = self.assembly.num_solved();
         self.lbfgs.resize(solved, self.params.lbfgs_memory);
-        let mut buffers =
-            [std::mem::take(&mut self.lbfgs_x), std::mem::take(&mut self.lbfgs_g), std::mem::take(&mut self.lbfgs_d)];
-        buffers.iter_mut().for_each(|b| b.resize(solved, [0.0; 4]));
-        let mut trial = std::mem::take(&mut self.plain_iterate);
+        let Scratch { plain: trial, x, g, d, .. } = scratch;
         trial.resize(q.len(), DVec3::ZERO);
-        let [x, g, d] = &mut buffers;
-        let result = self.lbfgs_loop(q, &mut trial, x, g, d, iterations, tolerance, previous, after_iteration, report);
-        let [x, g, d] = buffers;
-        (self.lbfgs_x, self.lbfgs_g, self.lbfgs_d, self.plain_iterate) = (x, g, d, trial);
-        result
-    }
-
-    /// The iterations of [`System::iterate_lbfgs`], on its scratch buffers.
-    #[allow(clippy::too_many_arguments)]
-    fn lbfgs_loop(
-        &mut self,
-        q: &mut [DVec3],
-        trial: &mut [DVec3],
-        x: &mut [[f64; 4]],
-        g: &mut [[f64; 4]],
-        d: &mut [[f64; 4]],
-        iterations: usize,
-        tolerance: f64,
-        mut previous: f64,
-        after_iteration: &mut impl FnMut(usize, f64) -> ControlFlow<()>,
-        report: &mut SolveReport,
-    ) -> Result<(), SolveError> {
+        for b in [&mut *x, &mut *g, &mut *d] {
+            b.resize(solved, [0.0; 4]);
+        }
+        let (tolerance, mut previous) = (run.tolerance, run.initial_energy);
         /// Armijo's sufficient-decrease constant c₁ (Nocedal & Wright's usual 1e-4).
         const ARMIJO: f64 = 1e-4;
         let mut objective = previous + self.inertial_energy(q);
-        for _ in 0..iterations {
+        for _ in 0..run.iterations {
             let t = Instant::now();
             // g at q: the projections and C q of the energy just evaluated there.
             self.half_gradient(q, g);
@@ -1249,6 +1199,27 @@ impl System {
     pub fn factor_sizes(&self) -> (usize, usize) {
         self.factor.as_ref().map_or((0, 0), |f| (f.nnz(), f.nnz_l()))
     }
+}
+
+/// What a solve asks of its iterations.
+#[derive(Debug, Clone, Copy)]
+struct Run {
+    iterations: usize,
+    tolerance: f64,
+    /// E at the start (the projections at q are current).
+    initial_energy: f64,
+}
+
+/// Buffers of the accelerated iterations, allocated once per problem size and kept between
+/// solves: G(x) (or L-BFGS's trial point) and Anderson's mixed iterate over all n points; x, g
+/// and the direction over the solved vertices in the factor's order for L-BFGS.
+#[derive(Debug, Default)]
+struct Scratch {
+    plain: Vec<DVec3>,
+    mixed: Vec<DVec3>,
+    x: Vec<[f64; 4]>,
+    g: Vec<[f64; 4]>,
+    d: Vec<[f64; 4]>,
 }
 
 /// `trial` = q with its solved vertices at x − d (factor order); [`SolveError::NonFinite`] if
