@@ -99,12 +99,14 @@ pub enum DynamicsError {
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct StepReport {
     /// E(q) = Σ w_i ‖C_i q − p_i(q)‖² after the step (constraints only, without k or inertia)
-    /// when the iterations computed it (a tolerance, or Anderson acceleration, whose safeguard
-    /// needs it); `None` after plain iterations, which skip it: [`Simulation::energy`] computes
+    /// when the iterations computed it (a tolerance, or an acceleration, whose safeguard needs
+    /// it); `None` after plain iterations, which skip it: [`Simulation::energy`] computes
     /// it when wanted.
     pub energy: Option<f64>,
     /// Iterations run (fewer than asked when the tolerance stopped them).
     pub iterations: usize,
+    /// Accelerated iterations replaced by the plain one ([`crate::solver::SolveReport::rejected`]).
+    pub rejected: usize,
     /// Seconds in local steps.
     pub local_seconds: f64,
     /// Seconds in global steps.
@@ -262,6 +264,7 @@ impl Simulation {
         Ok(StepReport {
             energy: report.energies.last().copied(),
             iterations: if needs_energy { report.energies.len() } else { self.params.iterations },
+            rejected: report.rejected,
             local_seconds: report.local_seconds,
             global_seconds: report.global_seconds,
             setup_seconds: report.setup_seconds,

@@ -142,7 +142,8 @@ enum Command {
 /// Overrides of the scene's acceleration settings.
 #[derive(Args, Clone, Copy)]
 struct AccelerationArgs {
-    /// How iterates are combined: lbfgs, anderson or none (overrides the scene's `acceleration`).
+    /// How iterates are combined: lbfgs (the default), anderson or none (overrides the scene's
+    /// `acceleration`).
     #[arg(long, value_name = "KIND", value_parser = parse_acceleration)]
     acceleration: Option<Acceleration>,
     /// Iterations Anderson acceleration mixes, 1 to 50 (overrides `anderson_window`).
@@ -562,10 +563,11 @@ fn bench_converge(mesh: Option<PathBuf>, iterations: usize, reference: usize, na
     let mut out = std::io::stdout().lock();
     writeln!(
         out,
-        "{}: {} vertices; {}; E* = lowest energy of {reference} accelerated iterations; runs capped at {iterations} iterations",
+        "{}: {} vertices; {}; E* = lowest energy of {reference} iterations with the default acceleration ({}) and of the timed runs; runs capped at {iterations} iterations",
         path.display(),
         loaded.mesh.num_vertices(),
-        threads_label()
+        threads_label(),
+        Acceleration::default().name()
     )?;
     writeln!(
         out,

@@ -193,8 +193,8 @@ pub fn run(args: &SimulateArgs<'_>) -> Result<()> {
     } else {
         ProgressBar::hidden()
     };
-    let (mut energies, mut local, mut global, mut setup, mut energy_seconds) =
-        (Vec::with_capacity(args.frames.min(1 << 20)), 0.0, 0.0, 0.0, 0.0);
+    let (mut energies, mut local, mut global, mut setup, mut energy_seconds, mut rejected) =
+        (Vec::with_capacity(args.frames.min(1 << 20)), 0.0, 0.0, 0.0, 0.0, 0);
     let h = simulation.params().time_step;
     let spinning = loaded.spinning_handles()?;
     let mut steps = || -> Result<()> {
@@ -222,17 +222,19 @@ pub fn run(args: &SimulateArgs<'_>) -> Result<()> {
                     }
                 };
                 energies.push(energy);
-                // The report's other energy: a rigid fall keeps E finite (even 0) while ½ m v²
-                // overflows, which JSON would write as null.
-                if !simulation.kinetic_energy().is_finite() {
-                    anyhow::bail!(
-                        "{}: step {k} of {}: the kinetic energy is not a finite number (velocities too large); check the gravity, time step and targets",
-                        args.scene.display(),
-                        args.frames
-                    );
-                }
+            }
+            // Overflowing velocities fail the step whether or not a report is asked for: a rigid
+            // fall keeps E finite (even 0) while ½ m v² overflows, which a report would write as
+            // null and the next steps would turn into infinite positions.
+            if !simulation.kinetic_energy().is_finite() {
+                anyhow::bail!(
+                    "{}: step {k} of {}: the kinetic energy is not a finite number (velocities too large); check the gravity, time step and targets",
+                    args.scene.display(),
+                    args.frames
+                );
             }
             local += step.local_seconds;
+            rejected += step.rejected;
             global += step.global_seconds;
             setup += step.setup_seconds;
             if k % args.every == 0 || k == args.frames {
@@ -272,6 +274,8 @@ pub fn run(args: &SimulateArgs<'_>) -> Result<()> {
             "simulated_s": simulation.time(),
             "energy": energies,
             "kinetic_energy_end": simulation.kinetic_energy(),
+            "acceleration": system.params().acceleration.name(),
+            "rejected": rejected,
             "warnings": warnings.to_json(),
             "timings": {
                 "load_s": loaded.load_seconds,

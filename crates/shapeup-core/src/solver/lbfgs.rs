@@ -67,15 +67,17 @@ impl Lbfgs {
     }
 
     /// Whether the next direction uses history (otherwise it is the plain step).
+    #[cfg(test)]
     pub(crate) fn has_history(&self) -> bool {
         self.len > 0
     }
 
     /// Records the iterate x with half-gradient g (keeping the pair with the previous one when
-    /// its curvature is positive), then runs the first loop of the two-loop recursion on `r`,
-    /// which enters as g. The caller then applies H_0 (solves with A) and calls
-    /// [`Lbfgs::second_loop`]; the direction is −r.
-    pub(crate) fn first_loop(&mut self, x: &[[f64; 4]], g: &[[f64; 4]], r: &mut [[f64; 4]]) {
+    /// its curvature is positive) and sets `r` = g. Unless `plain`, it then runs the first loop
+    /// of the two-loop recursion on r and returns whether the history was used; the caller then
+    /// applies H_0 (solves with A) and, when it was, calls [`Lbfgs::second_loop`]. The
+    /// direction is −r. A `plain` step (r = H_0 g, the local-global step) keeps the history.
+    pub(crate) fn first_loop(&mut self, x: &[[f64; 4]], g: &[[f64; 4]], r: &mut [[f64; 4]], plain: bool) -> bool {
         debug_assert!(x.len() == self.prev_x.len() && g.len() == x.len() && r.len() == x.len());
         if self.has_prev && self.memory > 0 {
             let slot = (self.start + self.len) % self.memory;
@@ -110,6 +112,9 @@ impl Lbfgs {
         self.prev_g.copy_from_slice(g);
         self.has_prev = true;
         r.copy_from_slice(g);
+        if plain || self.len == 0 {
+            return false;
+        }
         // Newest to oldest: α_j = ρ_j s_jᵀr, r −= α_j y_j; each update also forms the next
         // pair's s·r, so r is read once per pair.
         let slot = |j: usize| (self.start + j) % self.memory.max(1);
@@ -123,6 +128,7 @@ impl Lbfgs {
             let next = (j > 0).then(|| self.s[slot(j - 1)].as_slice());
             sr = axpy_dot(-a, &self.y[slot(j)], r, next);
         }
+        true
     }
 
     /// The second loop, on r = H_0 (first loop's output): r becomes H_k g. Oldest to newest:
@@ -219,7 +225,7 @@ mod tests {
             if dot(&g, &g).sqrt() < 1e-12 {
                 break;
             }
-            lbfgs.first_loop(&x, &g, &mut r);
+            lbfgs.first_loop(&x, &g, &mut r, false);
             // H_0 = 1/100 I, the plain step's scale.
             r.iter_mut().for_each(|v| v.iter_mut().for_each(|c| *c /= 100.0));
             lbfgs.second_loop(&mut r);
@@ -246,14 +252,14 @@ mod tests {
         lbfgs.resize(1, 3);
         let g = [[1.0, 2.0, 3.0, 0.0]];
         let mut r = [[0.0; 4]];
-        lbfgs.first_loop(&[[0.0; 4]], &g, &mut r);
+        lbfgs.first_loop(&[[0.0; 4]], &g, &mut r, false);
         assert!(!lbfgs.has_history());
         lbfgs.second_loop(&mut r);
         assert_eq!(r, g);
-        lbfgs.first_loop(&[[1.0, 0.0, 0.0, 0.0]], &[[2.0, 2.0, 3.0, 0.0]], &mut r);
+        lbfgs.first_loop(&[[1.0, 0.0, 0.0, 0.0]], &[[2.0, 2.0, 3.0, 0.0]], &mut r, false);
         assert!(lbfgs.has_history());
         lbfgs.reset();
-        lbfgs.first_loop(&[[0.0; 4]], &g, &mut r);
+        lbfgs.first_loop(&[[0.0; 4]], &g, &mut r, false);
         assert!(!lbfgs.has_history());
     }
 }
