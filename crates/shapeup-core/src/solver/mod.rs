@@ -913,17 +913,13 @@ impl System {
             timed(&mut report.global_seconds, || self.global_step(plain))?;
             let t = Instant::now();
             let is_mixed = self.anderson.mix(q, plain, mixed);
-            self.project(mixed);
-            let mut energy = self.energy_of_projections(mixed);
-            let mut mixed_objective = energy + self.inertial_energy(mixed);
+            let (mut energy, mut mixed_objective) = self.evaluate(mixed);
             let accepted_mixed = is_mixed && mixed_objective < objective;
             if is_mixed && !accepted_mixed {
                 // The plain iterate: E(G(x)) ≤ E(x) by the local-global argument.
                 self.anderson.reset();
                 report.rejected += 1;
-                self.project(plain);
-                energy = self.energy_of_projections(plain);
-                mixed_objective = energy + self.inertial_energy(plain);
+                (energy, mixed_objective) = self.evaluate(plain);
                 q.copy_from_slice(plain);
             } else {
                 q.copy_from_slice(mixed);
@@ -984,13 +980,10 @@ impl System {
             }
             // The directional derivative of the objective along −d is −2 gᵀd.
             let slope = -2.0 * lbfgs::dot(g, d);
-            step_to(&self.assembly, factor.permutation(), x, d, q, trial)?;
-            self.pin_held(trial);
+            self.step_to(x, d, q, trial)?;
             report.global_seconds += t.elapsed().as_secs_f64();
             let t = Instant::now();
-            self.project(trial);
-            let mut energy = self.energy_of_projections(trial);
-            let mut trial_objective = energy + self.inertial_energy(trial);
+            let (mut energy, mut trial_objective) = self.evaluate(trial);
             report.local_seconds += t.elapsed().as_secs_f64();
             let accepted = !quasi_newton || (slope < 0.0 && trial_objective <= objective + ARMIJO * slope);
             if !accepted {
@@ -1001,14 +994,11 @@ impl System {
                 d.copy_from_slice(g);
                 if let Some(factor) = self.factor.as_mut() {
                     factor.solve_permuted_in_place(d);
-                    step_to(&self.assembly, factor.permutation(), x, d, q, trial)?;
                 }
-                self.pin_held(trial);
+                self.step_to(x, d, q, trial)?;
                 report.global_seconds += t.elapsed().as_secs_f64();
                 let t = Instant::now();
-                self.project(trial);
-                energy = self.energy_of_projections(trial);
-                trial_objective = energy + self.inertial_energy(trial);
+                (energy, trial_objective) = self.evaluate(trial);
                 report.local_seconds += t.elapsed().as_secs_f64();
             }
             q.copy_from_slice(trial);
@@ -1048,6 +1038,34 @@ impl System {
             None => g.fill([0.0; 4]),
         }
         global::right_hand_side(&self.assembly, &self.rhs_map, &self.cq, g, &mut self.rhs_partials);
+    }
+
+    /// The local step at q, then E(q) and the objective (E plus the inertial term in dynamic
+    /// mode) from its projections: what every accelerated iteration asks of a candidate.
+    fn evaluate(&mut self, q: &[DVec3]) -> (f64, f64) {
+        self.project(q);
+        let energy = self.energy_of_projections(q);
+        (energy, energy + self.inertial_energy(q))
+    }
+
+    /// `trial` = q with its solved vertices at x − d (factor order) and the held ones on their
+    /// points; d is left holding x − d. [`SolveError::NonFinite`] if that holds a NaN or an
+    /// infinity.
+    fn step_to(&self, x: &[[f64; 4]], d: &mut [[f64; 4]], q: &[DVec3], trial: &mut [DVec3]) -> Result<(), SolveError> {
+        for (di, xi) in d.iter_mut().zip(x) {
+            for k in 0..3 {
+                di[k] = xi[k] - di[k];
+            }
+        }
+        trial.copy_from_slice(q);
+        // Without a factor no vertex is solved: only the held ones move.
+        if let Some(factor) = self.factor.as_ref()
+            && !global::scatter(&self.assembly, factor.permutation(), d, trial)
+        {
+            return Err(SolveError::NonFinite);
+        }
+        self.pin_held(trial);
+        Ok(())
     }
 
     /// Σ_v μ_v ‖q_v − s_v‖²: the inertial part of the objective in dynamic mode (0 in static).
@@ -1232,27 +1250,6 @@ struct Scratch {
     x: Vec<[f64; 4]>,
     g: Vec<[f64; 4]>,
     d: Vec<[f64; 4]>,
-}
-
-/// `trial` = q with its solved vertices at x − d (factor order); [`SolveError::NonFinite`] if
-/// that holds a NaN or an infinity.
-fn step_to(
-    a: &Assembly,
-    forward: &[u32],
-    x: &[[f64; 4]],
-    d: &mut [[f64; 4]],
-    q: &[DVec3],
-    trial: &mut [DVec3],
-) -> Result<(), SolveError> {
-    for (di, xi) in d.iter_mut().zip(x) {
-        for k in 0..3 {
-            di[k] = xi[k] - di[k];
-        }
-    }
-    trial.copy_from_slice(q);
-    let finite = global::scatter(a, forward, d, trial);
-    // d now holds x − d; the caller recomputes d before using it again.
-    if finite { Ok(()) } else { Err(SolveError::NonFinite) }
 }
 
 /// Runs `f`, adding its wall time in seconds to `seconds`.
