@@ -6,7 +6,7 @@
 //!   iteration count. It is also what the [`worker`](crate::worker) receives to solve.
 //! - [`Solver`] turns an `EditState` into a `shapeup-core` [`System`] and keeps the working
 //!   positions: a structural change rebuilds the system, a handle move only sets targets
-//!   ([`System::set_position_targets`], no refactorization), a weight change only refactors.
+//!   ([`System::set_targets`], no refactorization), a weight change only refactors.
 //! - [`Document`] ties them together with the selection and the current positions, and applies
 //!   [`Command`]s.
 //!
@@ -16,13 +16,11 @@
 
 use crate::command::{Command, SelectMode};
 use glam::{DQuat, DVec3};
-use shapeup_core::constraints::{BuildContext, Constraint, Params, Position, Selection, build_constraints};
+use shapeup_core::constraints::{GroupDescription, Params, Selection, build_group as build_described};
 use shapeup_core::geometry::{RestGeometry, WorkingFrame};
 use shapeup_core::io::read_mesh;
 use shapeup_core::mesh::Mesh;
-use shapeup_core::scene::{
-    GroupSpec, MeshSettings, Scene, SelectionSpec, SolverSettings, Targets, hardened, take_hard,
-};
+use shapeup_core::scene::{GroupSpec, MeshSettings, Scene, SelectionSpec, SolverSettings, Targets};
 use shapeup_core::solver::{Acceleration, ConstraintGroup, GroupId, SolveError, SolveReport, SolverParams, System};
 use std::fmt;
 use std::ops::ControlFlow;
@@ -130,12 +128,16 @@ pub struct Group {
     pub kind: String,
     /// Multiplier g.
     pub weight: f64,
-    /// The vertices it applies to (ascending for groups the editor makes); `None` = all.
+    /// The vertices it applies to (ascending); `None` = all (or the faces', when `faces` is
+    /// set).
     pub vertices: Option<Vec<u32>>,
-    /// Handles: one target per vertex (input frame); empty otherwise.
+    /// The polygon faces it applies to (ascending), for a group made on a face selection.
+    pub faces: Option<Vec<u32>>,
+    /// Handles: one target per vertex of `vertices`, in its order (input frame); empty
+    /// otherwise.
     pub targets: Vec<DVec3>,
-    /// Type options of a group read from a scene (kept to rebuild and save it).
-    source: Option<Arc<GroupSpec>>,
+    /// Type options (as a scene writes them, `hard` included), shared between undo steps.
+    pub options: Arc<serde_json::Map<String, serde_json::Value>>,
 }
 
 impl Group {
@@ -156,10 +158,14 @@ impl Group {
 
     /// What the system needs to rebuild when this changes (everything but name, weight and
     /// targets).
-    fn structure(&self) -> (GroupKey, &str, Option<&[u32]>) {
-        (self.key, &self.kind, self.vertices.as_deref())
+    fn structure(&self) -> Structure {
+        (self.key, self.kind.clone(), self.vertices.clone(), self.faces.clone(), Arc::clone(&self.options))
     }
 }
+
+/// What a rebuild of a group depends on: (key, kind, vertices, faces, options).
+type Structure =
+    (GroupKey, String, Option<Vec<u32>>, Option<Vec<u32>>, Arc<serde_json::Map<String, serde_json::Value>>);
 
 /// The rest shape: the mesh in its input frame and its rest geometry in the working frame.
 #[derive(Debug)]
@@ -179,7 +185,7 @@ impl Rest {
     pub fn new(mesh: Mesh, normalize: bool) -> Self {
         let frame = if normalize { WorkingFrame::fit(&mesh.positions) } else { WorkingFrame::IDENTITY };
         let working = mesh.positions.iter().map(|&p| frame.to_working(p)).collect();
-        let geometry = RestGeometry::new(working, mesh.triangles.clone(), mesh.tetrahedra.clone());
+        let geometry = RestGeometry::of_mesh(working, &mesh);
         Rest { mesh, frame, normalize, geometry }
     }
 }
@@ -308,38 +314,38 @@ impl From<SolveError> for EditorError {
     }
 }
 
-/// Builds a group's constraints on the rest shape.
+/// Builds a group's constraints on the rest shape, through the library's one route.
 fn build_group(rest: &Rest, group: &Group) -> Result<ConstraintGroup, EditorError> {
     let n = rest.mesh.num_vertices();
-    let constraint_error = |m: String| EditorError::Constraint(format!("group \"{}\": {m}", group.name));
-    let constraints: Vec<Box<dyn Constraint>> = if group.role == GroupRole::Handle {
-        let vertices = group.vertices.clone().unwrap_or_else(|| (0..n as u32).collect());
-        let working = group.targets.iter().map(|&t| rest.frame.to_working(t)).collect();
-        let position = Position::new(vertices, working)
-            .ok_or_else(|| constraint_error("a handle needs one target per vertex, at least one".into()))?;
-        let position = ConstraintGroup::new(group.name.clone(), group.weight, vec![Box::new(position)]);
-        // A handle read from a scene keeps its `hard` key.
-        let options = group.source.as_ref().map(|s| s.options.clone()).unwrap_or_default();
-        let (hard, _) = take_hard(&options).map_err(constraint_error)?;
-        return hardened(position, hard).map_err(constraint_error);
-    } else {
-        let selection = match &group.vertices {
-            None => Selection::All,
-            Some(list) => Selection::from_indices(n, &list.iter().map(|&v| v as usize).collect::<Vec<_>>()),
-        };
-        let ctx = BuildContext { rest: &rest.geometry, selection: &selection, frame: &rest.frame };
-        let params = group.source.as_ref().map(|s| Params::new(s.options.clone())).unwrap_or_default();
-        build_constraints(&group.kind, &ctx, params).map_err(|e| constraint_error(e.to_string()))?
+    let selection = match (&group.faces, &group.vertices) {
+        (Some(faces), _) => {
+            Selection::from_faces(n, &rest.geometry.faces, &faces.iter().map(|&f| f as usize).collect::<Vec<_>>())
+        }
+        (None, None) => Selection::All,
+        (None, Some(list)) => Selection::from_indices(n, &list.iter().map(|&v| v as usize).collect::<Vec<_>>()),
     };
-    Ok(ConstraintGroup::new(group.name.clone(), group.weight, constraints))
+    let targets = (group.role == GroupRole::Handle).then(|| {
+        let vertices = group.vertices.clone().unwrap_or_else(|| (0..n as u32).collect());
+        vertices.into_iter().zip(&group.targets).map(|(v, &t)| (v, rest.frame.to_working(t))).collect()
+    });
+    let description = GroupDescription {
+        kind: group.kind.clone(),
+        name: group.name.clone(),
+        weight: Some(group.weight),
+        selection,
+        options: Params::new((*group.options).clone()),
+        targets,
+    };
+    build_described(&description, &rest.geometry, &rest.frame)
+        .map_err(|e| EditorError::Constraint(format!("group \"{}\": {e}", group.name)))
 }
 
 /// The solve state of an [`EditState`]: its [`System`] and the working positions.
 #[derive(Debug, Default)]
 pub struct Solver {
     rest: Option<Arc<Rest>>,
-    /// (key, kind, vertices) of each group the system was built from.
-    structure: Vec<(GroupKey, String, Option<Vec<u32>>)>,
+    /// What each group the system was built from depends on.
+    structure: Vec<Structure>,
     system: Option<System>,
     ids: Vec<GroupId>,
     /// Current positions, working frame.
@@ -362,11 +368,7 @@ impl Solver {
     pub fn sync(&mut self, state: &EditState) -> Result<(), EditorError> {
         let same_rest = self.rest.as_ref().is_some_and(|r| Arc::ptr_eq(r, &state.rest));
         let same_groups = self.structure.len() == state.groups.len()
-            && self
-                .structure
-                .iter()
-                .zip(&state.groups)
-                .all(|((k, kind, v), g)| (*k, kind.as_str(), v.as_deref()) == g.structure());
+            && self.structure.iter().zip(&state.groups).all(|(s, g)| *s == g.structure());
         let params = SolverParams {
             iterations: state.iterations,
             acceleration: state.acceleration,
@@ -383,7 +385,7 @@ impl Solver {
                     if group.role == GroupRole::Handle {
                         let working: Vec<DVec3> =
                             group.targets.iter().map(|&t| state.rest.frame.to_working(t)).collect();
-                        system.set_position_targets(id, &working)?;
+                        system.set_targets(id, &working)?;
                     }
                     system.set_multiplier(id, group.weight)?;
                 }
@@ -405,7 +407,7 @@ impl Solver {
                     Some(_) if same_rest => std::mem::take(&mut self.q),
                     _ => rest.geometry.positions.clone(),
                 };
-                self.structure = state.groups.iter().map(|g| (g.key, g.kind.clone(), g.vertices.clone())).collect();
+                self.structure = state.groups.iter().map(Group::structure).collect();
                 self.system = Some(system);
                 self.ids = ids;
                 self.rest = Some(Arc::clone(rest));
@@ -674,7 +676,8 @@ impl Document {
                 weight,
                 vertices: None,
                 targets: Vec::new(),
-                source: None,
+                faces: None,
+                options: Arc::default(),
             })
             .collect()
     }
@@ -710,24 +713,38 @@ impl Document {
         let mut groups = Vec::with_capacity(scene.groups.len());
         for (i, spec) in scene.groups.iter().enumerate() {
             let entry = |m: String| EditorError::Load(format!("constraints[{i}] (\"{}\"): {m}", spec.name));
-            let picked = resolve_selection(&spec.selection, &rest.mesh).map_err(entry)?;
+            let ty = shapeup_core::constraints::constraint_type(&spec.kind).map_err(|e| entry(e.to_string()))?;
+            let (faces, picked) = match &spec.selection {
+                SelectionSpec::Faces(list) => {
+                    let m = rest.geometry.faces.len();
+                    if let Some(&f) = list.iter().find(|&&f| f >= m) {
+                        return Err(entry(format!("face {f} is out of range (the mesh has {m} faces)")));
+                    }
+                    let mut list: Vec<u32> = list.iter().map(|&f| f as u32).collect();
+                    list.sort_unstable();
+                    list.dedup();
+                    (Some(list), None)
+                }
+                other => (None, resolve_selection(other, &rest.mesh).map_err(entry)?),
+            };
             let shape_kind = ShapeModel::ALL.iter().any(|m| m.groups().iter().any(|(k, _)| *k == spec.kind));
             let plain = spec.options.is_empty();
-            let (role, targets) = if spec.kind == "position" {
-                let vertices = picked.clone().unwrap_or_else(|| (0..rest.mesh.num_vertices() as u32).collect());
-                (GroupRole::Handle, position_targets(&vertices, &spec.targets, &rest.mesh).map_err(entry)?)
-            } else if shape_kind && plain && picked.is_none() {
-                (GroupRole::Shape, Vec::new())
+            let (role, targets, picked) = if ty.has_targets() {
+                let vertices = picked.unwrap_or_else(|| (0..rest.mesh.num_vertices() as u32).collect());
+                let targets = position_targets(&vertices, &spec.targets, &rest.mesh).map_err(entry)?;
+                // Ascending, as the editor keeps every selection (targets follow their vertex).
+                let mut pairs: Vec<(u32, DVec3)> = vertices.into_iter().zip(targets).collect();
+                pairs.sort_unstable_by_key(|&(v, _)| v);
+                let (vertices, targets) = pairs.into_iter().unzip();
+                (GroupRole::Handle, targets, Some(vertices))
+            } else if shape_kind && plain && picked.is_none() && faces.is_none() {
+                (GroupRole::Shape, Vec::new(), picked)
             } else if spec.kind == "smoothing" && plain {
-                (GroupRole::Smoothing, Vec::new())
+                (GroupRole::Smoothing, Vec::new(), picked)
             } else {
-                (GroupRole::Other, Vec::new())
+                (GroupRole::Other, Vec::new(), picked)
             };
-            let vertices = if role == GroupRole::Handle {
-                Some(picked.unwrap_or_else(|| (0..rest.mesh.num_vertices() as u32).collect()))
-            } else {
-                picked
-            };
+            let vertices = picked;
             groups.push(Group {
                 key: document.new_key(),
                 name: spec.name.clone(),
@@ -736,8 +753,8 @@ impl Document {
                 weight: spec.weight,
                 vertices,
                 targets,
-                // Other groups keep their scene entry; handles their options (`hard`).
-                source: (role == GroupRole::Other || !spec.options.is_empty()).then(|| Arc::new(spec.clone())),
+                faces,
+                options: Arc::new(spec.options.clone()),
             });
         }
         let kinds: Vec<&str> = groups.iter().filter(|g| g.role == GroupRole::Shape).map(|g| g.kind.as_str()).collect();
@@ -760,16 +777,17 @@ impl Document {
                 kind: g.kind.clone(),
                 name: g.name.clone(),
                 weight: g.weight,
-                selection: match &g.vertices {
-                    None => SelectionSpec::All,
-                    Some(list) => SelectionSpec::Vertices(list.iter().map(|&v| v as usize).collect()),
+                selection: match (&g.faces, &g.vertices) {
+                    (Some(faces), _) => SelectionSpec::Faces(faces.iter().map(|&f| f as usize).collect()),
+                    (None, None) => SelectionSpec::All,
+                    (None, Some(list)) => SelectionSpec::Vertices(list.iter().map(|&v| v as usize).collect()),
                 },
                 targets: if g.role == GroupRole::Handle {
                     Targets { explicit: Some(g.targets.iter().map(|t| t.to_array()).collect()), ..Targets::default() }
                 } else {
                     Targets::default()
                 },
-                options: g.source.as_ref().map(|s| s.options.clone()).unwrap_or_default(),
+                options: (*g.options).clone(),
             })
             .collect();
         Scene {
@@ -1079,7 +1097,8 @@ impl Document {
                     weight: 1.0,
                     vertices: Some(vertices),
                     targets,
-                    source: None,
+                    faces: None,
+                    options: Arc::default(),
                 });
             }
             Command::MoveHandle { handle, delta } => {
@@ -1127,7 +1146,8 @@ impl Document {
                     weight: 1.0,
                     vertices: Some(vertices),
                     targets: Vec::new(),
-                    source: None,
+                    faces: None,
+                    options: Arc::default(),
                 });
             }
             Command::SetWeight { group, weight } => {
@@ -1189,7 +1209,8 @@ impl Document {
                     weight: FREE_PIECE_WEIGHT,
                     vertices: Some(vertices),
                     targets,
-                    source: None,
+                    faces: None,
+                    options: Arc::default(),
                 });
             }
             Command::Select { .. }

@@ -233,6 +233,10 @@ pub struct RestGeometry {
     pub triangles: Vec<[u32; 3]>,
     /// Tetrahedra of the mesh (empty for a surface).
     pub tetrahedra: Vec<[u32; 4]>,
+    /// The input's polygon faces as read (n-gons, not their triangles): what face constraints
+    /// (plane, circle, rectangle…) act on. The triangles themselves when built with
+    /// [`RestGeometry::new`].
+    pub faces: crate::mesh::Polygons,
     /// Connectivity.
     pub topology: Topology,
     /// Rest triangle areas A_t.
@@ -250,7 +254,16 @@ impl RestGeometry {
         let triangle_areas = triangle_areas(&positions, &triangles);
         let vertex_areas = vertex_areas(positions.len(), &triangles, &triangle_areas);
         let cotan_weights = cotan_weights(&positions, &triangles, &topology);
-        RestGeometry { positions, triangles, tetrahedra, topology, triangle_areas, vertex_areas, cotan_weights }
+        let faces = crate::mesh::Polygons::from_triangles(&triangles);
+        RestGeometry { positions, triangles, tetrahedra, faces, topology, triangle_areas, vertex_areas, cotan_weights }
+    }
+
+    /// The rest geometry of `mesh` at `positions` (its vertices in the working frame), with
+    /// the mesh's polygon faces.
+    pub fn of_mesh(positions: Vec<DVec3>, mesh: &crate::mesh::Mesh) -> Self {
+        let mut rest = RestGeometry::new(positions, mesh.triangles.clone(), mesh.tetrahedra.clone());
+        rest.faces = mesh.polygons.clone();
+        rest
     }
 
     /// Number of vertices.

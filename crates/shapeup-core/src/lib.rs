@@ -42,7 +42,7 @@
 //! assert!(q[2].x > 1.2, "the pulled corner moved towards its target");
 //!
 //! // Dragging a handle only changes its targets: no refactorization.
-//! system.set_position_targets(handle, &[DVec3::new(1.5, 0.5, 0.0)])?;
+//! system.set_targets(handle, &[DVec3::new(1.5, 0.5, 0.0)])?;
 //! system.solve(&mut q, 20, 0.0)?;
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```

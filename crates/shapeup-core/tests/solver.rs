@@ -289,8 +289,8 @@ fn reweighting_and_removing_groups_match_a_fresh_build() {
     // Moving a handle's targets needs no refactorization and changes the result.
     let moved_id = edited.groups().find(|(_, g)| g.name == "moved").unwrap().0;
     let targets: Vec<DVec3> = high.iter().map(|&v| mesh.positions[v] + DVec3::X * 0.5).collect();
-    edited.set_position_targets(moved_id, &targets).unwrap();
-    assert!(edited.set_position_targets(moved_id, &targets[1..]).is_err());
+    edited.set_targets(moved_id, &targets).unwrap();
+    assert!(edited.set_targets(moved_id, &targets[1..]).is_err());
     let mut qc = mesh.positions.clone();
     edited.solve(&mut qc, 10, 0.0).unwrap();
     assert!(qc.iter().zip(&qa).any(|(a, b)| (*a - *b).length() > 0.1));
@@ -390,7 +390,7 @@ fn chunked_solves_match_one_solve_and_a_fresh_system_bit_for_bit() {
         // A handle moved between chunks: the same as a fresh system started at that q.
         let moved_id = chunked.groups().find(|(_, g)| g.name == "moved").unwrap().0;
         let targets: Vec<DVec3> = high.iter().map(|&v| mesh.positions[v] + DVec3::new(0.1, 0.3, 0.0)).collect();
-        chunked.set_position_targets(moved_id, &targets).unwrap();
+        chunked.set_targets(moved_id, &targets).unwrap();
         let start = q.clone();
         let after = chunked.solve(&mut q, 3, 0.0).unwrap();
         let mut fresh = system(&mesh, model, &low, &high, |p| p + DVec3::new(0.1, 0.3, 0.0));
@@ -503,7 +503,7 @@ fn acceleration_history_restarts_when_the_map_changes() {
             match k {
                 0 => {
                     let targets: Vec<DVec3> = high.iter().map(|&v| mesh.positions[v] + DVec3::Y * 0.1).collect();
-                    s.set_position_targets(moved, &targets).unwrap();
+                    s.set_targets(moved, &targets).unwrap();
                 }
                 2 => s.set_multiplier(shape, 30.0).unwrap(),
                 _ => changed = false,
@@ -617,7 +617,7 @@ fn hard_handles_hold_exactly_and_are_the_limit_of_stiff_soft_ones() {
     let (mut q, mut s) = run(None, 5);
     let factorizations = s.factorizations();
     let targets: Vec<DVec3> = high.iter().map(|&v| mesh.positions[v] + DVec3::new(-0.1, 0.1, 0.05)).collect();
-    s.set_position_targets(shapeup_core::solver::GroupId(3), &targets).unwrap();
+    s.set_targets(shapeup_core::solver::GroupId(3), &targets).unwrap();
     s.solve(&mut q, 15, 0.0).unwrap();
     assert_eq!(s.factorizations(), factorizations, "no refactorization");
     for (&v, t) in high.iter().zip(&targets) {
@@ -628,7 +628,7 @@ fn hard_handles_hold_exactly_and_are_the_limit_of_stiff_soft_ones() {
     fresh.set_hard(shapeup_core::solver::GroupId(3), true).unwrap();
     let mut expected = mesh.positions.clone();
     fresh.solve(&mut expected, 5, 0.0).unwrap();
-    fresh.set_position_targets(shapeup_core::solver::GroupId(3), &targets).unwrap();
+    fresh.set_targets(shapeup_core::solver::GroupId(3), &targets).unwrap();
     fresh.solve(&mut expected, 15, 0.0).unwrap();
     assert!(max_distance(&q, &expected) < 1e-12);
 

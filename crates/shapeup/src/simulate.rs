@@ -196,13 +196,13 @@ pub fn run(args: &SimulateArgs<'_>) -> Result<()> {
     let (mut energies, mut local, mut global, mut setup, mut energy_seconds, mut rejected) =
         (Vec::with_capacity(args.frames.min(1 << 20)), 0.0, 0.0, 0.0, 0.0, 0);
     let h = simulation.params().time_step;
-    let spinning = loaded.spinning_handles()?;
+    let spinning = loaded.spinning_handles(simulation.system())?;
     let mut steps = || -> Result<()> {
         frames.write(0, &simulation)?;
         for k in 1..=args.frames {
             // Spinning handles: their targets at the end of this step.
             for handle in &spinning {
-                simulation.system_mut().set_position_targets(handle.id, &handle.targets_at(k as f64 * h))?;
+                simulation.system_mut().set_targets(handle.id, &handle.targets_at(k as f64 * h))?;
             }
             // The cause in the same line: only the outermost message is printed.
             let step = simulation

@@ -1028,6 +1028,11 @@ fn selected(selection: &SelectionSpec, mesh: &Mesh) -> Vec<bool> {
         SelectionSpec::Sphere { center, radius } => {
             mesh.positions.iter().map(|p| (*p - DVec3::from(*center)).length() <= *radius).collect()
         }
+        SelectionSpec::Faces(list) => {
+            let mut s = vec![false; n];
+            list.iter().flat_map(|&f| mesh.polygons.get(f).unwrap_or(&[])).for_each(|&v| s[v as usize] = true);
+            s
+        }
     }
 }
 

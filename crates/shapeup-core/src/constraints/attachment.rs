@@ -89,6 +89,9 @@ impl Constraint for EdgeAttachment {
     fn project(&self, _q: &[DVec3], out: &mut [DVec3]) {
         out[0] = DVec3::ZERO;
     }
+    fn set_residual(&self, p: &[DVec3]) -> f64 {
+        p[0].length()
+    }
 }
 
 /// What [`degenerate_attachments`] found.
@@ -243,7 +246,7 @@ fn touched_vertices<'a>(n: usize, constraints: impl IntoIterator<Item = &'a dyn 
                 *t |= sum != 0.0;
             }
         }
-        if c.kind() == "position" {
+        if c.held_points().is_some() {
             for &v in c.vertices() {
                 if let Some(h) = held.get_mut(v as usize) {
                     *h = true;
@@ -344,6 +347,9 @@ mod tests {
                 sink.push(0, 0, 1.0);
                 sink.push(0, 1, 0.0);
                 sink.push(0, 0, -1.0);
+            }
+            fn set_residual(&self, p: &[DVec3]) -> f64 {
+                p[0].length()
             }
             fn project(&self, _q: &[DVec3], out: &mut [DVec3]) {
                 out[0] = DVec3::ZERO;

@@ -6,7 +6,9 @@
 //! unit normals of i's triangles; p = 0 if ‖H⁰‖ < 1e-12. With flip prevention, p is negated
 //! when sign(n̄·H) ≠ sign(n̄⁰·H⁰) and ‖H‖ > 1e-5.
 
-use super::{BuildContext, Constraint, ConstraintError, ConstraintType, Params, RowSink, non_empty};
+use super::{
+    BuildContext, Constraint, ConstraintError, ConstraintType, Element, OptionSpec, Params, RowSink, non_empty,
+};
 use crate::geometry::{RestGeometry, triangle_normal};
 use glam::DVec3;
 
@@ -121,7 +123,17 @@ impl Constraint for Bending {
         }
         out[0] = p;
     }
+    fn set_residual(&self, p: &[DVec3]) -> f64 {
+        (p[0].length() - if self.rest_norm < 1e-12 { 0.0 } else { self.rest_norm }).abs()
+    }
 }
+
+/// `prevent_flips`: keep the sign of the curvature normal.
+const PREVENT_FLIPS: OptionSpec = OptionSpec {
+    key: "prevent_flips",
+    doc: "keep the curvature normal's side (no inversion of bumps); default false",
+    kind: super::OptionKind::Bool { default: false },
+};
 
 /// Builds a [`Bending`] on every selected interior vertex. Option `prevent_flips` (default false).
 #[derive(Debug, Clone, Copy)]
@@ -134,14 +146,17 @@ impl ConstraintType for BendingType {
     fn summary(&self) -> &'static str {
         "bending: each interior vertex keeps its mean curvature magnitude"
     }
-    fn options(&self) -> &'static [&'static str] {
-        &["prevent_flips"]
+    fn options(&self) -> &'static [OptionSpec] {
+        &[PREVENT_FLIPS]
+    }
+    fn element(&self) -> Element {
+        Element::Vertex
     }
     fn default_multiplier(&self) -> f64 {
         10.0
     }
     fn build(&self, ctx: &BuildContext, params: &mut Params) -> Result<Vec<Box<dyn Constraint>>, ConstraintError> {
-        let prevent_flips = params.take_bool("bending", "prevent_flips", false)?;
+        let prevent_flips = params.flag("bending", &PREVENT_FLIPS)?;
         let rest = ctx.rest;
         let built = (0..rest.num_vertices())
             .filter(|&i| rest.topology.is_interior(i) && ctx.selection.contains(i as u32))

@@ -3,7 +3,9 @@
 //! Term: ω ‖(q_j − q_i) − p‖² with p = L⁰ (q_j − q_i) / ‖q_j − q_i‖ (the rest edge vector
 //! x⁰_j − x⁰_i when the current edge is shorter than 1e-12), ω = L⁰ the rest length.
 
-use super::{BuildContext, Constraint, ConstraintError, ConstraintType, Params, RowSink, non_empty};
+use super::{
+    BuildContext, Constraint, ConstraintError, ConstraintType, Element, OptionSpec, Params, RowSink, non_empty,
+};
 use glam::DVec3;
 
 /// Shortest rest edge that gets a spring (shorter ones are skipped).
@@ -48,6 +50,9 @@ impl Constraint for EdgeSpring {
         let length = e.length();
         out[0] = if length < MIN_REST_LENGTH { self.rest_edge } else { e * (self.rest_length / length) };
     }
+    fn set_residual(&self, p: &[DVec3]) -> f64 {
+        (p[0].length() - self.rest_length).abs()
+    }
 }
 
 /// Builds an [`EdgeSpring`] on every mesh edge whose two vertices are selected.
@@ -61,8 +66,11 @@ impl ConstraintType for EdgeSpringType {
     fn summary(&self) -> &'static str {
         "edge springs: every edge keeps its rest length"
     }
-    fn options(&self) -> &'static [&'static str] {
+    fn options(&self) -> &'static [OptionSpec] {
         &[]
+    }
+    fn element(&self) -> Element {
+        Element::Edge
     }
     fn default_multiplier(&self) -> f64 {
         10.0

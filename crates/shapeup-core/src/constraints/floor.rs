@@ -4,7 +4,9 @@
 //! κ ≥ 0, default 0: the closest point of the half-space y ≥ h). ω = 10 A_i on a surface, or
 //! m_i / ρ = Σ_{T ∋ i} |V_T| / 4 on a tetrahedral mesh.
 
-use super::{BuildContext, Constraint, ConstraintError, ConstraintType, Params, RowSink, non_empty};
+use super::{
+    BuildContext, Constraint, ConstraintError, ConstraintType, Element, OptionSpec, Params, RowSink, non_empty,
+};
 use crate::geometry::tet_volume;
 use glam::DVec3;
 
@@ -51,7 +53,23 @@ impl Constraint for Floor {
         }
         out[0] = p;
     }
+    fn set_residual(&self, p: &[DVec3]) -> f64 {
+        (self.height - p[0].y).max(0.0)
+    }
 }
+
+/// `height`: the floor's height (input frame).
+const HEIGHT: OptionSpec = OptionSpec {
+    key: "height",
+    doc: "the floor's height y (input units); default just below the lowest vertex",
+    kind: super::OptionKind::Number { default: None, min: -f64::MAX, max: f64::MAX },
+};
+/// `push`: over-projection κ.
+const PUSH: OptionSpec = OptionSpec {
+    key: "push",
+    doc: "κ ≥ 0: a vertex below the floor is pushed κ times its depth above it; default 0",
+    kind: super::OptionKind::Number { default: Some(0.0), min: 0.0, max: f64::MAX },
+};
 
 /// Builds a [`Floor`] under every selected vertex of a triangle or tetrahedron. Options:
 /// `height` (input frame; default: just below the lowest vertex) and `push` (κ ≥ 0, default 0).
@@ -65,8 +83,14 @@ impl ConstraintType for FloorType {
     fn summary(&self) -> &'static str {
         "floor: vertices stay above the plane y = height"
     }
-    fn options(&self) -> &'static [&'static str] {
-        &["height", "push"]
+    fn options(&self) -> &'static [OptionSpec] {
+        &[HEIGHT, PUSH]
+    }
+    fn is_rigidly_invariant(&self) -> bool {
+        false
+    }
+    fn element(&self) -> Element {
+        Element::Vertex
     }
     fn default_multiplier(&self) -> f64 {
         // A floor must win against the shape and, in dynamic mode, against inertia and the
@@ -80,16 +104,9 @@ impl ConstraintType for FloorType {
         let rest = ctx.rest;
         let lowest = rest.positions.iter().map(|p| p.y).fold(f64::INFINITY, f64::min);
         let default_input = ctx.frame.to_input(DVec3::new(0.0, lowest - DEFAULT_FLOOR_GAP, 0.0)).y;
-        let height_input = params.take_f64("floor", "height", default_input)?;
+        let height_input = params.number("floor", &HEIGHT)?.unwrap_or(default_input);
         let height = ctx.frame.to_working(DVec3::new(0.0, height_input, 0.0)).y;
-        let push = params.take_f64("floor", "push", 0.0)?;
-        if push < 0.0 {
-            return Err(ConstraintError::BadOption {
-                kind: "floor",
-                key: "push".into(),
-                problem: format!("must be ≥ 0, found {push}"),
-            });
-        }
+        let push = params.number("floor", &PUSH)?.unwrap_or(0.0);
         let weights = floor_weights(ctx);
         let built = weights
             .iter()

@@ -5,7 +5,9 @@
 //! S = Σ_j e_j e⁰_jᵀ = UΣVᵀ, R = U diag(1, 1, det(UVᵀ)) Vᵀ ([`nearest_rotation3`]`(S)`).
 //! Projection p_j = R e⁰_j. ω = A_i, the rest vertex area.
 
-use super::{BuildContext, Constraint, ConstraintError, ConstraintType, Params, RowSink, non_empty};
+use super::{
+    BuildContext, Constraint, ConstraintError, ConstraintType, Element, OptionSpec, Params, RowSink, non_empty,
+};
 use crate::linalg::nearest_rotation3;
 use glam::{DMat3, DVec3};
 
@@ -77,6 +79,9 @@ impl Constraint for IsoOneRing {
             *o = r * *e0;
         }
     }
+    fn set_residual(&self, p: &[DVec3]) -> f64 {
+        super::sets::gram_residual(p, &self.rest_edges)
+    }
 }
 
 /// Builds an [`IsoOneRing`] on every selected vertex with at least 2 neighbours (chosen by its
@@ -91,8 +96,11 @@ impl ConstraintType for IsoOneRingType {
     fn summary(&self) -> &'static str {
         "isometric one-ring: the edges around each vertex move as rigidly as possible"
     }
-    fn options(&self) -> &'static [&'static str] {
+    fn options(&self) -> &'static [OptionSpec] {
         &[]
+    }
+    fn element(&self) -> Element {
+        Element::Vertex
     }
     fn default_multiplier(&self) -> f64 {
         100.0

@@ -17,8 +17,10 @@ mod attachment;
 mod bending;
 mod edge_spring;
 mod floor;
+mod group;
 mod iso_one_ring;
 mod position;
+mod sets;
 mod smoothing;
 mod tet_strain;
 mod triangle_strain;
@@ -29,6 +31,7 @@ pub use attachment::{
 pub use bending::{Bending, BendingType};
 pub use edge_spring::{EdgeSpring, EdgeSpringType};
 pub use floor::{Floor, FloorType};
+pub use group::{GroupDescription, build_group, held_vertices};
 pub use iso_one_ring::{IsoOneRing, IsoOneRingType};
 pub use position::{Position, PositionType};
 pub use smoothing::{Smoothing, SmoothingType};
@@ -60,6 +63,111 @@ impl RowSink {
     }
 }
 
+/// A constant load ([`Constraint::load`]): forces on vertices and the rest points their
+/// potential is measured from (all working frame).
+#[derive(Debug, Clone, Copy)]
+pub struct Load<'a> {
+    /// The vertices loaded.
+    pub vertices: &'a [u32],
+    /// The force on each (working frame).
+    pub forces: &'a [DVec3],
+    /// Each vertex's rest position x⁰_v.
+    pub rest: &'a [DVec3],
+}
+
+impl Load<'_> {
+    /// −2 Σ_v f_v · (q_v − x⁰_v): the load's share of E without the multiplier.
+    pub fn energy(&self, q: &[DVec3]) -> f64 {
+        let work: f64 =
+            self.vertices.iter().zip(self.forces).zip(self.rest).map(|((&v, f), x0)| f.dot(q[v as usize] - *x0)).sum();
+        -2.0 * work
+    }
+}
+
+/// The elements a constraint type builds one constraint on: what its selection picks, what
+/// the editor offers it for, and which meshes the shared tests run it on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Element {
+    /// One constraint per selected vertex.
+    Vertex,
+    /// One constraint over all the selected vertices together (at least `min` of them).
+    VertexSet {
+        /// Fewest vertices the set needs.
+        min: usize,
+    },
+    /// One per edge whose two vertices are selected.
+    Edge,
+    /// One per polygon face of the input (as read, not its triangles) with between `min` and
+    /// `max` corners.
+    Face {
+        /// Fewest corners.
+        min: usize,
+        /// Most corners.
+        max: usize,
+    },
+    /// One per triangle of the triangulation.
+    Triangle,
+    /// One per tetrahedron.
+    Tetrahedron,
+}
+
+impl Element {
+    /// Whether the element is a polygon face (selections may name faces).
+    pub fn is_face(self) -> bool {
+        matches!(self, Element::Face { .. })
+    }
+
+    /// Plural noun for messages ("quad faces", "vertices").
+    pub fn plural(self) -> String {
+        match self {
+            Element::Vertex | Element::VertexSet { .. } => "vertices".into(),
+            Element::Edge => "edges".into(),
+            Element::Face { min: 4, max: 4 } => "quad faces".into(),
+            Element::Face { min, max } if max == usize::MAX => format!("faces of {min} or more corners"),
+            Element::Face { min, max } => format!("faces of {min} to {max} corners"),
+            Element::Triangle => "triangles".into(),
+            Element::Tetrahedron => "tetrahedra".into(),
+        }
+    }
+}
+
+/// What an option of a constraint type takes, and its default.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum OptionKind {
+    /// A finite number in [`min`, `max`]; `default` `None` means the value comes from the rest
+    /// shape (the option's doc says how).
+    Number {
+        /// Default, or `None` for "from the rest shape".
+        default: Option<f64>,
+        /// Smallest value allowed.
+        min: f64,
+        /// Largest value allowed.
+        max: f64,
+    },
+    /// `true` or `false`.
+    Bool {
+        /// Default.
+        default: bool,
+    },
+    /// Three finite numbers `[x, y, z]`.
+    Vector {
+        /// Default.
+        default: [f64; 3],
+    },
+}
+
+/// One option of a constraint type: its scene key, what it means, what it takes. Scenes,
+/// the editor's widgets and the shared tests all read it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OptionSpec {
+    /// Scene key.
+    pub key: &'static str,
+    /// One line: meaning, units, default.
+    pub doc: &'static str,
+    /// Value type, range and default.
+    pub kind: OptionKind,
+}
+
 /// A constraint term `ω ‖C q − p(q)‖²_F` (the group multiplier g is applied by its group).
 ///
 /// - `C q` is `num_rows()×3`: each row is a linear combination of vertex positions, given by
@@ -81,6 +189,20 @@ pub trait Constraint: Any + Send + Sync + Debug {
     fn held_points(&self) -> Option<(&[u32], &[DVec3])> {
         None
     }
+    /// Moves the points [`Constraint::held_points`] gives (a handle's targets, working frame),
+    /// one per held vertex; returns `false` (and changes nothing) for a constraint without
+    /// targets or the wrong count. Only the projection may change, so the factorization stays
+    /// valid.
+    fn set_targets(&mut self, _targets: &[DVec3]) -> bool {
+        false
+    }
+    /// A constant load instead of (or besides) a projective term: forces f_v on vertices v at
+    /// rest points x⁰_v, adding −2 Σ_v f_v · (q_v − x⁰_v) to E (times the group multiplier),
+    /// so that the global step's right-hand side gains Σ g f_v as in ShapeOp (math reference,
+    /// "Forces"). `None` (the default): no load.
+    fn load(&self) -> Option<Load<'_>> {
+        None
+    }
     /// The element weight ω_i (rest length, area, volume, … as in the math reference).
     fn element_weight(&self) -> f64;
     /// Number of rows k_i of C_i; fixed after construction.
@@ -89,6 +211,10 @@ pub trait Constraint: Any + Send + Sync + Debug {
     fn rows(&self, sink: &mut RowSink);
     /// Writes the projection p_i(q) (`num_rows()` rows) into `out`.
     fn project(&self, q: &[DVec3], out: &mut [DVec3]);
+    /// How far `p` (`num_rows()` rows, as [`Constraint::project`] writes them) is from the
+    /// constraint set, in the rows' units: 0 on the set. The shared test suite checks every
+    /// projection with it (`tests/catalogue.rs`).
+    fn set_residual(&self, p: &[DVec3]) -> f64;
 
     /// `C_i q`, computed from [`Constraint::rows`] (for tests and diagnostics, not the solver's
     /// hot path, which uses the assembled matrix).
@@ -111,17 +237,24 @@ pub trait Constraint: Any + Send + Sync + Debug {
     }
 }
 
-/// Which vertices a constraint group applies to.
+/// Which vertices (or polygon faces) a constraint group applies to.
 ///
-/// Per-vertex constraints (bending, smoothing, iso_one_ring, floor, position) take the chosen
-/// vertices; edge, triangle and tetrahedron constraints take the elements all of whose vertices
-/// are chosen.
+/// Per-vertex and vertex-set constraints take the chosen vertices; edge, face, triangle and
+/// tetrahedron constraints take the elements all of whose vertices are chosen, and face
+/// constraints the chosen faces of a face selection ([`Element`]).
 #[derive(Debug, Clone, PartialEq)]
 pub enum Selection {
-    /// Every vertex.
+    /// Every vertex and face.
     All,
     /// `chosen[i]` for each vertex i.
     Vertices(Vec<bool>),
+    /// Polygon faces by index (into the input's faces), and the vertices they use.
+    Faces {
+        /// `faces[f]`: face f is chosen.
+        faces: Vec<bool>,
+        /// `vertices[i]`: vertex i is a corner of a chosen face.
+        vertices: Vec<bool>,
+    },
 }
 
 impl Selection {
@@ -136,12 +269,47 @@ impl Selection {
         Selection::Vertices(chosen)
     }
 
-    /// Whether vertex `v` is chosen.
+    /// A selection of the listed faces of `faces` and their corners (indices must be
+    /// `< faces.len()`; others are ignored), over `n` vertices.
+    pub fn from_faces(n: usize, faces: &crate::mesh::Polygons, indices: &[usize]) -> Self {
+        let mut chosen = vec![false; faces.len()];
+        let mut vertices = vec![false; n];
+        for &f in indices {
+            if let (Some(c), Some(corners)) = (chosen.get_mut(f), faces.get(f)) {
+                *c = true;
+                for &v in corners {
+                    if let Some(x) = vertices.get_mut(v as usize) {
+                        *x = true;
+                    }
+                }
+            }
+        }
+        Selection::Faces { faces: chosen, vertices }
+    }
+
+    /// Whether vertex `v` is chosen (a corner of a chosen face, for a face selection).
     pub fn contains(&self, v: u32) -> bool {
         match self {
             Selection::All => true,
-            Selection::Vertices(chosen) => chosen.get(v as usize).copied().unwrap_or(false),
+            Selection::Vertices(chosen) | Selection::Faces { vertices: chosen, .. } => {
+                chosen.get(v as usize).copied().unwrap_or(false)
+            }
         }
+    }
+
+    /// Whether polygon face `f` with these corners is chosen: every face for
+    /// [`Selection::All`], a face whose corners are all chosen for a vertex selection, a listed
+    /// face for a face selection.
+    pub fn contains_face(&self, f: usize, corners: &[u32]) -> bool {
+        match self {
+            Selection::Faces { faces, .. } => faces.get(f).copied().unwrap_or(false),
+            _ => self.contains_all(corners),
+        }
+    }
+
+    /// The chosen vertices in ascending order, out of `n`.
+    pub fn vertex_list(&self, n: usize) -> Vec<u32> {
+        (0..n as u32).filter(|&v| self.contains(v)).collect()
     }
 
     /// Whether every vertex of an element is chosen.
@@ -180,7 +348,7 @@ pub enum ConstraintError {
         /// The key as written.
         key: String,
         /// The keys it does take.
-        allowed: &'static [&'static str],
+        allowed: &'static [OptionSpec],
     },
     /// An option with a value of the wrong type or out of range.
     #[error("{kind} option \"{key}\": {problem}")]
@@ -200,10 +368,30 @@ pub enum ConstraintError {
         /// "vertices", "edges", "triangles", …
         element: &'static str,
     },
+    /// A group that cannot be built as described (too few vertices, no face of the needed
+    /// size, targets that do not match…).
+    #[error("{kind}: {problem}")]
+    Invalid {
+        /// Constraint type.
+        kind: &'static str,
+        /// What is wrong.
+        problem: String,
+    },
 }
 
-fn allowed_hint(allowed: &[&str]) -> String {
-    allowed.join(", ")
+fn allowed_hint(allowed: &[OptionSpec]) -> String {
+    allowed.iter().map(|o| o.key).collect::<Vec<_>>().join(", ")
+}
+
+/// A range bound for messages: π for 3.14159…, else the number.
+fn fmt_bound(x: f64) -> String {
+    if x == std::f64::consts::PI {
+        "π".into()
+    } else if x == f64::MAX {
+        "∞".into()
+    } else {
+        format!("{x}")
+    }
 }
 
 fn hint_for(list: &str) -> String {
@@ -259,15 +447,84 @@ impl Params {
         }
     }
 
+    /// Takes a number option as `spec` describes it: its default when absent (`None` for a
+    /// default from the rest shape), else a finite number within its range.
+    ///
+    /// # Errors
+    /// [`ConstraintError::BadOption`] naming the key, for a value that is not a number or is
+    /// out of range.
+    pub fn number(&mut self, kind: &'static str, spec: &OptionSpec) -> Result<Option<f64>, ConstraintError> {
+        let OptionKind::Number { default, min, max } = spec.kind else {
+            return Err(ConstraintError::BadOption {
+                kind,
+                key: spec.key.into(),
+                problem: "is not a number option".into(),
+            });
+        };
+        let bad = |problem: String| ConstraintError::BadOption { kind, key: spec.key.into(), problem };
+        match self.map.remove(spec.key) {
+            None => Ok(default),
+            Some(v) => {
+                let x =
+                    v.as_f64().filter(|x| x.is_finite()).ok_or_else(|| bad(format!("expected a number, found {v}")))?;
+                if (min..=max).contains(&x) {
+                    Ok(Some(x))
+                } else {
+                    Err(bad(format!("must be in [{}, {}], found {x}", fmt_bound(min), fmt_bound(max))))
+                }
+            }
+        }
+    }
+
+    /// Takes a boolean option as `spec` describes it.
+    ///
+    /// # Errors
+    /// [`ConstraintError::BadOption`] naming the key.
+    pub fn flag(&mut self, kind: &'static str, spec: &OptionSpec) -> Result<bool, ConstraintError> {
+        let default = match spec.kind {
+            OptionKind::Bool { default } => default,
+            _ => false,
+        };
+        self.take_bool(kind, spec.key, default)
+    }
+
+    /// Takes a vector option `[x, y, z]` as `spec` describes it.
+    ///
+    /// # Errors
+    /// [`ConstraintError::BadOption`] naming the key, for anything but three finite numbers.
+    pub fn vector(&mut self, kind: &'static str, spec: &OptionSpec) -> Result<DVec3, ConstraintError> {
+        let default = match spec.kind {
+            OptionKind::Vector { default } => default,
+            _ => [0.0; 3],
+        };
+        match self.map.remove(spec.key) {
+            None => Ok(DVec3::from(default)),
+            Some(v) => serde_json::from_value::<[f64; 3]>(v.clone())
+                .ok()
+                .filter(|a| a.iter().all(|x| x.is_finite()))
+                .map(DVec3::from)
+                .ok_or_else(|| ConstraintError::BadOption {
+                    kind,
+                    key: spec.key.into(),
+                    problem: format!("expected three finite numbers [x, y, z], found {v}"),
+                }),
+        }
+    }
+
     /// Fails on the first option nobody took.
     ///
     /// # Errors
     /// [`ConstraintError::UnknownOption`] naming the key.
-    pub fn finish(self, kind: &'static str, allowed: &'static [&'static str]) -> Result<(), ConstraintError> {
+    pub fn finish(self, kind: &'static str, allowed: &'static [OptionSpec]) -> Result<(), ConstraintError> {
         match self.map.into_iter().next() {
             None => Ok(()),
             Some((key, _)) => Err(ConstraintError::UnknownOption { kind, key, allowed }),
         }
+    }
+
+    /// Whether no option is left.
+    pub fn is_empty(&self) -> bool {
+        self.map.is_empty()
     }
 }
 
@@ -278,8 +535,23 @@ pub trait ConstraintType: Sync {
     fn name(&self) -> &'static str;
     /// One line for menus and `--help`.
     fn summary(&self) -> &'static str;
-    /// The option keys [`ConstraintType::build`] takes (besides the common ones).
-    fn options(&self) -> &'static [&'static str];
+    /// The options [`ConstraintType::build`] takes (besides the common ones: selection,
+    /// weight, name, hard, targets), with their ranges and defaults.
+    fn options(&self) -> &'static [OptionSpec];
+    /// The elements it builds constraints on.
+    fn element(&self) -> Element;
+    /// Whether its constraints have targets a scene or the editor moves
+    /// ([`Constraint::set_targets`]): the group takes `translate`, `rotate`, `targets` and
+    /// `spin`, and the editor treats it as a handle. Default `false`.
+    fn has_targets(&self) -> bool {
+        false
+    }
+    /// Whether moving the input rigidly (and turning its vector options with it) moves the
+    /// result the same way; `false` only for types tied to the world frame (a floor at y = h).
+    /// The shared tests check it. Default `true`.
+    fn is_rigidly_invariant(&self) -> bool {
+        true
+    }
     /// The editor's default group multiplier g (math reference, "Notes").
     fn default_multiplier(&self) -> f64;
     /// Builds this type's constraints on `ctx.selection`, taking its options from `params`.

@@ -3,7 +3,9 @@
 //! Term: ω ‖Q_S − Y‖² with Q_S the |S| selected positions (one row each), p = Y the targets,
 //! ω = 1. Targets can change between solves without refactoring ([`Position::set_targets`]).
 
-use super::{BuildContext, Constraint, ConstraintError, ConstraintType, Params, RowSink, non_empty};
+use super::{
+    BuildContext, Constraint, ConstraintError, ConstraintType, Element, OptionSpec, Params, RowSink, non_empty,
+};
 use glam::DVec3;
 
 /// A position group: vertices S pulled to targets Y (one row per vertex).
@@ -56,8 +58,14 @@ impl Constraint for Position {
             sink.push(row, v, 1.0);
         }
     }
+    fn set_targets(&mut self, targets: &[DVec3]) -> bool {
+        Position::set_targets(self, targets)
+    }
     fn project(&self, _q: &[DVec3], out: &mut [DVec3]) {
         out.copy_from_slice(&self.targets);
+    }
+    fn set_residual(&self, p: &[DVec3]) -> f64 {
+        super::sets::max_distance(p, &self.targets)
     }
 }
 
@@ -73,11 +81,17 @@ impl ConstraintType for PositionType {
     fn summary(&self) -> &'static str {
         "position (handle): selected vertices pulled to targets"
     }
-    fn options(&self) -> &'static [&'static str] {
+    fn options(&self) -> &'static [OptionSpec] {
         &[]
+    }
+    fn element(&self) -> Element {
+        Element::VertexSet { min: 1 }
     }
     fn default_multiplier(&self) -> f64 {
         1.0
+    }
+    fn has_targets(&self) -> bool {
+        true
     }
     fn build(&self, ctx: &BuildContext, _params: &mut Params) -> Result<Vec<Box<dyn Constraint>>, ConstraintError> {
         let rest = &ctx.rest.positions;

@@ -3,7 +3,9 @@
 //! Term: ω ‖H(q)‖² with H(q) = Σ_j (c_ij / A_i)(q_i − q_j), p = 0, ω = 0.01 A_i.
 
 use super::bending::LaplacianRow;
-use super::{BuildContext, Constraint, ConstraintError, ConstraintType, Params, RowSink, non_empty};
+use super::{
+    BuildContext, Constraint, ConstraintError, ConstraintType, Element, OptionSpec, Params, RowSink, non_empty,
+};
 use crate::geometry::RestGeometry;
 use glam::DVec3;
 
@@ -40,6 +42,9 @@ impl Constraint for Smoothing {
     fn project(&self, _q: &[DVec3], out: &mut [DVec3]) {
         out[0] = DVec3::ZERO;
     }
+    fn set_residual(&self, p: &[DVec3]) -> f64 {
+        p[0].length()
+    }
 }
 
 /// Builds a [`Smoothing`] on every selected interior vertex.
@@ -53,8 +58,11 @@ impl ConstraintType for SmoothingType {
     fn summary(&self) -> &'static str {
         "smoothing: flattens the selected region (Laplacian to zero)"
     }
-    fn options(&self) -> &'static [&'static str] {
+    fn options(&self) -> &'static [OptionSpec] {
         &[]
+    }
+    fn element(&self) -> Element {
+        Element::Vertex
     }
     fn default_multiplier(&self) -> f64 {
         1.0

@@ -8,7 +8,9 @@
 //! tetrahedron). ω = |V_T|, the rest volume; tetrahedra of volume ≤ 1e-12 get no constraint.
 
 use super::triangle_strain::take_strain_freedom;
-use super::{BuildContext, Constraint, ConstraintError, ConstraintType, Params, RowSink, non_empty};
+use super::{
+    BuildContext, Constraint, ConstraintError, ConstraintType, Element, OptionSpec, Params, RowSink, non_empty,
+};
 use crate::geometry::tet_volume;
 use crate::linalg::{nearest_rotation3, svd3_rotations};
 use glam::{DMat3, DVec3};
@@ -117,6 +119,10 @@ impl Constraint for TetStrain {
         out[1] = p.y_axis;
         out[2] = p.z_axis;
     }
+    fn set_residual(&self, p: &[DVec3]) -> f64 {
+        let f = self.strain_freedom;
+        super::sets::strain_band_residual(DMat3::from_cols(p[0], p[1], p[2]), 1.0 - f, 1.0 + f)
+    }
 }
 
 /// Builds a [`TetStrain`] on every tetrahedron (of the rest geometry's `tetrahedra`) whose four
@@ -132,8 +138,11 @@ impl ConstraintType for TetStrainType {
     fn summary(&self) -> &'static str {
         "tetrahedral strain: each tetrahedron stays a rotation of its rest shape (stretch within ±strain_freedom)"
     }
-    fn options(&self) -> &'static [&'static str] {
-        &["strain_freedom"]
+    fn options(&self) -> &'static [OptionSpec] {
+        &[super::triangle_strain::STRAIN_FREEDOM_OPTION]
+    }
+    fn element(&self) -> Element {
+        Element::Tetrahedron
     }
     fn default_multiplier(&self) -> f64 {
         10.0

@@ -12,7 +12,9 @@
 //! P(q) takes the current normal's orientation, so `det P(q)ᵀT ≥ 0` and the 2×2 polar factor
 //! is a rotation: a triangle flipped in 3D projects to the nearest rotation in its own plane.
 
-use super::{BuildContext, Constraint, ConstraintError, ConstraintType, Params, RowSink, non_empty};
+use super::{
+    BuildContext, Constraint, ConstraintError, ConstraintType, Element, OptionSpec, Params, RowSink, non_empty,
+};
 use crate::geometry::is_degenerate_triangle;
 use crate::linalg::{clamp_singular_values2, nearest_rotation2};
 use glam::{DMat2, DVec2, DVec3};
@@ -128,6 +130,11 @@ impl Constraint for TriangleStrain {
         out[0] = u * p.x_axis.x + v * p.x_axis.y;
         out[1] = u * p.y_axis.x + v * p.y_axis.y;
     }
+    fn set_residual(&self, p: &[DVec3]) -> f64 {
+        let f = self.strain_freedom;
+        let s = super::sets::singular_values_3x2(p[0], p[1]);
+        s.iter().map(|&x| super::sets::interval_distance(x, 1.0 - f, 1.0 + f)).fold(0.0, f64::max)
+    }
 }
 
 /// Builds a [`TriangleStrain`] on every non-degenerate triangle whose three vertices are
@@ -137,16 +144,15 @@ pub struct TriangleStrainType;
 
 /// Takes the `strain_freedom` option (a number ≥ 0, default 0) of a strain constraint type.
 pub(crate) fn take_strain_freedom(kind: &'static str, params: &mut Params) -> Result<f64, ConstraintError> {
-    let f = params.take_f64(kind, STRAIN_FREEDOM, 0.0)?;
-    if f < 0.0 {
-        return Err(ConstraintError::BadOption {
-            kind,
-            key: STRAIN_FREEDOM.into(),
-            problem: format!("must be a number ≥ 0 (0 keeps the element rigid), found {f}"),
-        });
-    }
-    Ok(f)
+    Ok(params.number(kind, &STRAIN_FREEDOM_OPTION)?.unwrap_or(0.0))
 }
+
+/// `strain_freedom`: the band f of singular values [1 − f, 1 + f].
+pub(crate) const STRAIN_FREEDOM_OPTION: OptionSpec = OptionSpec {
+    key: STRAIN_FREEDOM,
+    doc: "f ≥ 0: singular values of the deformation gradient stay in [1 − f, 1 + f]; default 0 (rigid)",
+    kind: super::OptionKind::Number { default: Some(0.0), min: 0.0, max: f64::MAX },
+};
 
 impl ConstraintType for TriangleStrainType {
     fn name(&self) -> &'static str {
@@ -155,8 +161,11 @@ impl ConstraintType for TriangleStrainType {
     fn summary(&self) -> &'static str {
         "triangle strain: each triangle stays a rotation of its rest shape (stretch within ±strain_freedom)"
     }
-    fn options(&self) -> &'static [&'static str] {
-        &[STRAIN_FREEDOM]
+    fn options(&self) -> &'static [OptionSpec] {
+        &[STRAIN_FREEDOM_OPTION]
+    }
+    fn element(&self) -> Element {
+        Element::Triangle
     }
     fn default_multiplier(&self) -> f64 {
         10.0

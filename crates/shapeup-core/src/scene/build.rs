@@ -2,7 +2,10 @@
 //! resolve selections and build each group.
 
 use super::{GroupSpec, Scene, SceneError, SelectionSpec, Targets};
-use crate::constraints::{BuildContext, Params, Position, Selection, attach_degenerate_vertices, build_constraints};
+use crate::constraints::{
+    GroupDescription, Params, Selection, attach_degenerate_vertices, build_group as build_described, constraint_type,
+    held_vertices,
+};
 use crate::dynamics::{DynamicsParams, Simulation};
 use crate::geometry::{RestGeometry, WorkingFrame, lumped_masses_surface, lumped_masses_volume};
 use crate::io::read_mesh;
@@ -10,7 +13,6 @@ use crate::mesh::Mesh;
 use crate::solver::{ConstraintGroup, GroupId, SolveError, SolveReport, SolverParams, System};
 use crate::warnings::Warnings;
 use glam::DVec3;
-use serde_json::{Map, Value};
 use std::time::Instant;
 
 /// A scene with its mesh loaded and its constraints built: ready to solve.
@@ -84,7 +86,7 @@ impl Scene {
         }
         let frame = if self.mesh.normalize { WorkingFrame::fit(&mesh.positions) } else { WorkingFrame::IDENTITY };
         let working: Vec<DVec3> = mesh.positions.iter().map(|&p| frame.to_working(p)).collect();
-        let rest = RestGeometry::new(working, mesh.triangles.clone(), mesh.tetrahedra.clone());
+        let rest = RestGeometry::of_mesh(working, &mesh);
         let params = SolverParams {
             iterations: self.solver.iterations,
             tolerance: self.solver.tolerance,
@@ -168,66 +170,51 @@ impl SpinningHandle {
     }
 }
 
+/// A scene entry as the library's one group route takes it ([`crate::constraints::build_group`]):
+/// its selection resolved, its targets (for types with targets) mapped to the working frame.
 fn build_group(
     spec: &GroupSpec,
     mesh: &Mesh,
     rest: &RestGeometry,
     frame: &WorkingFrame,
 ) -> Result<ConstraintGroup, String> {
-    let picked = spec.selection.resolve(&mesh.positions)?;
-    let (hard, options) = take_hard(&spec.options)?;
-    let constraints = if spec.kind == "position" {
-        if !options.is_empty() {
-            let keys: Vec<&str> = options.keys().map(String::as_str).collect();
-            return Err(format!(
-                "unknown key \"{}\" for a position constraint (allowed: vertices, box, sphere, translate, rotate, targets, hard)",
-                keys[0]
-            ));
-        }
+    let ty = constraint_type(&spec.kind).map_err(|e| e.to_string())?;
+    let selection = resolve_selection(&spec.selection, mesh, rest)?;
+    let targets = if ty.has_targets() {
+        let picked = spec.selection.resolve(&mesh.positions)?;
         let targets = position_targets(&picked, &spec.targets, mesh)?;
-        let vertices: Vec<u32> = picked.iter().map(|&v| v as u32).collect();
-        let working = targets.into_iter().map(|t| frame.to_working(t)).collect();
-        match Position::new(vertices, working) {
-            Some(p) => vec![Box::new(p) as Box<dyn crate::constraints::Constraint>],
-            None => return Err("the position group selects no vertices (check its vertices, box or sphere)".into()),
-        }
+        Some(picked.iter().zip(targets).map(|(&v, t)| (v as u32, frame.to_working(t))).collect())
     } else {
-        let selection = match spec.selection {
-            SelectionSpec::All => Selection::All,
-            _ => Selection::from_indices(mesh.num_vertices(), &picked),
-        };
-        let ctx = BuildContext { rest, selection: &selection, frame };
-        build_constraints(&spec.kind, &ctx, Params::new(options)).map_err(|e| e.to_string())?
+        None
     };
-    hardened(ConstraintGroup::new(spec.name.clone(), spec.weight, constraints), hard)
+    let description = GroupDescription {
+        kind: spec.kind.clone(),
+        name: spec.name.clone(),
+        weight: Some(spec.weight),
+        selection,
+        options: Params::new(spec.options.clone()),
+        targets,
+    };
+    build_described(&description, rest, frame).map_err(|e| e.to_string())
 }
 
-/// A group's `hard` key (default `false`) and its other options.
+/// A scene selection as the constraint builders take it.
 ///
 /// # Errors
-/// A `hard` that is not `true` or `false`.
-pub fn take_hard(options: &Map<String, Value>) -> Result<(bool, Map<String, Value>), String> {
-    let mut rest = options.clone();
-    let hard = match rest.remove("hard") {
-        None => false,
-        Some(Value::Bool(b)) => b,
-        Some(other) => return Err(format!("\"hard\" must be true or false, found {other}")),
-    };
-    Ok((hard, rest))
-}
-
-/// `group` made hard when asked, if its constraints can hold their vertices exactly.
-///
-/// # Errors
-/// A hard group of a type without [`held_points`](crate::constraints::Constraint::held_points).
-pub fn hardened(group: ConstraintGroup, hard: bool) -> Result<ConstraintGroup, String> {
-    if hard && group.constraints.iter().any(|c| c.held_points().is_none()) {
-        return Err(format!(
-            "\"hard = true\" is for groups that hold vertices at points (position), not {}",
-            group.kind
-        ));
-    }
-    Ok(group.with_hard(hard))
+/// A vertex or face index out of range.
+pub fn resolve_selection(spec: &SelectionSpec, mesh: &Mesh, rest: &RestGeometry) -> Result<Selection, String> {
+    let n = mesh.num_vertices();
+    Ok(match spec {
+        SelectionSpec::All => Selection::All,
+        SelectionSpec::Faces(list) => {
+            let m = rest.faces.len();
+            if let Some(&f) = list.iter().find(|&&f| f >= m) {
+                return Err(format!("face {f} is out of range (the mesh has {m} faces: 0..{})", m.saturating_sub(1)));
+            }
+            Selection::from_faces(n, &rest.faces, list)
+        }
+        _ => Selection::from_indices(n, &spec.resolve(&mesh.positions)?),
+    })
 }
 
 /// Targets (input frame) of a position group's vertices: explicit, or rest rotated about the
@@ -356,16 +343,16 @@ impl LoadedScene {
         Simulation::new(system, self.masses(), self.rest.positions.clone(), params).map_err(|e| invalid(e.to_string()))
     }
 
-    /// Every position group that spins (see [`super::Spin`]), with its static targets resolved
-    /// once, so that a time step only turns them ([`SpinningHandle::targets_at`]).
+    /// Every group with targets that spins (see [`super::Spin`]) in `system` (the scene's,
+    /// or the simulation's it moved into), with its static targets resolved once, so that a time step only turns them ([`SpinningHandle::targets_at`]).
     ///
     /// # Errors
     /// [`SceneError::Invalid`] naming the group (a selection or targets that do not resolve, or
     /// a zero spin axis).
-    pub fn spinning_handles(&self) -> Result<Vec<SpinningHandle>, SceneError> {
+    pub fn spinning_handles(&self, system: &System) -> Result<Vec<SpinningHandle>, SceneError> {
         let mut out = Vec::new();
         for (i, (spec, &id)) in self.scene.groups.iter().zip(&self.group_ids).enumerate() {
-            let Some(spin) = spec.targets.spin.filter(|_| spec.kind == "position") else { continue };
+            let Some(spin) = spec.targets.spin else { continue };
             let invalid = |message: String| SceneError::Invalid {
                 path: self.scene.file.clone(),
                 entry: format!("constraints[{i}] (\"{}\")", spec.name),
@@ -375,6 +362,11 @@ impl LoadedScene {
             let rest: Vec<DVec3> = picked.iter().map(|&v| self.mesh.positions[v]).collect();
             let targets = spec.targets.resolve(&rest).map_err(invalid)?;
             let (axis, center) = spin.pivot(&targets).map_err(invalid)?;
+            // In the order the group holds its vertices (what `set_targets` takes).
+            let at: std::collections::HashMap<u32, DVec3> =
+                picked.iter().zip(&targets).map(|(&v, &t)| (v as u32, t)).collect();
+            let held = system.group(id).map(held_vertices).unwrap_or_default();
+            let targets = held.iter().map(|v| at.get(v).copied().unwrap_or(DVec3::ZERO)).collect();
             out.push(SpinningHandle { id, targets, axis, center, deg_per_s: spin.deg_per_s, frame: self.frame });
         }
         Ok(out)

@@ -8,7 +8,7 @@
 mod build;
 mod write;
 
-pub use build::{LoadedScene, SpinningHandle, hardened, take_hard};
+pub use build::{LoadedScene, SpinningHandle, resolve_selection};
 
 use crate::mesh::Mesh;
 use crate::solver::{Acceleration, Factorization, MAX_ANDERSON_WINDOW, MAX_LBFGS_MEMORY, SolverParams};
@@ -167,6 +167,9 @@ pub enum SelectionSpec {
     All,
     /// Listed vertex indices (0-based, file order).
     Vertices(Vec<usize>),
+    /// Listed polygon faces (0-based, file order): face constraints act on them, vertex
+    /// constraints on their corners.
+    Faces(Vec<usize>),
     /// Vertices inside an axis-aligned box (bounds included).
     Box {
         /// Lower corner.
@@ -202,6 +205,9 @@ impl SelectionSpec {
                     ));
                 }
                 list.clone()
+            }
+            SelectionSpec::Faces(_) => {
+                return Err("a face selection needs the mesh's faces: use scene::resolve_selection".into());
             }
             SelectionSpec::Box { min, max } => {
                 let (lo, hi) = (glam::DVec3::from(*min), glam::DVec3::from(*max));
@@ -522,7 +528,7 @@ fn validate_solver(s: &SolverSettings) -> Result<(), String> {
 }
 
 /// Keys every group takes; the rest go to the type's builder (which rejects unknown ones).
-const SELECTION_KEYS: [&str; 3] = ["vertices", "box", "sphere"];
+const SELECTION_KEYS: [&str; 4] = ["vertices", "faces", "box", "sphere"];
 
 fn parse_group(mut entry: Map<String, Value>) -> Result<GroupSpec, String> {
     let kind = match entry.remove("type") {
@@ -547,12 +553,15 @@ fn parse_group(mut entry: Map<String, Value>) -> Result<GroupSpec, String> {
     };
     let given: Vec<&str> = SELECTION_KEYS.iter().copied().filter(|k| entry.contains_key(*k)).collect();
     if given.len() > 1 {
-        return Err(format!("give at most one of vertices, box, sphere (found {})", given.join(" and ")));
+        return Err(format!("give at most one of vertices, faces, box, sphere (found {})", given.join(" and ")));
     }
     let selection = if let Some(v) = entry.remove("vertices") {
         let list: Vec<usize> =
             serde_json::from_value(v).map_err(|_| "\"vertices\" must be a list of vertex indices ≥ 0")?;
         SelectionSpec::Vertices(list)
+    } else if let Some(v) = entry.remove("faces") {
+        let list: Vec<usize> = serde_json::from_value(v).map_err(|_| "\"faces\" must be a list of face indices ≥ 0")?;
+        SelectionSpec::Faces(list)
     } else if let Some(v) = entry.remove("box") {
         #[derive(Deserialize)]
         #[serde(deny_unknown_fields)]
@@ -579,7 +588,7 @@ fn parse_group(mut entry: Map<String, Value>) -> Result<GroupSpec, String> {
     } else {
         SelectionSpec::All
     };
-    let targets = if kind == "position" { parse_targets(&mut entry)? } else { Targets::default() };
+    let targets = if ty.has_targets() { parse_targets(&mut entry)? } else { Targets::default() };
     Ok(GroupSpec { kind, name, weight, selection, targets, options: entry })
 }
 

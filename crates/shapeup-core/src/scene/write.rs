@@ -68,6 +68,10 @@ impl Scene {
                     let list = list.iter().map(|&v| integer(v as u64)).collect();
                     line(&mut out, "vertices", Value::Array(list));
                 }
+                SelectionSpec::Faces(list) => {
+                    let list = list.iter().map(|&f| integer(f as u64)).collect();
+                    line(&mut out, "faces", Value::Array(list));
+                }
                 SelectionSpec::Box { min, max } => {
                     let mut table = toml::Table::new();
                     table.insert("min".into(), vec3(*min));
@@ -85,7 +89,7 @@ impl Scene {
             if let Some(explicit) = &t.explicit {
                 line(&mut out, "targets", Value::Array(explicit.iter().map(|&p| vec3(p)).collect()));
             } else {
-                // The parser only reads targets on position groups; other kinds never set them.
+                // The parser only reads targets on types with targets; others never set them.
                 if t.translate != [0.0; 3] {
                     line(&mut out, "translate", vec3(t.translate));
                 }

@@ -24,7 +24,7 @@ mod triangular;
 
 pub use cholesky::{FactorError, Factorization};
 
-use crate::constraints::{Constraint, Position};
+use crate::constraints::Constraint;
 use anderson::Anderson;
 use assemble::Assembly;
 use cholesky::SparseCholesky;
@@ -287,7 +287,8 @@ pub const ROUND_OFF_FLOOR: f64 = 1e-18;
 /// `energy`, the relative change |E_k − E_{k−1}| / E_{k−1} is at most `tolerance`, or E is at
 /// most `floor` (E = 0 included; see [`SolveReport::energy_floor`], at least [`ENERGY_FLOOR`]).
 pub fn is_converged(previous: f64, energy: f64, tolerance: f64, floor: f64) -> bool {
-    energy <= floor.max(ENERGY_FLOOR) || (previous - energy).abs() <= tolerance * previous.abs()
+    // A load makes E negative: the round-off floor is for E ≥ 0 (constraints met).
+    (0.0..=floor.max(ENERGY_FLOOR)).contains(&energy) || (previous - energy).abs() <= tolerance * previous.abs()
 }
 
 /// What a [`System::solve`] did.
@@ -360,6 +361,10 @@ pub struct System {
     held_rhs: Vec<DVec3>,
     /// Vertices held by hard groups and where (the last hard group holding a vertex wins).
     held: Vec<(u32, DVec3)>,
+    /// The loads' share of the right-hand side per solved vertex, Σ g f_v over the groups'
+    /// [`Constraint::load`]s; empty when there is none. Recomputed when weights or the
+    /// assembly change.
+    load_rhs: Vec<DVec3>,
     /// Numeric factorizations so far.
     factorizations: u64,
     /// What does not change between iterations per solved vertex: μ s (dynamic mode) minus the
@@ -394,6 +399,7 @@ impl System {
             inertial_target: Vec::new(),
             held_rhs: Vec::new(),
             held: Vec::new(),
+            load_rhs: Vec::new(),
             factorizations: 0,
             constant_rhs: Vec::new(),
         }
@@ -451,6 +457,18 @@ impl System {
     fn update_constant_rhs(&mut self) {
         self.constant_rhs.clear();
         let a = &self.assembly;
+        if self.assembled && !self.load_rhs.is_empty() {
+            // Loads are rare and static: the general form, without the fast paths below.
+            self.constant_rhs.extend(a.solved.iter().enumerate().map(|(s, &v)| {
+                let v = v as usize;
+                let inertial = match &self.inertia {
+                    Some(mu) => mu[v] * self.inertial_target.get(v).copied().unwrap_or(DVec3::ZERO),
+                    None => DVec3::ZERO,
+                };
+                inertial + self.held_rhs.get(s).copied().unwrap_or(DVec3::ZERO) + self.load_rhs[s]
+            }));
+            return;
+        }
         match (&self.inertia, self.held_rhs.is_empty()) {
             _ if !self.assembled => {}
             (None, true) => {}
@@ -464,6 +482,45 @@ impl System {
                 }));
             }
         }
+    }
+
+    /// [`System::load_rhs`](Self): Σ g f_v per solved vertex over every group's loads.
+    fn update_load_rhs(&mut self) {
+        self.load_rhs.clear();
+        if !self.assembled {
+            return;
+        }
+        let a = &self.assembly;
+        let mut any = false;
+        for group in self.slots.iter().flatten() {
+            for load in group.constraints.iter().filter_map(|c| c.load()) {
+                if !any {
+                    self.load_rhs.resize(a.num_solved(), DVec3::ZERO);
+                    any = true;
+                }
+                for (&v, f) in load.vertices.iter().zip(load.forces) {
+                    if let Some(b) = a.solved_index.get(v as usize).and_then(|&s| self.load_rhs.get_mut(s as usize)) {
+                        *b += group.multiplier * *f;
+                    }
+                }
+            }
+        }
+    }
+
+    /// The loads' share of E at q: −2 Σ g f_v · (q_v − x⁰_v) over the groups in `slots`.
+    fn load_energy(&self, q: &[DVec3], slots: impl IntoIterator<Item = usize>) -> f64 {
+        let mut e = 0.0;
+        for group in slots.into_iter().filter_map(|s| self.slots.get(s).and_then(Option::as_ref)) {
+            for load in group.constraints.iter().filter_map(|c| c.load()) {
+                e += group.multiplier * load.energy(q);
+            }
+        }
+        e
+    }
+
+    /// Whether some group carries a load.
+    fn has_loads(&self) -> bool {
+        self.slots.iter().flatten().any(|g| g.constraints.iter().any(|c| c.load().is_some()))
     }
 
     /// [`System::held_rhs`](Self) from the held vertices' points and the current weights, then
@@ -601,22 +658,32 @@ impl System {
         Ok(())
     }
 
-    /// Moves the targets of a position group (working frame); no refactorization is needed.
+    /// Moves the targets of a group with targets (a handle: its constraints'
+    /// [`Constraint::held_points`]), working frame, one per held vertex in constraint order
+    /// ([`crate::constraints::held_vertices`]); no refactorization is needed.
     ///
     /// # Errors
-    /// Unknown group, not a position group, or a target count different from its vertex count.
-    pub fn set_position_targets(&mut self, id: GroupId, targets: &[DVec3]) -> Result<(), SolveError> {
+    /// Unknown group, a group without targets, or a target count different from its held
+    /// vertex count.
+    pub fn set_targets(&mut self, id: GroupId, targets: &[DVec3]) -> Result<(), SolveError> {
         let group = self.slots.get_mut(id.0 as usize).and_then(Option::as_mut).ok_or(SolveError::UnknownGroup(id.0))?;
         let name = group.name.clone();
         let bad = |problem: String| SolveError::BadTargets { name: name.clone(), problem };
-        let [constraint] = group.constraints.as_mut_slice() else {
-            return Err(bad("is not a position group".into()));
-        };
-        let any: &mut dyn std::any::Any = constraint.as_mut();
-        let position = any.downcast_mut::<Position>().ok_or_else(|| bad("is not a position group".into()))?;
-        let expected = position.targets().len();
-        if !position.set_targets(targets) {
+        let counts: Vec<usize> =
+            group.constraints.iter().map(|c| c.held_points().map_or(0, |(v, _)| v.len())).collect();
+        let expected: usize = counts.iter().sum();
+        if expected == 0 {
+            return Err(bad(format!("has no targets (a {} group)", group.kind)));
+        }
+        if targets.len() != expected {
             return Err(bad(format!("has {expected} vertices but {} targets were given", targets.len())));
+        }
+        let mut start = 0;
+        for (c, &k) in group.constraints.iter_mut().zip(&counts) {
+            if k > 0 && !c.set_targets(&targets[start..start + k]) {
+                return Err(bad("does not take targets".into()));
+            }
+            start += k;
         }
         if group.hard {
             // Held points: only the right-hand side changes.
@@ -677,6 +744,7 @@ impl System {
         self.factor = None;
         self.assembled = true;
         self.update_weights();
+        self.update_load_rhs();
         self.update_held_rhs();
         Ok(())
     }
@@ -737,6 +805,7 @@ impl System {
             self.update_rhs_slots();
         }
         self.update_weights();
+        self.update_load_rhs();
         self.update_held_rhs();
         let mut values = vec![0.0; self.assembly.lhs_row_idx.len()];
         for (group, &gk) in self.assembly.group_lhs.iter().zip(&g) {
@@ -1038,6 +1107,15 @@ impl System {
             None => g.fill([0.0; 4]),
         }
         global::right_hand_side(&self.assembly, &self.rhs_map, &self.cq, g, &mut self.rhs_partials);
+        if !self.load_rhs.is_empty() {
+            // −½ ∇ of −2 Σ g f·q.
+            for (gi, &s) in g.iter_mut().zip(factor.permutation()) {
+                let f = self.load_rhs[s as usize];
+                gi[0] -= f.x;
+                gi[1] -= f.y;
+                gi[2] -= f.z;
+            }
+        }
     }
 
     /// The local step at q, then E(q) and the objective (E plus the inertial term in dynamic
@@ -1089,7 +1167,7 @@ impl System {
             .zip(&self.assembly.groups)
             .map(|(&slot, rows)| {
                 let g = self.slots[slot].as_ref().map_or(0.0, |g| g.multiplier);
-                (GroupId(slot as u32), g * self.weighted_residual(rows.range()))
+                (GroupId(slot as u32), g * self.weighted_residual(rows.range()) + self.load_energy(q, [slot]))
             })
             .collect::<Vec<_>>();
         Ok(Energy { total: per_group.iter().map(|(_, e)| e).sum(), per_group })
@@ -1175,7 +1253,12 @@ impl System {
     fn energy_of_projections(&mut self, q: &[DVec3]) -> f64 {
         global::apply_c(&self.assembly, q, &mut self.cq);
         let g = self.multipliers();
-        self.assembly.groups.iter().zip(&g).map(|(rows, gk)| gk * self.weighted_residual(rows.range())).sum()
+        let projective: f64 =
+            self.assembly.groups.iter().zip(&g).map(|(rows, gk)| gk * self.weighted_residual(rows.range())).sum();
+        if self.load_rhs.is_empty() && !self.has_loads() {
+            return projective;
+        }
+        projective + self.load_energy(q, self.order.clone())
     }
 
     /// [`SolveReport::energy_floor`] from the current projections.
@@ -1294,7 +1377,7 @@ fn check_weight(name: &str, value: f64) -> Result<(), SolveError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::constraints::{BuildContext, Params, Selection, build_constraints};
+    use crate::constraints::{BuildContext, Params, Position, Selection, build_constraints};
     use crate::geometry::{RestGeometry, WorkingFrame};
 
     impl System {
