@@ -32,7 +32,15 @@ pub enum Command {
         /// How they combine with the current selection.
         mode: SelectMode,
     },
-    /// Empties the selection.
+    /// Combines polygon faces (indices into the rest mesh's faces) with the face selection
+    /// (face mode).
+    SelectFaces {
+        /// Face indices.
+        faces: Vec<u32>,
+        /// How they combine with the current face selection.
+        mode: SelectMode,
+    },
+    /// Empties the selection (vertices and faces).
     ClearSelection,
     /// Combines the mesh's boundary vertices with the selection.
     SelectBoundary(SelectMode),
@@ -81,6 +89,16 @@ pub enum Command {
     SetShapeModel(ShapeModel),
     /// A smoothing group (g = 1) on the selected vertices.
     AddSmoothing,
+    /// A group of any registered constraint type on the selection (the selected faces for a
+    /// face type when faces are selected, else the selected vertices), with the type's
+    /// default weight and these options (scene keys); a type with targets becomes a handle at
+    /// the current positions.
+    AddConstraint {
+        /// Constraint type name.
+        kind: String,
+        /// Its options, as a scene would give them.
+        options: serde_json::Map<String, serde_json::Value>,
+    },
     /// Sets a group's weight (multiplier g), clamped to [`WEIGHT_RANGE`](crate::document::WEIGHT_RANGE).
     SetWeight {
         /// The group.
@@ -113,6 +131,7 @@ impl Command {
         !matches!(
             self,
             Command::Select { .. }
+                | Command::SelectFaces { .. }
                 | Command::ClearSelection
                 | Command::SelectBoundary(_)
                 | Command::SelectPiece { .. }
@@ -127,6 +146,7 @@ impl Command {
         !matches!(
             self,
             Command::Select { .. }
+                | Command::SelectFaces { .. }
                 | Command::ClearSelection
                 | Command::SelectBoundary(_)
                 | Command::SelectPiece { .. }

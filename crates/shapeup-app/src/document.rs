@@ -16,7 +16,10 @@
 
 use crate::command::{Command, SelectMode};
 use glam::{DQuat, DVec3};
-use shapeup_core::constraints::{GroupDescription, Params, Selection, build_group as build_described};
+use shapeup_core::constraints::{
+    ConstraintType, GroupDescription, Params, Selection, build_group as build_described, constraint_type, registry,
+    selects_any,
+};
 use shapeup_core::geometry::{RestGeometry, WorkingFrame};
 use shapeup_core::io::read_mesh;
 use shapeup_core::mesh::Mesh;
@@ -575,6 +578,8 @@ pub struct Document {
     /// Where the current epoch started (input frame), for the worker.
     epoch_start: Arc<Vec<DVec3>>,
     selection: Vec<bool>,
+    /// Selected polygon faces (of the rest mesh's faces), for face constraints.
+    face_selection: Vec<bool>,
     undo: Vec<Snapshot>,
     redo: Vec<Snapshot>,
     /// Connected piece of each vertex (vertices no triangle uses: their own piece).
@@ -647,6 +652,7 @@ impl Document {
             positions,
             epoch: 0,
             selection: vec![false; n],
+            face_selection: vec![false; rest.geometry.faces.len()],
             undo: Vec::new(),
             redo: Vec::new(),
             pieces: Arc::new(Pieces::new(n, &rest.mesh.triangles)),
@@ -976,9 +982,52 @@ impl Document {
         }
     }
 
-    /// Empties the selection.
+    /// Empties the selection (vertices and faces).
     pub fn clear_selection(&mut self) {
         self.selection.iter_mut().for_each(|s| *s = false);
+        self.face_selection.iter_mut().for_each(|s| *s = false);
+    }
+
+    /// Combines faces with the face selection (out-of-range indices are ignored).
+    pub fn select_faces(&mut self, faces: &[u32], mode: SelectMode) {
+        if mode == SelectMode::Replace {
+            self.clear_selection();
+        }
+        for &f in faces {
+            if let Some(s) = self.face_selection.get_mut(f as usize) {
+                *s = mode != SelectMode::Remove;
+            }
+        }
+    }
+
+    /// Which polygon faces are selected (one flag per face of the rest mesh).
+    pub fn face_selection(&self) -> &[bool] {
+        &self.face_selection
+    }
+
+    /// The selected faces, ascending.
+    pub fn selected_faces(&self) -> Vec<u32> {
+        self.face_selection.iter().enumerate().filter(|(_, s)| **s).map(|(f, _)| f as u32).collect()
+    }
+
+    /// The selection as the library's builders take it: the selected faces when there are
+    /// any, else the selected vertices.
+    pub fn library_selection(&self) -> Selection {
+        let faces = self.selected_faces();
+        if faces.is_empty() {
+            Selection::Vertices(self.selection.clone())
+        } else {
+            let list: Vec<usize> = faces.iter().map(|&f| f as usize).collect();
+            Selection::from_faces(self.selection.len(), &self.state.rest.geometry.faces, &list)
+        }
+    }
+
+    /// Every registered constraint type that fits the selection (it picks at least one of
+    /// the type's elements), in registry order: what "Add constraint to selection" offers.
+    pub fn fitting_types(&self) -> Vec<&'static dyn ConstraintType> {
+        let selection = self.library_selection();
+        let rest = &self.state.rest.geometry;
+        registry().iter().copied().filter(|t| selects_any(t.element(), rest, &selection)).collect()
     }
 
     /// Combines the boundary vertices (of edges with one triangle) with the selection.
@@ -1003,6 +1052,7 @@ impl Document {
     pub fn apply(&mut self, command: Command) -> Result<bool, EditorError> {
         match command {
             Command::Select { vertices, mode } => self.select(&vertices, mode),
+            Command::SelectFaces { faces, mode } => self.select_faces(&faces, mode),
             Command::ClearSelection => self.clear_selection(),
             Command::SelectBoundary(mode) => self.select_boundary(mode),
             Command::SelectPiece { vertex, mode } => {
@@ -1132,6 +1182,32 @@ impl Document {
                 state.groups.splice(at.min(state.groups.len())..at.min(state.groups.len()), groups);
                 state.shape_model = Some(model);
             }
+            Command::AddConstraint { kind, options } => {
+                let ty = constraint_type(&kind).map_err(|e| EditorError::Constraint(e.to_string()))?;
+                let faces = self.selected_faces();
+                let vertices = self.selected_vertices();
+                let on_faces = ty.element().is_face() && !faces.is_empty();
+                if !on_faces && vertices.is_empty() {
+                    return Err(EditorError::EmptySelection);
+                }
+                let name = unique_name(state, ty.name());
+                let handle = ty.has_targets();
+                state.groups.push(Group {
+                    key: self.new_key(),
+                    name,
+                    role: if handle { GroupRole::Handle } else { GroupRole::Other },
+                    kind: ty.name().into(),
+                    weight: ty.default_multiplier(),
+                    targets: if handle {
+                        vertices.iter().map(|&v| self.positions[v as usize]).collect()
+                    } else {
+                        Vec::new()
+                    },
+                    vertices: (!on_faces).then_some(vertices),
+                    faces: on_faces.then_some(faces),
+                    options: Arc::new(options),
+                });
+            }
             Command::AddSmoothing => {
                 let vertices = self.selected_vertices();
                 if vertices.is_empty() {
@@ -1214,6 +1290,7 @@ impl Document {
                 });
             }
             Command::Select { .. }
+            | Command::SelectFaces { .. }
             | Command::SelectPiece { .. }
             | Command::ClearSelection
             | Command::SelectBoundary(_)

@@ -199,6 +199,59 @@ pub fn pick_vertex(
     best.map(|(v, _)| v)
 }
 
+/// The polygon face under the cursor: the front-most triangle (largest interpolated 1/w)
+/// whose screen projection contains it, mapped to its face by `triangle_face` (the mesh's
+/// triangle → polygon table). `None` when the cursor is off the mesh.
+pub fn pick_face(
+    positions: &[DVec3],
+    triangles: &[[u32; 3]],
+    triangle_face: &[u32],
+    camera: &OrbitCamera,
+    viewport: Vec2,
+    cursor: Vec2,
+) -> Option<u32> {
+    let projected = project_all(positions, camera, viewport);
+    let mut best: Option<(u32, f32)> = None;
+    for (t, &face) in triangles.iter().zip(triangle_face) {
+        let [Some(a), Some(b), Some(c)] = t.map(|v| projected.get(v as usize).copied().flatten()) else { continue };
+        let area = edge(a.pixel, b.pixel, c.pixel);
+        if area.abs() <= f32::EPSILON {
+            continue;
+        }
+        // Barycentric coordinates of the cursor; all of one sign inside (either winding).
+        let (wa, wb, wc) = (
+            edge(b.pixel, c.pixel, cursor) / area,
+            edge(c.pixel, a.pixel, cursor) / area,
+            edge(a.pixel, b.pixel, cursor) / area,
+        );
+        if wa < 0.0 || wb < 0.0 || wc < 0.0 {
+            continue;
+        }
+        let inv_w = wa * a.inv_w + wb * b.inv_w + wc * c.inv_w;
+        if best.is_none_or(|(_, d)| inv_w > d) {
+            best = Some((face, inv_w));
+        }
+    }
+    best.map(|(f, _)| f)
+}
+
+/// The faces all of whose corners are in `vertices` (ascending vertex indices), ascending:
+/// what a box selection in face mode picks.
+pub fn faces_within(faces: &shapeup_core::mesh::Polygons, vertices: &[u32], num_vertices: usize) -> Vec<u32> {
+    let mut inside = vec![false; num_vertices];
+    for &v in vertices {
+        if let Some(x) = inside.get_mut(v as usize) {
+            *x = true;
+        }
+    }
+    faces
+        .iter()
+        .enumerate()
+        .filter(|(_, corners)| corners.iter().all(|&v| inside.get(v as usize).copied().unwrap_or(false)))
+        .map(|(f, _)| f as u32)
+        .collect()
+}
+
 /// Axis-aligned bounds (min, max) of positions as f32, for [`OrbitCamera::frame`]; a unit box
 /// around the origin when there are none.
 pub fn bounds(positions: &[DVec3]) -> (Vec3, Vec3) {

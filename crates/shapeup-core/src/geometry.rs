@@ -142,6 +142,19 @@ pub fn indexed_normals(
     sums.into_iter().map(|s| s.try_normalize()).collect()
 }
 
+/// Mean length of the mesh's edges (of its triangles; of its tetrahedra's when there are no
+/// triangles); 0 for none.
+pub fn mean_edge_length(rest: &RestGeometry) -> f64 {
+    let p = &rest.positions;
+    let length = |e: &[u32; 2]| (p[e[1] as usize] - p[e[0] as usize]).length();
+    if rest.topology.edges.is_empty() {
+        let edges = crate::topology::tetrahedron_edges(&rest.tetrahedra);
+        if edges.is_empty() { 0.0 } else { edges.iter().map(length).sum::<f64>() / edges.len() as f64 }
+    } else {
+        rest.topology.edges.iter().map(length).sum::<f64>() / rest.topology.edges.len() as f64
+    }
+}
+
 /// Lumped masses of a surface: m_i = max(ρ Σ_{t ∋ i} A_t / 3, 1e-9).
 pub fn lumped_masses_surface(n: usize, triangles: &[[u32; 3]], triangle_areas: &[f64], density: f64) -> Vec<f64> {
     let mut m = vec![0.0; n];

@@ -40,6 +40,8 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Lists every constraint type a scene can use: what it acts on, its default weight and its options.
+    Types,
     /// Static solve of a scene from its rest shape; writes the deformed mesh.
     Deform {
         /// Scene file (.toml or .json).
@@ -208,6 +210,10 @@ fn run(cli: Cli) -> Result<()> {
             deform(&scene, &output, iterations, report.as_deref(), ply_encoding, acceleration)
         }
         Command::Energy { scene, positions } => energy(&scene, &positions),
+        Command::Types => {
+            std::io::stdout().lock().write_all(shapeup_core::constraints::catalogue_markdown().as_bytes())?;
+            Ok(())
+        }
         Command::Simulate { scene, frames, output, every, format, report, acceleration } => {
             simulate::run(&simulate::SimulateArgs {
                 scene: &scene,
@@ -282,14 +288,27 @@ fn deform(
     warnings.extend(write_mesh_with(output, &mesh, format)?);
     let total = start.elapsed().as_secs_f64();
     if let Some(path) = report_path {
+        // Violations are relative to the rest mesh's mean edge length (working frame), so that
+        // a plane group's is the planarity error: the largest distance of a face's vertices to
+        // its best-fit plane over the mean edge length.
+        let mean_edge = shapeup_core::geometry::mean_edge_length(&loaded.rest).max(f64::MIN_POSITIVE);
+        let rest = loaded.rest_positions().to_vec();
         let groups: Vec<_> = loaded
             .group_ids
             .iter()
             .filter_map(|&id| loaded.system.group(id))
             .map(|g| {
-                serde_json::json!({"name": g.name, "type": g.kind, "weight": g.multiplier, "constraints": g.constraints.len(), "hard": g.hard})
+                serde_json::json!({
+                    "name": g.name, "type": g.kind, "weight": g.multiplier, "constraints": g.constraints.len(),
+                    "hard": g.hard,
+                    "max_violation": {"rest": g.max_violation(&rest) / mean_edge, "result": g.max_violation(&q) / mean_edge},
+                })
             })
             .collect();
+        let (lo, hi) = loaded.mesh.bounding_box();
+        let diagonal = (hi - lo).length().max(f64::MIN_POSITIVE);
+        let moved =
+            mesh.positions.iter().zip(&loaded.mesh.positions).map(|(a, b)| (*a - *b).length()).fold(0.0, f64::max);
         let (nnz_a, nnz_l) = loaded.system.factor_sizes();
         let report = serde_json::json!({
             "vertices": loaded.mesh.num_vertices(),
@@ -297,6 +316,8 @@ fn deform(
             "solved_vertices": loaded.system.num_solved_vertices(),
             "constraints": loaded.system.num_constraints(),
             "groups": groups,
+            // The largest vertex displacement from the input, over its bounding-box diagonal.
+            "max_displacement": moved / diagonal,
             "iterations": solve.energies.len(),
             "initial_energy": solve.initial_energy,
             "energy": solve.energies,

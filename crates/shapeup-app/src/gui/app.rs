@@ -11,7 +11,7 @@ use super::renderer::{BASE_COLOR, FrameParams, MeshRenderer};
 use crate::camera::OrbitCamera;
 use crate::command::{Command, SelectMode};
 use crate::document::{Document, GroupKey, GroupRole, ShapeModel, WEIGHT_RANGE};
-use crate::picking::{box_select, pick_vertex, visible_vertices};
+use crate::picking::{box_select, faces_within, pick_face, pick_vertex, visible_vertices};
 use crate::simulation::{SimulationRunner, SimulationSettings, tetrahedralize_available};
 use crate::worker::{SolveRequest, SolveResult, SolverWorker};
 use eframe::egui;
@@ -71,6 +71,8 @@ impl ViewportSlot {
 }
 
 const SELECTED_COLOR: [f32; 3] = [0.15, 0.35, 0.95];
+/// Corners of selected faces (face mode).
+const SELECTED_FACE_COLOR: [f32; 3] = [0.1, 0.75, 0.8];
 /// Colour of handle vertices (green, as in the seed editor).
 pub const HANDLE_COLOR: [f32; 3] = [0.10, 0.70, 0.25];
 /// Colour of the vertices of the group whose row the pointer is over.
@@ -158,6 +160,11 @@ struct View {
     close_confirmed: bool,
     /// The next click on the mesh selects the connected piece under it.
     pick_piece: bool,
+    /// Face mode: clicks and box selections pick polygon faces instead of vertices.
+    face_mode: bool,
+    /// The type "Add constraint to selection" will add, and the options set in its widgets.
+    add_kind: Option<&'static str>,
+    add_options: serde_json::Map<String, serde_json::Value>,
     /// Whether Tetrahedralize can be ticked for this mesh (computed once per mesh).
     tetrahedralize: Result<(), String>,
     energy_history: VecDeque<f64>,
@@ -267,6 +274,9 @@ impl EditorApp {
                 confirm_close: false,
                 close_confirmed: false,
                 pick_piece: false,
+                face_mode: false,
+                add_kind: None,
+                add_options: serde_json::Map::new(),
                 tetrahedralize: tetrahedralize_available(&document),
                 energy_history: VecDeque::new(),
                 solves: VecDeque::new(),
@@ -667,6 +677,15 @@ impl EditorApp {
                 *c = SELECTED_COLOR;
             }
         }
+        // A selected face shows as its corners (the renderer colours vertices).
+        let mesh = self.document.rest_mesh();
+        for (corners, _) in mesh.polygons.iter().zip(self.document.face_selection()).filter(|(_, s)| **s) {
+            for &v in corners {
+                if let Some(c) = colors.get_mut(v as usize) {
+                    *c = SELECTED_FACE_COLOR;
+                }
+            }
+        }
         if let Some(group) = self.view.hovered_group.and_then(|k| self.document.group(k)) {
             match group.vertices() {
                 Some(list) => list.iter().for_each(|&v| colors[v as usize] = HOVER_COLOR),
@@ -742,7 +761,16 @@ impl EditorApp {
     }
 
     fn selection_section(&mut self, ui: &mut egui::Ui, commands: &mut Vec<Command>) {
-        ui.label(format!("{} selected", count(self.document.num_selected(), "vertex", "vertices")));
+        let faces = self.document.face_selection().iter().filter(|s| **s).count();
+        ui.horizontal(|ui| {
+            ui.label(format!(
+                "{}, {} selected",
+                count(self.document.num_selected(), "vertex", "vertices"),
+                count(faces, "face", "faces")
+            ));
+            ui.toggle_value(&mut self.view.face_mode, "Face mode")
+                .on_hover_text("clicks and Ctrl+drag boxes select polygon faces (for plane, circle, rectangle…)");
+        });
         ui.horizontal_wrapped(|ui| {
             if ui.button("Fix selection").on_hover_text("a handle holding the selected vertices").clicked() {
                 commands.push(Command::FixSelection);
@@ -753,10 +781,8 @@ impl EditorApp {
             if ui.button("Select boundary").clicked() {
                 commands.push(Command::SelectBoundary(SelectMode::Replace));
             }
-            if ui.button("Add smoothing to selection").clicked() {
-                commands.push(Command::AddSmoothing);
-            }
         });
+        self.add_constraint_row(ui, commands);
         // Pieces: every connected piece needs a handle, or the system is singular.
         let pieces = self.document.pieces().count;
         let free = self.document.num_free_pieces();
@@ -784,6 +810,45 @@ impl EditorApp {
             ui.toggle_value(&mut self.view.pick_piece, "Select connected piece")
                 .on_hover_text("while on, a click on a vertex selects its piece (shift adds); click again to stop");
         });
+    }
+
+    /// "Add constraint to selection": every registered type that fits the selection, its
+    /// options as widgets generated from its option descriptions, and the button.
+    fn add_constraint_row(&mut self, ui: &mut egui::Ui, commands: &mut Vec<Command>) {
+        let fitting = self.document.fitting_types();
+        if fitting.is_empty() {
+            ui.label("select vertices or faces to add a constraint");
+            return;
+        }
+        let chosen = self.view.add_kind.and_then(|k| fitting.iter().copied().find(|t| t.name() == k));
+        let ty = chosen.unwrap_or(fitting[0]);
+        if chosen.is_none() {
+            self.view.add_kind = Some(ty.name());
+            self.view.add_options.clear();
+        }
+        ui.horizontal(|ui| {
+            egui::ComboBox::from_id_salt("add constraint type")
+                .selected_text(ty.name())
+                .show_ui(ui, |ui| {
+                    for t in &fitting {
+                        if ui.selectable_label(t.name() == ty.name(), t.name()).on_hover_text(t.summary()).clicked()
+                            && t.name() != ty.name()
+                        {
+                            self.view.add_kind = Some(t.name());
+                            self.view.add_options.clear();
+                        }
+                    }
+                })
+                .response
+                .on_hover_text(ty.summary());
+            if ui.button("Add constraint to selection").on_hover_text(ty.summary()).clicked() {
+                commands
+                    .push(Command::AddConstraint { kind: ty.name().into(), options: self.view.add_options.clone() });
+            }
+        });
+        for option in ty.options() {
+            option_widget(ui, option, &mut self.view.add_options);
+        }
     }
 
     fn groups_section(&mut self, ui: &mut egui::Ui, commands: &mut Vec<Command>) {
@@ -1137,6 +1202,28 @@ impl EditorApp {
             };
         }
         if response.clicked()
+            && self.view.face_mode
+            && !self.view.pick_piece
+            && let Some(pos) = response.interact_pointer_pos()
+        {
+            let mesh = self.document.rest_mesh();
+            let picked = pick_face(
+                self.document.positions(),
+                &mesh.triangles,
+                &mesh.triangle_polygon,
+                &self.view.camera,
+                viewport,
+                to_local(pos),
+            );
+            match picked {
+                Some(face) => {
+                    let mode = if modifiers.shift { SelectMode::Add } else { SelectMode::Replace };
+                    commands.push(Command::SelectFaces { faces: vec![face], mode });
+                }
+                None => self.view.status = "no face under the pointer: click on the mesh".into(),
+            }
+        }
+        if response.clicked()
             && self.view.pick_piece
             && let Some(pos) = response.interact_pointer_pos()
         {
@@ -1196,7 +1283,13 @@ impl EditorApp {
                     to_local(start),
                     to_local(end),
                 );
-                commands.push(Command::Select { vertices, mode });
+                if self.view.face_mode {
+                    let mesh = self.document.rest_mesh();
+                    let faces = faces_within(&mesh.polygons, &vertices, mesh.num_vertices());
+                    commands.push(Command::SelectFaces { faces, mode });
+                } else {
+                    commands.push(Command::Select { vertices, mode });
+                }
             }
             if matches!(self.view.gesture, Some(Gesture::Grab { .. }))
                 && let Some(runner) = &self.simulation
@@ -1560,6 +1653,65 @@ pub fn run_window(document: Document, path: PathBuf, window: WindowOptions) -> R
 }
 
 /// The editor's name for an acceleration.
+/// The widget of one constraint option, generated from its description: a number field
+/// within its range (with "rest" for a default taken from the rest shape), a checkbox, or
+/// three number fields; the value lands in `options` under the option's key, and an option
+/// left at its default is left out.
+fn option_widget(
+    ui: &mut egui::Ui,
+    option: &shapeup_core::constraints::OptionSpec,
+    options: &mut serde_json::Map<String, serde_json::Value>,
+) {
+    use shapeup_core::constraints::OptionKind;
+    ui.horizontal(|ui| {
+        ui.label(option.key).on_hover_text(option.doc);
+        match option.kind {
+            OptionKind::Number { default, min, max } => {
+                let current = options.get(option.key).and_then(serde_json::Value::as_f64);
+                if default.is_none() {
+                    let mut from_rest = current.is_none();
+                    if ui.checkbox(&mut from_rest, "rest").on_hover_text(option.doc).changed() {
+                        if from_rest {
+                            options.remove(option.key);
+                        } else {
+                            options.insert(option.key.into(), min.max(0.0).min(max).into());
+                        }
+                    }
+                    if from_rest {
+                        return;
+                    }
+                }
+                let mut value = current.or(default).unwrap_or(0.0);
+                let speed = if max - min < 10.0 { 0.01 } else { 0.1 };
+                if ui
+                    .add(egui::DragValue::new(&mut value).range(min..=max).speed(speed))
+                    .on_hover_text(option.doc)
+                    .changed()
+                {
+                    options.insert(option.key.into(), value.into());
+                }
+            }
+            OptionKind::Bool { default } => {
+                let mut value = options.get(option.key).and_then(serde_json::Value::as_bool).unwrap_or(default);
+                if ui.checkbox(&mut value, "").on_hover_text(option.doc).changed() {
+                    options.insert(option.key.into(), value.into());
+                }
+            }
+            OptionKind::Vector { default } => {
+                let mut value: [f64; 3] =
+                    options.get(option.key).and_then(|v| serde_json::from_value(v.clone()).ok()).unwrap_or(default);
+                let mut changed = false;
+                for x in &mut value {
+                    changed |= ui.add(egui::DragValue::new(x).speed(0.1)).on_hover_text(option.doc).changed();
+                }
+                if changed {
+                    options.insert(option.key.into(), value.to_vec().into());
+                }
+            }
+        }
+    });
+}
+
 fn acceleration_label(a: Acceleration) -> &'static str {
     match a {
         Acceleration::Anderson => "Anderson",

@@ -575,6 +575,66 @@ pub fn registry() -> &'static [&'static dyn ConstraintType] {
     ]
 }
 
+/// Whether `selection` picks at least one element of this kind on `rest` (for menus: the
+/// editor offers a type only when it fits the selection).
+pub fn selects_any(element: Element, rest: &RestGeometry, selection: &Selection) -> bool {
+    let n = rest.num_vertices() as u32;
+    match element {
+        Element::Vertex => (0..n).any(|v| selection.contains(v)),
+        Element::VertexSet { min } => (0..n).filter(|&v| selection.contains(v)).take(min).count() >= min.max(1),
+        Element::Edge => rest.topology.edges.iter().any(|e| selection.contains_all(&e[..])),
+        Element::Face { min, max } => rest
+            .faces
+            .iter()
+            .enumerate()
+            .any(|(f, corners)| (min..=max).contains(&corners.len()) && selection.contains_face(f, corners)),
+        Element::Triangle => rest.triangles.iter().any(|t| selection.contains_all(&t[..])),
+        Element::Tetrahedron => rest.tetrahedra.iter().any(|t| selection.contains_all(&t[..])),
+    }
+}
+
+/// The registry as a Markdown table (type, elements, default weight, options, summary): what
+/// `shapeup types` prints and the README and the scene contract show (a test keeps them equal).
+pub fn catalogue_markdown() -> String {
+    let mut out = String::from(
+        "| type | acts on | default weight | options (default, range) | what it does |\n|---|---|---:|---|---|\n",
+    );
+    for ty in registry() {
+        let options: Vec<String> = ty.options().iter().map(option_markdown).collect();
+        let mut options = if options.is_empty() { "—".to_string() } else { options.join("; ") };
+        if ty.has_targets() {
+            options.push_str("; targets: translate, rotate, targets, spin, hard");
+        }
+        out.push_str(&format!(
+            "| `{}` | {} | {} | {} | {} |\n",
+            ty.name(),
+            ty.element().plural(),
+            ty.default_multiplier(),
+            options,
+            ty.summary().replace('|', "\\|")
+        ));
+    }
+    out
+}
+
+/// One option for [`catalogue_markdown`]: `key = default` and its range.
+fn option_markdown(o: &OptionSpec) -> String {
+    match o.kind {
+        OptionKind::Number { default, min, max } => {
+            let d = default.map_or("rest".to_string(), |d| format!("{d}"));
+            let range = match (min > -f64::MAX, max < f64::MAX) {
+                (true, true) => format!(" in [{}, {}]", fmt_bound(min), fmt_bound(max)),
+                (true, false) => format!(" ≥ {}", fmt_bound(min)),
+                (false, true) => format!(" ≤ {}", fmt_bound(max)),
+                (false, false) => String::new(),
+            };
+            format!("`{}` = {d}{range}", o.key)
+        }
+        OptionKind::Bool { default } => format!("`{}` = {default}", o.key),
+        OptionKind::Vector { default } => format!("`{}` = [{}, {}, {}]", o.key, default[0], default[1], default[2]),
+    }
+}
+
 /// The names of every constraint type.
 pub fn type_names() -> Vec<&'static str> {
     registry().iter().map(|t| t.name()).collect()
