@@ -763,11 +763,11 @@ impl EditorApp {
     fn selection_section(&mut self, ui: &mut egui::Ui, commands: &mut Vec<Command>) {
         let faces = self.document.face_selection().iter().filter(|s| **s).count();
         ui.horizontal(|ui| {
-            ui.label(format!(
-                "{}, {} selected",
-                count(self.document.num_selected(), "vertex", "vertices"),
-                count(faces, "face", "faces")
-            ));
+            let vertices = count(self.document.num_selected(), "vertex", "vertices");
+            ui.label(match faces {
+                0 => format!("{vertices} selected"),
+                _ => format!("{vertices}, {} selected", count(faces, "face", "faces")),
+            });
             ui.toggle_value(&mut self.view.face_mode, "Face mode")
                 .on_hover_text("clicks and Ctrl+drag boxes select polygon faces (for plane, circle, rectangle…)");
         });
