@@ -19,8 +19,12 @@ mod edge_spring;
 mod floor;
 mod group;
 mod iso_one_ring;
+mod parallelogram;
 mod position;
+mod rectangle;
+mod rigid;
 mod sets;
+mod similarity;
 mod smoothing;
 mod tet_strain;
 mod triangle_strain;
@@ -33,7 +37,11 @@ pub use edge_spring::{EdgeSpring, EdgeSpringType};
 pub use floor::{Floor, FloorType};
 pub use group::{GroupDescription, build_group, held_vertices};
 pub use iso_one_ring::{IsoOneRing, IsoOneRingType};
+pub use parallelogram::{Parallelogram, ParallelogramType};
 pub use position::{Position, PositionType};
+pub use rectangle::{Rectangle, RectangleType};
+pub use rigid::{Rigid, RigidType};
+pub use similarity::{Similarity, SimilarityType};
 pub use smoothing::{Smoothing, SmoothingType};
 pub use tet_strain::{TetStrain, TetStrainType};
 pub use triangle_strain::{TriangleStrain, TriangleStrainType};
@@ -572,6 +580,10 @@ pub fn registry() -> &'static [&'static dyn ConstraintType] {
         &TetStrainType,
         &PositionType,
         &FloorType,
+        &RigidType,
+        &SimilarityType,
+        &RectangleType,
+        &ParallelogramType,
     ]
 }
 
