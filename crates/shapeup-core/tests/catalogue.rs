@@ -169,6 +169,35 @@ fn the_energy_never_increases_over_iterations() {
     }
 }
 
+#[test]
+fn every_type_time_steps_in_dynamic_mode() {
+    use shapeup_core::dynamics::{DynamicsParams, Simulation};
+    use shapeup_core::geometry::{lumped_masses_surface, lumped_masses_volume};
+    for ty in registry() {
+        let mesh = mesh_for(*ty);
+        let rest = rest_of(&mesh);
+        let masses = if mesh.tetrahedra.is_empty() {
+            lumped_masses_surface(mesh.num_vertices(), &mesh.triangles, &rest.triangle_areas, 1.0)
+        } else {
+            lumped_masses_volume(&mesh.positions, &mesh.tetrahedra, 1.0)
+        };
+        for acceleration in Acceleration::ALL {
+            let system = system_for(*ty, &rest, Params::default(), &handle_of(&rest), acceleration);
+            let mut sim = Simulation::new(system, masses.clone(), rest.positions.clone(), DynamicsParams::default())
+                .unwrap_or_else(|e| panic!("{}: {e}", ty.name()));
+            for _ in 0..5 {
+                sim.step().unwrap_or_else(|e| panic!("{} with {}: {e}", ty.name(), acceleration.name()));
+            }
+            assert!(
+                sim.positions().iter().all(|p| p.is_finite() && p.length() < 10.0),
+                "{} with {}: the body left",
+                ty.name(),
+                acceleration.name()
+            );
+        }
+    }
+}
+
 /// Options of a type moved by a rigid motion: vectors (directions, forces) turn with it.
 fn turned_options(ty: &dyn ConstraintType, turn: DQuat) -> Params {
     let mut params = Params::default();
