@@ -17,8 +17,13 @@ mod attachment;
 mod bending;
 mod edge_spring;
 mod floor;
+mod force;
+mod gravity;
 mod group;
+mod hinge_bending;
 mod iso_one_ring;
+mod laplacian;
+mod laplacian_displacement;
 mod position;
 mod sets;
 mod smoothing;
@@ -31,8 +36,13 @@ pub use attachment::{
 pub use bending::{Bending, BendingType};
 pub use edge_spring::{EdgeSpring, EdgeSpringType};
 pub use floor::{Floor, FloorType};
+pub use force::{Force, ForceType};
+pub use gravity::GravityType;
 pub use group::{GroupDescription, build_group, held_vertices};
+pub use hinge_bending::{HingeBending, HingeBendingType};
 pub use iso_one_ring::{IsoOneRing, IsoOneRingType};
+pub use laplacian::{Laplacian, LaplacianType};
+pub use laplacian_displacement::{LaplacianDisplacement, LaplacianDisplacementType};
 pub use position::{Position, PositionType};
 pub use smoothing::{Smoothing, SmoothingType};
 pub use tet_strain::{TetStrain, TetStrainType};
@@ -572,6 +582,11 @@ pub fn registry() -> &'static [&'static dyn ConstraintType] {
         &TetStrainType,
         &PositionType,
         &FloorType,
+        &LaplacianType,
+        &LaplacianDisplacementType,
+        &HingeBendingType,
+        &ForceType,
+        &GravityType,
     ]
 }
 
