@@ -27,10 +27,7 @@ fn the_add_menu_offers_the_registered_types_that_fit_the_selection() {
     doc.apply(Command::Select { vertices: vec![0], mode: SelectMode::Replace }).unwrap();
     let names: Vec<&str> = doc.fitting_types().iter().map(|t| t.name()).collect();
     assert!(names.contains(&"position") && names.contains(&"smoothing"), "{names:?}");
-    assert!(
-        doc.fitting_types().iter().all(|t| !t.element().is_face()),
-        "one vertex is no face: {names:?}"
-    );
+    assert!(doc.fitting_types().iter().all(|t| !t.element().is_face()), "one vertex is no face: {names:?}");
     doc.apply(Command::SelectFaces { faces: some_quads(&doc, 12), mode: SelectMode::Replace }).unwrap();
     let fitting = doc.fitting_types();
     let names: Vec<&str> = fitting.iter().map(|t| t.name()).collect();
@@ -68,7 +65,10 @@ fn a_face_group_is_built_on_the_selected_faces_solved_and_replayed() {
     assert!(worst < 1e-6, "the replay is off the editor's shape by {worst}");
     // And the scene reopens in the editor with its face group.
     let reopened = Document::from_scene(&scene).unwrap();
-    assert_eq!(reopened.groups().iter().find(|g| g.kind == "parallelogram").unwrap().faces.as_deref(), Some(&quads[..]));
+    assert_eq!(
+        reopened.groups().iter().find(|g| g.kind == "parallelogram").unwrap().faces.as_deref(),
+        Some(&quads[..])
+    );
 }
 
 #[test]

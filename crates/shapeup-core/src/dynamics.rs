@@ -186,6 +186,7 @@ impl Simulation {
             return Err(DynamicsError::BadState(format!("vertex {i} has a non-finite position")));
         }
         system.set_inertia(Some(params.inertia(&masses)))?;
+        system.set_load_scale(1.0 / params.stiffness)?;
         Ok(Simulation {
             system,
             params,
@@ -356,6 +357,7 @@ impl Simulation {
             self.params = old;
             return Err(e.into());
         }
+        self.system.set_load_scale(1.0 / params.stiffness)?;
         Ok(())
     }
 

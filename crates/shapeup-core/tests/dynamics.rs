@@ -350,16 +350,16 @@ fn every_constraint_type_solves_under_every_acceleration() {
                 system.add_group(h).unwrap();
             }
             let mut q = mesh.positions.clone();
-            let report = system.solve(&mut q, 30, 0.0).unwrap();
-            for w in report.energies.windows(2) {
-                assert!(
-                    w[1] <= w[0] * (1.0 + 1e-12) + 1e-15,
-                    "{kind} {acceleration:?}: E rose from {} to {}",
-                    w[0],
-                    w[1]
-                );
+            let loads_only = group(kind, 10.0, &rest, Params::default()).constraints.iter().all(|c| c.num_rows() == 0);
+            if loads_only {
+                // A load that nothing but the two end handles holds: its vertices are an
+                // unanchored piece in static mode, refused rather than left in place.
+                let e = system.solve(&mut q, 30, 0.0).unwrap_err();
+                assert!(matches!(e, shapeup_core::solver::SolveError::Unanchored { .. }), "{kind}: {e}");
+            } else {
+                let report = system.solve(&mut q, 30, 0.0).unwrap();
+                check_energies(kind, acceleration, &report);
             }
-            assert!(report.energies[29] < report.initial_energy, "{kind} {acceleration:?}: E decreased");
 
             let mut system = System::new(mesh.num_vertices(), params);
             system.add_group(group(kind, 10.0, &rest, Params::default())).unwrap();
@@ -371,6 +371,15 @@ fn every_constraint_type_solves_under_every_acceleration() {
             assert!(sim.positions().iter().all(|p| p.is_finite() && p.length() < 10.0), "{kind} {acceleration:?}");
         }
     }
+}
+
+/// E never rose over a solve's iterations and fell overall.
+fn check_energies(kind: &str, acceleration: Acceleration, report: &shapeup_core::solver::SolveReport) {
+    for w in report.energies.windows(2) {
+        assert!(w[1] <= w[0] + 1e-12 * w[0].abs() + 1e-15, "{kind} {acceleration:?}: E rose from {} to {}", w[0], w[1]);
+    }
+    let last = report.energies.last().copied().unwrap_or(report.initial_energy);
+    assert!(last < report.initial_energy, "{kind} {acceleration:?}: E decreased");
 }
 
 /// A time step's tolerance is on the objective it minimizes (E plus the inertial term), not on

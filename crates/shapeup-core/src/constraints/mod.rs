@@ -17,8 +17,13 @@ mod attachment;
 mod bending;
 mod edge_spring;
 mod floor;
+mod force;
+mod gravity;
 mod group;
+mod hinge_bending;
 mod iso_one_ring;
+mod laplacian;
+mod laplacian_displacement;
 mod parallelogram;
 mod position;
 mod rectangle;
@@ -35,8 +40,13 @@ pub use attachment::{
 pub use bending::{Bending, BendingType};
 pub use edge_spring::{EdgeSpring, EdgeSpringType};
 pub use floor::{Floor, FloorType};
+pub use force::{Force, ForceType};
+pub use gravity::GravityType;
 pub use group::{GroupDescription, build_group, held_vertices};
+pub use hinge_bending::{HingeBending, HingeBendingType};
 pub use iso_one_ring::{IsoOneRing, IsoOneRingType};
+pub use laplacian::{Laplacian, LaplacianType};
+pub use laplacian_displacement::{LaplacianDisplacement, LaplacianDisplacementType};
 pub use parallelogram::{Parallelogram, ParallelogramType};
 pub use position::{Position, PositionType};
 pub use rectangle::{Rectangle, RectangleType};
@@ -584,6 +594,11 @@ pub fn registry() -> &'static [&'static dyn ConstraintType] {
         &SimilarityType,
         &RectangleType,
         &ParallelogramType,
+        &LaplacianType,
+        &LaplacianDisplacementType,
+        &HingeBendingType,
+        &ForceType,
+        &GravityType,
     ]
 }
 

@@ -75,6 +75,9 @@ impl Assembly {
     ) -> Self {
         let mut a = Assembly { c_ptr: vec![0], fixed, ..Default::default() };
         let mut sink = RowSink::default();
+        // Loaded vertices are unknowns even without rows: a load nothing balances is an
+        // unanchored piece (an error), not a vertex silently left where it is.
+        let mut loaded = Vec::new();
         for (g, constraints) in groups.iter().enumerate() {
             let start = a.row_weight.len();
             let mut offsets = Vec::with_capacity(constraints.len() + 1);
@@ -84,6 +87,9 @@ impl Assembly {
                 continue;
             }
             for c in constraints.iter() {
+                if let Some(load) = c.load() {
+                    loaded.extend_from_slice(load.vertices);
+                }
                 sink.entries.clear();
                 c.rows(&mut sink);
                 a.push_rows(&mut sink, c.num_rows(), c.element_weight(), g as u32);
@@ -91,7 +97,7 @@ impl Assembly {
             }
             a.groups.push(GroupRows { start, offsets });
         }
-        a.number_solved_vertices(n, inertia);
+        a.number_solved_vertices(n, inertia, &loaded);
         a.build_transpose();
         a.build_lhs_pattern();
         a
@@ -133,12 +139,12 @@ impl Assembly {
         }
     }
 
-    fn number_solved_vertices(&mut self, n: usize, inertia: Option<&[f64]>) {
+    fn number_solved_vertices(&mut self, n: usize, inertia: Option<&[f64]>, loaded: &[u32]) {
         let mut touched: Vec<bool> = match inertia {
             Some(mu) => mu.iter().map(|&m| m > 0.0).collect(),
             None => vec![false; n],
         };
-        for &v in &self.c_col {
+        for &v in self.c_col.iter().chain(loaded) {
             touched[v as usize] = true;
         }
         for (t, _) in touched.iter_mut().zip(&self.fixed).filter(|(_, f)| **f) {

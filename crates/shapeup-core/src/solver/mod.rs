@@ -373,6 +373,9 @@ pub struct System {
     /// [`Constraint::load`]s; empty when there is none. Recomputed when weights or the
     /// assembly change.
     load_rhs: Vec<DVec3>,
+    /// What the loads are multiplied by besides their group's multiplier: 1 in static mode,
+    /// 1/k in dynamic mode (k the stiffness, which scales the constraint terms but not a force).
+    load_scale: f64,
     /// Numeric factorizations so far.
     factorizations: u64,
     /// What does not change between iterations per solved vertex: μ s (dynamic mode) minus the
@@ -408,6 +411,7 @@ impl System {
             held_rhs: Vec::new(),
             held: Vec::new(),
             load_rhs: Vec::new(),
+            load_scale: 1.0,
             factorizations: 0,
             constant_rhs: Vec::new(),
         }
@@ -492,6 +496,22 @@ impl System {
         }
     }
 
+    /// Sets the factor every load is multiplied by besides its group's multiplier (1 by
+    /// default; dynamic mode sets 1/k so that a load is the physical force g f).
+    ///
+    /// # Errors
+    /// [`SolveError::BadWeight`] for a negative or non-finite scale.
+    pub fn set_load_scale(&mut self, scale: f64) -> Result<(), SolveError> {
+        check_weight("load scale", scale)?;
+        if scale != self.load_scale {
+            self.load_scale = scale;
+            self.update_load_rhs();
+            self.update_constant_rhs();
+            self.map_changed = true;
+        }
+        Ok(())
+    }
+
     /// [`System::load_rhs`](Self): Σ g f_v per solved vertex over every group's loads.
     fn update_load_rhs(&mut self) {
         self.load_rhs.clear();
@@ -508,7 +528,7 @@ impl System {
                 }
                 for (&v, f) in load.vertices.iter().zip(load.forces) {
                     if let Some(b) = a.solved_index.get(v as usize).and_then(|&s| self.load_rhs.get_mut(s as usize)) {
-                        *b += group.multiplier * *f;
+                        *b += self.load_scale * group.multiplier * *f;
                     }
                 }
             }
@@ -520,7 +540,7 @@ impl System {
         let mut e = 0.0;
         for group in slots.into_iter().filter_map(|s| self.slots.get(s).and_then(Option::as_ref)) {
             for load in group.constraints.iter().filter_map(|c| c.load()) {
-                e += group.multiplier * load.energy(q);
+                e += self.load_scale * group.multiplier * load.energy(q);
             }
         }
         e
