@@ -16,6 +16,7 @@ use std::fmt::Debug;
 mod attachment;
 mod bending;
 mod edge_spring;
+mod edge_strain;
 mod floor;
 mod group;
 mod iso_one_ring;
@@ -30,6 +31,7 @@ pub use attachment::{
 };
 pub use bending::{Bending, BendingType};
 pub use edge_spring::{EdgeSpring, EdgeSpringType};
+pub use edge_strain::{EdgeStrain, EdgeStrainType};
 pub use floor::{Floor, FloorType};
 pub use group::{GroupDescription, build_group, held_vertices};
 pub use iso_one_ring::{IsoOneRing, IsoOneRingType};
@@ -572,6 +574,7 @@ pub fn registry() -> &'static [&'static dyn ConstraintType] {
         &TetStrainType,
         &PositionType,
         &FloorType,
+        &EdgeStrainType,
     ]
 }
 
