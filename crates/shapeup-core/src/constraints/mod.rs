@@ -13,6 +13,7 @@ use glam::DVec3;
 use std::any::Any;
 use std::fmt::Debug;
 
+mod area;
 mod attachment;
 mod bending;
 mod edge_spring;
@@ -26,6 +27,7 @@ mod smoothing;
 mod tet_strain;
 mod triangle_strain;
 
+pub use area::{Area, AreaType};
 pub use attachment::{
     DEGENERATE_FACES_GROUP, DegenerateAttachments, EdgeAttachment, attach_degenerate_vertices, degenerate_attachments,
 };
@@ -575,6 +577,7 @@ pub fn registry() -> &'static [&'static dyn ConstraintType] {
         &PositionType,
         &FloorType,
         &EdgeStrainType,
+        &AreaType,
     ]
 }
 
