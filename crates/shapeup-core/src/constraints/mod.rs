@@ -26,6 +26,7 @@ mod sets;
 mod smoothing;
 mod tet_strain;
 mod triangle_strain;
+mod volume;
 
 pub use area::{Area, AreaType};
 pub use attachment::{
@@ -41,6 +42,7 @@ pub use position::{Position, PositionType};
 pub use smoothing::{Smoothing, SmoothingType};
 pub use tet_strain::{TetStrain, TetStrainType};
 pub use triangle_strain::{TriangleStrain, TriangleStrainType};
+pub use volume::{Volume, VolumeType};
 
 /// One entry of a constraint's selection matrix C_i: `C[row, vertex] = coeff`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -578,6 +580,7 @@ pub fn registry() -> &'static [&'static dyn ConstraintType] {
         &FloorType,
         &EdgeStrainType,
         &AreaType,
+        &VolumeType,
     ]
 }
 
