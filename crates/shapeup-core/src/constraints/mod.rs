@@ -13,6 +13,7 @@ use glam::DVec3;
 use std::any::Any;
 use std::fmt::Debug;
 
+mod angle;
 mod area;
 mod attachment;
 mod bending;
@@ -28,6 +29,7 @@ mod tet_strain;
 mod triangle_strain;
 mod volume;
 
+pub use angle::{Angle, AngleType};
 pub use area::{Area, AreaType};
 pub use attachment::{
     DEGENERATE_FACES_GROUP, DegenerateAttachments, EdgeAttachment, attach_degenerate_vertices, degenerate_attachments,
@@ -581,6 +583,7 @@ pub fn registry() -> &'static [&'static dyn ConstraintType] {
         &EdgeStrainType,
         &AreaType,
         &VolumeType,
+        &AngleType,
     ]
 }
 
