@@ -13,9 +13,12 @@ use glam::DVec3;
 use std::any::Any;
 use std::fmt::Debug;
 
+mod angle;
+mod area;
 mod attachment;
 mod bending;
 mod edge_spring;
+mod edge_strain;
 mod floor;
 mod force;
 mod gravity;
@@ -33,12 +36,16 @@ mod similarity;
 mod smoothing;
 mod tet_strain;
 mod triangle_strain;
+mod volume;
 
+pub use angle::{Angle, AngleType};
+pub use area::{Area, AreaType};
 pub use attachment::{
     DEGENERATE_FACES_GROUP, DegenerateAttachments, EdgeAttachment, attach_degenerate_vertices, degenerate_attachments,
 };
 pub use bending::{Bending, BendingType};
 pub use edge_spring::{EdgeSpring, EdgeSpringType};
+pub use edge_strain::{EdgeStrain, EdgeStrainType};
 pub use floor::{Floor, FloorType};
 pub use force::{Force, ForceType};
 pub use gravity::GravityType;
@@ -55,6 +62,7 @@ pub use similarity::{Similarity, SimilarityType};
 pub use smoothing::{Smoothing, SmoothingType};
 pub use tet_strain::{TetStrain, TetStrainType};
 pub use triangle_strain::{TriangleStrain, TriangleStrainType};
+pub use volume::{Volume, VolumeType};
 
 /// One entry of a constraint's selection matrix C_i: `C[row, vertex] = coeff`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -582,21 +590,28 @@ pub trait ConstraintType: Sync {
 /// Every constraint type, in the order menus list them.
 pub fn registry() -> &'static [&'static dyn ConstraintType] {
     &[
+        // Shape models (keep lengths, strains, curvature, details).
         &EdgeSpringType,
+        &EdgeStrainType,
         &TriangleStrainType,
-        &BendingType,
-        &IsoOneRingType,
-        &SmoothingType,
+        &AreaType,
         &TetStrainType,
-        &PositionType,
-        &FloorType,
-        &RigidType,
-        &SimilarityType,
+        &VolumeType,
+        &BendingType,
+        &HingeBendingType,
+        &IsoOneRingType,
+        &LaplacianDisplacementType,
+        &SmoothingType,
+        &LaplacianType,
+        // Geometric sets of ShapeUp / ShapeOp (faces, parts).
         &RectangleType,
         &ParallelogramType,
-        &LaplacianType,
-        &LaplacianDisplacementType,
-        &HingeBendingType,
+        &AngleType,
+        &RigidType,
+        &SimilarityType,
+        // Handles, contact and loads.
+        &PositionType,
+        &FloorType,
         &ForceType,
         &GravityType,
     ]
