@@ -290,3 +290,16 @@ fn every_type_documents_its_options_and_elements() {
         let _ = ty.element().plural();
     }
 }
+
+#[test]
+fn the_readme_and_the_scene_contract_list_every_registered_type() {
+    let table = shapeup_core::constraints::catalogue_markdown();
+    for doc in ["README.md", "docs/scenes-and-cli.md"] {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").join(doc);
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert!(
+            text.contains(&table),
+            "{doc} does not hold the registry's table: paste the output of `shapeup types` into it\n{table}"
+        );
+    }
+}
