@@ -15,13 +15,17 @@ use std::fmt::Debug;
 
 mod attachment;
 mod bending;
+mod circle;
 mod edge_spring;
 mod floor;
 mod group;
 mod iso_one_ring;
+mod line;
+mod plane;
 mod position;
 mod sets;
 mod smoothing;
+mod sphere;
 mod tet_strain;
 mod triangle_strain;
 
@@ -29,12 +33,16 @@ pub use attachment::{
     DEGENERATE_FACES_GROUP, DegenerateAttachments, EdgeAttachment, attach_degenerate_vertices, degenerate_attachments,
 };
 pub use bending::{Bending, BendingType};
+pub use circle::{Circle, CircleType};
 pub use edge_spring::{EdgeSpring, EdgeSpringType};
 pub use floor::{Floor, FloorType};
 pub use group::{GroupDescription, build_group, held_vertices};
 pub use iso_one_ring::{IsoOneRing, IsoOneRingType};
+pub use line::{Line, LineType};
+pub use plane::{Plane, PlaneType};
 pub use position::{Position, PositionType};
 pub use smoothing::{Smoothing, SmoothingType};
+pub use sphere::{Sphere, SphereType};
 pub use tet_strain::{TetStrain, TetStrainType};
 pub use triangle_strain::{TriangleStrain, TriangleStrainType};
 
@@ -572,6 +580,10 @@ pub fn registry() -> &'static [&'static dyn ConstraintType] {
         &TetStrainType,
         &PositionType,
         &FloorType,
+        &LineType,
+        &PlaneType,
+        &CircleType,
+        &SphereType,
     ]
 }
 
