@@ -336,16 +336,21 @@ fn every_constraint_type_solves_under_every_acceleration() {
             ConstraintGroup::new("high", 100.0, vec![Box::new(held(&high, offset))]),
         ]
     };
-    for kind in shapeup_core::constraints::type_names() {
-        // Face types act on polygon faces, which this box's triangles are not: the shared suite
-        // (tests/catalogue.rs) runs them, static and dynamic, on a quad grid.
-        if shapeup_core::constraints::constraint_type(kind).is_ok_and(|t| t.element().is_face()) {
+    for ty in shapeup_core::constraints::registry() {
+        let kind = ty.name();
+        // The box has no polygon faces: a face type runs over all its vertices at once where it
+        // can (whole_selection), else it has nothing to act on here.
+        let options = if !ty.element().is_face() {
+            Params::default()
+        } else if ty.options().iter().any(|o| o.key == "whole_selection") {
+            Params::default().with("whole_selection", true)
+        } else {
             continue;
-        }
+        };
         for acceleration in [Acceleration::None, Acceleration::Anderson, Acceleration::Lbfgs] {
             let params = SolverParams { acceleration, ..SolverParams::default() };
             let mut system = System::new(mesh.num_vertices(), params);
-            system.add_group(group(kind, 10.0, &rest, Params::default())).unwrap();
+            system.add_group(group(kind, 10.0, &rest, options.clone())).unwrap();
             for h in handles(DVec3::new(0.4, 0.3, -0.2)) {
                 system.add_group(h).unwrap();
             }
@@ -362,7 +367,7 @@ fn every_constraint_type_solves_under_every_acceleration() {
             }
 
             let mut system = System::new(mesh.num_vertices(), params);
-            system.add_group(group(kind, 10.0, &rest, Params::default())).unwrap();
+            system.add_group(group(kind, 10.0, &rest, options.clone())).unwrap();
             let m = masses(&mesh, &rest);
             let mut sim = Simulation::new(system, m, mesh.positions.clone(), DynamicsParams::default()).unwrap();
             for _ in 0..5 {

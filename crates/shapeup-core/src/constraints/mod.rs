@@ -17,6 +17,7 @@ mod angle;
 mod area;
 mod attachment;
 mod bending;
+mod circle;
 mod edge_spring;
 mod edge_strain;
 mod floor;
@@ -27,13 +28,16 @@ mod hinge_bending;
 mod iso_one_ring;
 mod laplacian;
 mod laplacian_displacement;
+mod line;
 mod parallelogram;
+mod plane;
 mod position;
 mod rectangle;
 mod rigid;
 mod sets;
 mod similarity;
 mod smoothing;
+mod sphere;
 mod tet_strain;
 mod triangle_strain;
 mod volume;
@@ -44,6 +48,7 @@ pub use attachment::{
     DEGENERATE_FACES_GROUP, DegenerateAttachments, EdgeAttachment, attach_degenerate_vertices, degenerate_attachments,
 };
 pub use bending::{Bending, BendingType};
+pub use circle::{Circle, CircleType};
 pub use edge_spring::{EdgeSpring, EdgeSpringType};
 pub use edge_strain::{EdgeStrain, EdgeStrainType};
 pub use floor::{Floor, FloorType};
@@ -54,12 +59,15 @@ pub use hinge_bending::{HingeBending, HingeBendingType};
 pub use iso_one_ring::{IsoOneRing, IsoOneRingType};
 pub use laplacian::{Laplacian, LaplacianType};
 pub use laplacian_displacement::{LaplacianDisplacement, LaplacianDisplacementType};
+pub use line::{Line, LineType};
 pub use parallelogram::{Parallelogram, ParallelogramType};
+pub use plane::{Plane, PlaneType};
 pub use position::{Position, PositionType};
 pub use rectangle::{Rectangle, RectangleType};
 pub use rigid::{Rigid, RigidType};
 pub use similarity::{Similarity, SimilarityType};
 pub use smoothing::{Smoothing, SmoothingType};
+pub use sphere::{Sphere, SphereType};
 pub use tet_strain::{TetStrain, TetStrainType};
 pub use triangle_strain::{TriangleStrain, TriangleStrainType};
 pub use volume::{Volume, VolumeType};
@@ -604,6 +612,10 @@ pub fn registry() -> &'static [&'static dyn ConstraintType] {
         &SmoothingType,
         &LaplacianType,
         // Geometric sets of ShapeUp / ShapeOp (faces, parts).
+        &PlaneType,
+        &CircleType,
+        &SphereType,
+        &LineType,
         &RectangleType,
         &ParallelogramType,
         &AngleType,

@@ -44,6 +44,125 @@ pub(crate) fn max_distance(a: &[DVec3], b: &[DVec3]) -> f64 {
     a.iter().zip(b).map(|(x, y)| (*x - *y).length()).fold(0.0, f64::max)
 }
 
+/// Jacobi sweeps after which [`singular_values`] stops even if not converged.
+const JACOBI_SWEEPS: usize = 40;
+/// Columns count as orthogonal when `|bᵢ·bⱼ| ≤ JACOBI_TOL · ‖bᵢ‖‖bⱼ‖`.
+const JACOBI_TOL: f64 = 1e-15;
+
+/// Singular values `σ₁ ≥ … ≥ σ_M ≥ 0` of the k×M matrix with rows `rows`, and its right
+/// singular vectors (`v[j]` belongs to `σ_j`), by one-sided (Hestenes) Jacobi on the columns,
+/// as [`svd3_rotations`](crate::linalg::svd3_rotations) does for 3×3: plane rotations on the
+/// right make the columns mutually orthogonal to working precision relative to their lengths,
+/// so that the small singular values (what rank tests read) are accurate to about 1e-15 of the
+/// largest. With k < M the last M − k values are 0. The matrix is scaled by its largest entry
+/// first; the zero matrix gives σ = 0, V = I.
+pub(crate) fn singular_values<const M: usize>(rows: &[[f64; M]]) -> ([f64; M], [[f64; M]; M]) {
+    let mut v = [[0.0; M]; M];
+    for (j, column) in v.iter_mut().enumerate() {
+        column[j] = 1.0;
+    }
+    let scale = rows.iter().flatten().fold(0.0, |a: f64, x| a.max(x.abs()));
+    if !(scale > 0.0 && scale.is_finite()) {
+        let sigma = if scale == 0.0 { 0.0 } else { f64::NAN };
+        return ([sigma; M], v);
+    }
+    // Columns b_j (and v_j, stored as columns too).
+    let mut b: Vec<[f64; M]> = rows.iter().map(|r| r.map(|x| x / scale)).collect();
+    let column_norm2 = |b: &[[f64; M]], j: usize| b.iter().map(|r| r[j] * r[j]).sum::<f64>();
+    let mut n: [f64; M] = std::array::from_fn(|j| column_norm2(&b, j));
+    for _ in 0..JACOBI_SWEEPS {
+        let mut rotated = false;
+        for i in 0..M {
+            for j in i + 1..M {
+                let g: f64 = b.iter().map(|r| r[i] * r[j]).sum();
+                if g * g <= JACOBI_TOL * JACOBI_TOL * n[i] * n[j] {
+                    continue;
+                }
+                rotated = true;
+                // As in svd3_rotations: d = ‖bⱼ‖² − ‖bᵢ‖², r = √(d² + 4g²), w = r + |d|,
+                // c = w/√(2rw), s = ±2g/√(2rw).
+                let d = n[j] - n[i];
+                let r = (d * d + 4.0 * g * g).sqrt();
+                let w = r + d.abs();
+                let h = 1.0 / (2.0 * r * w).sqrt();
+                let c = w * h;
+                let s = if d < 0.0 { -2.0 * g * h } else { 2.0 * g * h };
+                for row in b.iter_mut() {
+                    let (bi, bj) = (row[i], row[j]);
+                    row[i] = c * bi - s * bj;
+                    row[j] = s * bi + c * bj;
+                }
+                for column in v.iter_mut() {
+                    let (vi, vj) = (column[i], column[j]);
+                    column[i] = c * vi - s * vj;
+                    column[j] = s * vi + c * vj;
+                }
+                n[i] = column_norm2(&b, i);
+                n[j] = column_norm2(&b, j);
+            }
+        }
+        if !rotated {
+            break;
+        }
+    }
+    // `v` holds V by rows (v[row][column]); sort the columns by decreasing norm.
+    let mut order: [usize; M] = std::array::from_fn(|j| j);
+    order.sort_by(|&a, &b| n[b].total_cmp(&n[a]));
+    let sigma = order.map(|j| n[j].sqrt() * scale);
+    let vectors = order.map(|j| std::array::from_fn(|row| v[row][j]));
+    (sigma, vectors)
+}
+
+/// The centroid of `points`, the singular values σ₁ ≥ σ₂ ≥ σ₃ of the points about it (rows
+/// `x_i − x̄`) and the principal axes (unit, in the same order): σ₃ = 0 exactly when the points
+/// are coplanar, σ₂ = σ₃ = 0 when collinear. Empty input: zero centroid, σ = 0, the unit axes.
+pub(crate) fn principal_axes(points: &[DVec3]) -> (DVec3, [f64; 3], [DVec3; 3]) {
+    let centroid =
+        if points.is_empty() { DVec3::ZERO } else { points.iter().copied().sum::<DVec3>() / points.len() as f64 };
+    let rows: Vec<[f64; 3]> = points.iter().map(|&x| (x - centroid).to_array()).collect();
+    let (sigma, v) = singular_values(&rows);
+    (centroid, sigma, v.map(DVec3::from_array))
+}
+
+/// ‖Σ_i p_i‖ / √k: the distance (Frobenius, over the k rows) of `p` from the centred
+/// configurations (Σ p_i = 0), where the mean-centred rows of line, plane, circle and sphere live.
+pub(crate) fn centroid_offset(p: &[DVec3]) -> f64 {
+    if p.is_empty() { 0.0 } else { p.iter().copied().sum::<DVec3>().length() / (p.len() as f64).sqrt() }
+}
+
+/// Singular values σ₁ ≥ … ≥ σ₅ of the k×5 "lifted" matrix with rows (‖y_i‖²/L, y_i, L),
+/// y_i = p_i − p̄ and L = max_i ‖y_i‖ (so that every column is in length units and of the
+/// points' size). A row is orthogonal to (a, b, e) exactly when y_i lies on the generalized
+/// sphere a‖y‖²/L + b·y + eL = 0 (a sphere, or a plane when a = 0), so:
+/// - σ₅ = 0 ⇔ the points lie on one sphere or plane (cospherical, or coplanar: the closure of
+///   the cospherical configurations);
+/// - σ₄ = 0 ⇔ a two-dimensional null space ⇔ one plane and one more sphere or plane contain
+///   them ⇔ the points lie on one circle or line (concyclic, or collinear: the closure of the
+///   concyclic configurations).
+///
+/// Coincident points (L = 0) give σ = 0.
+pub(crate) fn lifted_singular_values(p: &[DVec3]) -> [f64; 5] {
+    if p.is_empty() {
+        return [0.0; 5];
+    }
+    let mean = p.iter().copied().sum::<DVec3>() / p.len() as f64;
+    let length = p.iter().map(|&x| (x - mean).length()).fold(0.0, f64::max);
+    if length == 0.0 {
+        return [0.0; 5];
+    }
+    if !length.is_finite() {
+        return [f64::NAN; 5];
+    }
+    let rows: Vec<[f64; 5]> = p
+        .iter()
+        .map(|&x| {
+            let y = x - mean;
+            [y.length_squared() / length, y.x, y.y, y.z, length]
+        })
+        .collect();
+    singular_values(&rows).0
+}
+
 /// A root of `f` in `[lo, hi]`, given a sign change (`f(lo)` and `f(hi)` of opposite signs or
 /// one of them zero; otherwise the end with the smaller |f| is returned): regula falsi with the
 /// Illinois modification, falling back to bisection whenever a step is not inside the bracket or
