@@ -355,7 +355,7 @@ fn every_constraint_type_solves_under_every_acceleration() {
                 system.add_group(h).unwrap();
             }
             let mut q = mesh.positions.clone();
-            let loads_only = group(kind, 10.0, &rest, Params::default()).constraints.iter().all(|c| c.num_rows() == 0);
+            let loads_only = group(kind, 10.0, &rest, options.clone()).constraints.iter().all(|c| c.num_rows() == 0);
             if loads_only {
                 // A load that nothing but the two end handles holds: its vertices are an
                 // unanchored piece in static mode, refused rather than left in place.
