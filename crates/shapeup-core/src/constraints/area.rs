@@ -31,17 +31,15 @@
 //! the same kind of frame (the columns of T span it), exact, and rigid-motion equivariant.
 
 use super::sets::{bracketed_root, interval_distance};
+use super::triangle_strain::TriangleGradient;
 use super::{
     BuildContext, Constraint, ConstraintError, ConstraintType, Element, OptionKind, OptionSpec, Params, RowSink,
     non_empty,
 };
-use crate::geometry::is_degenerate_triangle;
 use crate::linalg::svd2;
 use glam::{DMat2, DVec2, DVec3};
 use std::f64::consts::FRAC_1_SQRT_2;
 
-/// Smallest rest area that gets a constraint (smaller triangles are skipped).
-const MIN_REST_AREA: f64 = 1e-12;
 /// Name in scene files.
 const KIND: &str = "area";
 
@@ -61,12 +59,7 @@ const MAX_OPTION: OptionSpec = OptionSpec {
 /// An area constraint on triangle (a, b, c).
 #[derive(Debug, Clone)]
 pub struct Area {
-    vertices: [u32; 3],
-    /// D⁻¹ (2×2): column k holds the coefficients of (q_b − q_a, q_c − q_a) in T's column k.
-    rest_inverse: DMat2,
-    /// P⁰'s columns, the frame used when the current triangle has collapsed to a point.
-    rest_frame: [DVec3; 2],
-    rest_area: f64,
+    gradient: TriangleGradient,
     min: f64,
     max: f64,
 }
@@ -74,52 +67,14 @@ pub struct Area {
 impl Area {
     /// A constraint on triangle (a, b, c) of the rest shape `rest` keeping its area ratio in
     /// `[min, max]` (0 ≤ min ≤ max expected); `None` if the rest triangle is degenerate
-    /// ([`is_degenerate_triangle`] or area ≤ 1e-12).
+    /// ([`TriangleGradient::new`]: the rows and current frame of triangle strain).
     pub fn new(vertices: [u32; 3], rest: &[DVec3], min: f64, max: f64) -> Option<Self> {
-        let [a, b, c] = vertices.map(|v| rest[v as usize]);
-        let (e1, e2) = (b - a, c - a);
-        let normal = e1.cross(e2);
-        let area = 0.5 * normal.length();
-        if is_degenerate_triangle(a, b, c) || area.is_nan() || area <= MIN_REST_AREA {
-            return None;
-        }
-        let t = e1.normalize();
-        let s = normal.normalize().cross(t);
-        let d = DMat2::from_cols(DVec2::new(t.dot(e1), s.dot(e1)), DVec2::new(t.dot(e2), s.dot(e2)));
-        Some(Area { vertices, rest_inverse: d.inverse(), rest_frame: [t, s], rest_area: area, min, max })
+        TriangleGradient::new(vertices, rest).map(|gradient| Area { gradient, min, max })
     }
 
     /// The range [min, max] of the area ratio.
     pub fn range(&self) -> (f64, f64) {
         (self.min, self.max)
-    }
-
-    /// T = [q_b − q_a, q_c − q_a] D⁻¹, as its two columns.
-    #[inline]
-    fn deformation_gradient(&self, q: &[DVec3]) -> [DVec3; 2] {
-        let [a, b, c] = self.vertices.map(|v| q[v as usize]);
-        let (e1, e2) = (b - a, c - a);
-        let m = self.rest_inverse;
-        [e1 * m.x_axis.x + e2 * m.x_axis.y, e1 * m.y_axis.x + e2 * m.y_axis.y]
-    }
-
-    /// An orthonormal frame (u, v) of a plane holding T's columns: u along the longer column,
-    /// v ⊥ u in the plane of both (any v ⊥ u for a rank-1 T; the rest frame for T ≈ 0).
-    #[inline]
-    fn current_frame(&self, t: &[DVec3; 2]) -> [DVec3; 2] {
-        let (l0, l1) = (t[0].length_squared(), t[1].length_squared());
-        let (long, l) = if l0 >= l1 { (t[0], l0) } else { (t[1], l1) };
-        if l.is_nan() || l <= 1e-300 {
-            return self.rest_frame;
-        }
-        let u = long / l.sqrt();
-        let n = t[0].cross(t[1]);
-        let v = if n.length_squared() > 1e-24 * l0 * l1 {
-            n.cross(u).normalize_or(u.any_orthonormal_vector())
-        } else {
-            u.any_orthonormal_vector()
-        };
-        [u, v]
     }
 }
 
@@ -149,24 +104,19 @@ impl Constraint for Area {
         KIND
     }
     fn vertices(&self) -> &[u32] {
-        &self.vertices
+        &self.gradient.vertices
     }
     fn element_weight(&self) -> f64 {
-        self.rest_area
+        self.gradient.rest_area
     }
     fn num_rows(&self) -> usize {
         2
     }
     fn rows(&self, sink: &mut RowSink) {
-        let [a, b, c] = self.vertices;
-        for (k, col) in [self.rest_inverse.x_axis, self.rest_inverse.y_axis].into_iter().enumerate() {
-            sink.push(k, a, -(col.x + col.y));
-            sink.push(k, b, col.x);
-            sink.push(k, c, col.y);
-        }
+        self.gradient.rows(sink);
     }
     fn project(&self, q: &[DVec3], out: &mut [DVec3]) {
-        let t = self.deformation_gradient(q);
+        let t = self.gradient.at(q);
         let ratio = t[0].cross(t[1]).length();
         if ratio >= self.min && ratio <= self.max {
             out[0] = t[0];
@@ -174,13 +124,11 @@ impl Constraint for Area {
             return;
         }
         let target = ratio.max(self.min).min(self.max);
-        let [u, v] = self.current_frame(&t);
-        let m = DMat2::from_cols(DVec2::new(u.dot(t[0]), v.dot(t[0])), DVec2::new(u.dot(t[1]), v.dot(t[1])));
-        let svd = svd2(m);
+        let frame = self.gradient.current_frame(&t);
+        let svd = svd2(TriangleGradient::in_frame(frame, &t));
         let (x, y) = nearest_with_product2(svd.sigma.x, svd.sigma.y, target);
         let p = svd.u * DMat2::from_diagonal(DVec2::new(x, y)) * svd.v.transpose();
-        out[0] = u * p.x_axis.x + v * p.x_axis.y;
-        out[1] = u * p.y_axis.x + v * p.y_axis.y;
+        TriangleGradient::out_of_frame(frame, p, out);
     }
     fn set_residual(&self, p: &[DVec3]) -> f64 {
         interval_distance(p[0].cross(p[1]).length(), self.min, self.max)

@@ -3,7 +3,7 @@
 //! groups with [`build_group`], so no layer outside a constraint's own file names a concrete
 //! type.
 
-use super::{BuildContext, ConstraintError, Params, Selection, constraint_type};
+use super::{BuildContext, ConstraintError, Params, Selection, build_constraints, constraint_type};
 use crate::geometry::{RestGeometry, WorkingFrame};
 use crate::solver::ConstraintGroup;
 use glam::DVec3;
@@ -72,8 +72,7 @@ pub fn build_group(
     let mut params = description.options.clone();
     let hard = params.take_bool(kind, "hard", false)?;
     let ctx = BuildContext { rest, selection: &description.selection, frame };
-    let mut constraints = ty.build(&ctx, &mut params)?;
-    params.finish(kind, ty.options())?;
+    let mut constraints = build_constraints(kind, &ctx, params)?;
     let invalid = |problem: String| ConstraintError::Invalid { kind, problem };
     if hard && constraints.iter().any(|c| c.held_points().is_none()) {
         return Err(invalid("\"hard = true\" is for groups that hold vertices at targets (position)".into()));

@@ -451,21 +451,6 @@ impl Params {
         self
     }
 
-    /// Takes a finite number option, or `default` when absent.
-    ///
-    /// # Errors
-    /// [`ConstraintError::BadOption`] if the value is not a finite number.
-    pub fn take_f64(&mut self, kind: &'static str, key: &str, default: f64) -> Result<f64, ConstraintError> {
-        match self.map.remove(key) {
-            None => Ok(default),
-            Some(v) => v.as_f64().filter(|x| x.is_finite()).ok_or_else(|| ConstraintError::BadOption {
-                kind,
-                key: key.into(),
-                problem: format!("expected a number, found {v}"),
-            }),
-        }
-    }
-
     /// Takes a boolean option, or `default` when absent.
     ///
     /// # Errors

@@ -20,40 +20,67 @@ const MIN_REST_VOLUME: f64 = 1e-12;
 /// Name in scene files.
 const KIND: &str = "tet_strain";
 
-/// A strain constraint on tetrahedron (a, b, c, d).
+/// The deformation gradient T = [q_b − q_a, q_c − q_a, q_d − q_a] D⁻¹ of a rest tetrahedron
+/// (a, b, c, d) and its rows of C. Shared by the tetrahedron types (strain, volume).
 #[derive(Debug, Clone)]
-pub struct TetStrain {
-    vertices: [u32; 4],
+pub(crate) struct TetGradient {
+    pub(crate) vertices: [u32; 4],
     /// D⁻¹: column k holds the coefficients of (q_b − q_a, q_c − q_a, q_d − q_a) in T's column k.
     rest_inverse: DMat3,
-    rest_volume: f64,
-    strain_freedom: f64,
+    /// The rest volume |V_T|.
+    pub(crate) rest_volume: f64,
 }
 
-impl TetStrain {
-    /// A constraint on tetrahedron (a, b, c, d) of the rest shape `rest` with strain freedom
-    /// `f ≥ 0`; `None` if its rest volume |V_T| is ≤ 1e-12. Either orientation of the rest
-    /// tetrahedron works (T = I at rest).
-    pub fn new(vertices: [u32; 4], rest: &[DVec3], strain_freedom: f64) -> Option<Self> {
+impl TetGradient {
+    /// The gradient of tetrahedron (a, b, c, d) of the rest shape `rest`; `None` if its rest
+    /// volume |V_T| is ≤ 1e-12. Either orientation of the rest tetrahedron works (T = I at rest).
+    pub(crate) fn new(vertices: [u32; 4], rest: &[DVec3]) -> Option<Self> {
         let [a, b, c, d] = vertices.map(|v| rest[v as usize]);
         let volume = tet_volume(a, b, c, d).abs();
         if volume.is_nan() || volume <= MIN_REST_VOLUME {
             return None;
         }
         let rest_inverse = DMat3::from_cols(b - a, c - a, d - a).inverse();
-        Some(TetStrain { vertices, rest_inverse, rest_volume: volume, strain_freedom })
+        Some(TetGradient { vertices, rest_inverse, rest_volume: volume })
+    }
+
+    /// T = [q_b − q_a, q_c − q_a, q_d − q_a] D⁻¹.
+    #[inline]
+    pub(crate) fn at(&self, q: &[DVec3]) -> DMat3 {
+        let [a, b, c, d] = self.vertices.map(|v| q[v as usize]);
+        DMat3::from_cols(b - a, c - a, d - a) * self.rest_inverse
+    }
+
+    /// The three rows of C (T's columns).
+    pub(crate) fn rows(&self, sink: &mut RowSink) {
+        let [a, b, c, d] = self.vertices;
+        let m = self.rest_inverse;
+        for (k, col) in [m.x_axis, m.y_axis, m.z_axis].into_iter().enumerate() {
+            sink.push(k, a, -(col.x + col.y + col.z));
+            sink.push(k, b, col.x);
+            sink.push(k, c, col.y);
+            sink.push(k, d, col.z);
+        }
+    }
+}
+
+/// A strain constraint on tetrahedron (a, b, c, d).
+#[derive(Debug, Clone)]
+pub struct TetStrain {
+    gradient: TetGradient,
+    strain_freedom: f64,
+}
+
+impl TetStrain {
+    /// A constraint on tetrahedron (a, b, c, d) of the rest shape `rest` with strain freedom
+    /// `f ≥ 0`; `None` if its rest volume |V_T| is ≤ 1e-12 ([`TetGradient::new`]).
+    pub fn new(vertices: [u32; 4], rest: &[DVec3], strain_freedom: f64) -> Option<Self> {
+        TetGradient::new(vertices, rest).map(|gradient| TetStrain { gradient, strain_freedom })
     }
 
     /// The strain freedom f.
     pub fn strain_freedom(&self) -> f64 {
         self.strain_freedom
-    }
-
-    /// T = [q_b − q_a, q_c − q_a, q_d − q_a] D⁻¹.
-    #[inline]
-    fn deformation_gradient(&self, q: &[DVec3]) -> DMat3 {
-        let [a, b, c, d] = self.vertices.map(|v| q[v as usize]);
-        DMat3::from_cols(b - a, c - a, d - a) * self.rest_inverse
     }
 }
 
@@ -94,26 +121,19 @@ impl Constraint for TetStrain {
         KIND
     }
     fn vertices(&self) -> &[u32] {
-        &self.vertices
+        &self.gradient.vertices
     }
     fn element_weight(&self) -> f64 {
-        self.rest_volume
+        self.gradient.rest_volume
     }
     fn num_rows(&self) -> usize {
         3
     }
     fn rows(&self, sink: &mut RowSink) {
-        let [a, b, c, d] = self.vertices;
-        let m = self.rest_inverse;
-        for (k, col) in [m.x_axis, m.y_axis, m.z_axis].into_iter().enumerate() {
-            sink.push(k, a, -(col.x + col.y + col.z));
-            sink.push(k, b, col.x);
-            sink.push(k, c, col.y);
-            sink.push(k, d, col.z);
-        }
+        self.gradient.rows(sink);
     }
     fn project(&self, q: &[DVec3], out: &mut [DVec3]) {
-        let t = self.deformation_gradient(q);
+        let t = self.gradient.at(q);
         let p = if self.strain_freedom == 0.0 { nearest_rotation3(t) } else { clamp_strain(t, self.strain_freedom) };
         out[0] = p.x_axis;
         out[1] = p.y_axis;
@@ -230,7 +250,7 @@ mod tests {
             assert!(sum.abs() < 1e-12, "row {row} sums to {sum}");
         }
         let q = [rng.vec3(), rng.vec3(), rng.vec3(), rng.vec3()];
-        assert!(dist2(&c.apply(&q), &cols(c.deformation_gradient(&q))) < 1e-26);
+        assert!(dist2(&c.apply(&q), &cols(c.gradient.at(&q))) < 1e-26);
         let shifted: Vec<DVec3> = q.iter().map(|x| *x + DVec3::new(-2.0, 1.0, 5.0)).collect();
         assert!(dist2(&c.apply(&q), &c.apply(&shifted)) < 1e-24, "translation invariant");
     }

@@ -26,52 +26,53 @@ const KIND: &str = "triangle_strain";
 /// Option: the strain freedom f ≥ 0.
 const STRAIN_FREEDOM: &str = "strain_freedom";
 
-/// A strain constraint on triangle (a, b, c).
+/// The deformation gradient T = [q_b − q_a, q_c − q_a] D⁻¹ (3×2) of a rest triangle (a, b,
+/// c): its rows of C and the current frame its projections are computed in. Shared by the
+/// triangle types (strain, area).
 #[derive(Debug, Clone)]
-pub struct TriangleStrain {
-    vertices: [u32; 3],
+pub(crate) struct TriangleGradient {
+    pub(crate) vertices: [u32; 3],
     /// D⁻¹ (2×2): column k holds the coefficients of (q_b − q_a, q_c − q_a) in T's column k.
     rest_inverse: DMat2,
     /// P⁰'s columns, the frame used when the current triangle has collapsed to a point.
-    rest_frame: [DVec3; 2],
-    rest_area: f64,
-    strain_freedom: f64,
+    pub(crate) rest_frame: [DVec3; 2],
+    /// The rest area A_t.
+    pub(crate) rest_area: f64,
 }
 
-impl TriangleStrain {
-    /// A constraint on triangle (a, b, c) of the rest shape `rest` with strain freedom `f ≥ 0`;
-    /// `None` if the rest triangle is degenerate ([`is_degenerate_triangle`] or area ≤ 1e-12).
+impl TriangleGradient {
+    /// The gradient of triangle (a, b, c) of the rest shape `rest`; `None` if the rest
+    /// triangle is degenerate ([`is_degenerate_triangle`] or area ≤ 1e-12, or not a number).
     ///
     /// P⁰ = [t, n̂ × t] with t = (x⁰_b − x⁰_a)/‖x⁰_b − x⁰_a‖ and n̂ the unit rest normal, so
     /// D = [[‖e₁‖, t·e₂], [0, (n̂ × t)·e₂]] is upper triangular with det D = 2A_t > 0.
-    pub fn new(vertices: [u32; 3], rest: &[DVec3], strain_freedom: f64) -> Option<Self> {
+    pub(crate) fn new(vertices: [u32; 3], rest: &[DVec3]) -> Option<Self> {
         let [a, b, c] = vertices.map(|v| rest[v as usize]);
         let (e1, e2) = (b - a, c - a);
         let normal = e1.cross(e2);
         let area = 0.5 * normal.length();
-        if is_degenerate_triangle(a, b, c) || area <= MIN_REST_AREA {
+        if is_degenerate_triangle(a, b, c) || area.is_nan() || area <= MIN_REST_AREA {
             return None;
         }
         let t = e1.normalize();
         let s = normal.normalize().cross(t);
         let d = DMat2::from_cols(DVec2::new(t.dot(e1), s.dot(e1)), DVec2::new(t.dot(e2), s.dot(e2)));
-        Some(TriangleStrain {
-            vertices,
-            rest_inverse: d.inverse(),
-            rest_frame: [t, s],
-            rest_area: area,
-            strain_freedom,
-        })
+        Some(TriangleGradient { vertices, rest_inverse: d.inverse(), rest_frame: [t, s], rest_area: area })
     }
 
-    /// The strain freedom f.
-    pub fn strain_freedom(&self) -> f64 {
-        self.strain_freedom
+    /// The two rows of C (T's columns).
+    pub(crate) fn rows(&self, sink: &mut RowSink) {
+        let [a, b, c] = self.vertices;
+        for (k, col) in [self.rest_inverse.x_axis, self.rest_inverse.y_axis].into_iter().enumerate() {
+            sink.push(k, a, -(col.x + col.y));
+            sink.push(k, b, col.x);
+            sink.push(k, c, col.y);
+        }
     }
 
     /// T = [q_b − q_a, q_c − q_a] D⁻¹, as its two columns.
     #[inline]
-    fn deformation_gradient(&self, q: &[DVec3]) -> [DVec3; 2] {
+    pub(crate) fn at(&self, q: &[DVec3]) -> [DVec3; 2] {
         let [a, b, c] = self.vertices.map(|v| q[v as usize]);
         let (e1, e2) = (b - a, c - a);
         let m = self.rest_inverse;
@@ -82,7 +83,7 @@ impl TriangleStrain {
     /// the longer column, v = (n × u)/‖n × u‖ with n = t₀ × t₁. A collapsed triangle (rank 1)
     /// gets any v ⊥ u; one collapsed to a point gets the rest frame.
     #[inline]
-    fn current_frame(&self, t: &[DVec3; 2]) -> [DVec3; 2] {
+    pub(crate) fn current_frame(&self, t: &[DVec3; 2]) -> [DVec3; 2] {
         let (l0, l1) = (t[0].length_squared(), t[1].length_squared());
         let (long, l) = if l0 >= l1 { (t[0], l0) } else { (t[1], l1) };
         if l.is_nan() || l <= 1e-300 {
@@ -98,6 +99,39 @@ impl TriangleStrain {
         };
         [u, v]
     }
+
+    /// [u v]ᵀ T: T in the frame (u, v) of [`TriangleGradient::current_frame`].
+    #[inline]
+    pub(crate) fn in_frame([u, v]: [DVec3; 2], t: &[DVec3; 2]) -> DMat2 {
+        DMat2::from_cols(DVec2::new(u.dot(t[0]), v.dot(t[0])), DVec2::new(u.dot(t[1]), v.dot(t[1])))
+    }
+
+    /// The columns of [u v] p: a 2×2 matrix in the frame (u, v) back in 3D, into `out`.
+    #[inline]
+    pub(crate) fn out_of_frame([u, v]: [DVec3; 2], p: DMat2, out: &mut [DVec3]) {
+        out[0] = u * p.x_axis.x + v * p.x_axis.y;
+        out[1] = u * p.y_axis.x + v * p.y_axis.y;
+    }
+}
+
+/// A strain constraint on triangle (a, b, c).
+#[derive(Debug, Clone)]
+pub struct TriangleStrain {
+    gradient: TriangleGradient,
+    strain_freedom: f64,
+}
+
+impl TriangleStrain {
+    /// A constraint on triangle (a, b, c) of the rest shape `rest` with strain freedom `f ≥ 0`;
+    /// `None` if the rest triangle is degenerate ([`TriangleGradient::new`]).
+    pub fn new(vertices: [u32; 3], rest: &[DVec3], strain_freedom: f64) -> Option<Self> {
+        TriangleGradient::new(vertices, rest).map(|gradient| TriangleStrain { gradient, strain_freedom })
+    }
+
+    /// The strain freedom f.
+    pub fn strain_freedom(&self) -> f64 {
+        self.strain_freedom
+    }
 }
 
 impl Constraint for TriangleStrain {
@@ -105,30 +139,24 @@ impl Constraint for TriangleStrain {
         KIND
     }
     fn vertices(&self) -> &[u32] {
-        &self.vertices
+        &self.gradient.vertices
     }
     fn element_weight(&self) -> f64 {
-        self.rest_area
+        self.gradient.rest_area
     }
     fn num_rows(&self) -> usize {
         2
     }
     fn rows(&self, sink: &mut RowSink) {
-        let [a, b, c] = self.vertices;
-        for (k, col) in [self.rest_inverse.x_axis, self.rest_inverse.y_axis].into_iter().enumerate() {
-            sink.push(k, a, -(col.x + col.y));
-            sink.push(k, b, col.x);
-            sink.push(k, c, col.y);
-        }
+        self.gradient.rows(sink);
     }
     fn project(&self, q: &[DVec3], out: &mut [DVec3]) {
-        let t = self.deformation_gradient(q);
-        let [u, v] = self.current_frame(&t);
-        let m = DMat2::from_cols(DVec2::new(u.dot(t[0]), v.dot(t[0])), DVec2::new(u.dot(t[1]), v.dot(t[1])));
+        let t = self.gradient.at(q);
+        let frame = self.gradient.current_frame(&t);
+        let m = TriangleGradient::in_frame(frame, &t);
         let f = self.strain_freedom;
         let p = if f == 0.0 { nearest_rotation2(m) } else { clamp_singular_values2(m, 1.0 - f, 1.0 + f) };
-        out[0] = u * p.x_axis.x + v * p.x_axis.y;
-        out[1] = u * p.y_axis.x + v * p.y_axis.y;
+        TriangleGradient::out_of_frame(frame, p, out);
     }
     fn set_residual(&self, p: &[DVec3]) -> f64 {
         let f = self.strain_freedom;
@@ -264,7 +292,7 @@ mod tests {
         }
         let q = [rng.vec3(), rng.vec3(), rng.vec3()];
         let shifted: Vec<DVec3> = q.iter().map(|x| *x + DVec3::new(3.0, -1.0, 2.0)).collect();
-        assert!(dist2(&c.apply(&q), &c.deformation_gradient(&q)) < 1e-28);
+        assert!(dist2(&c.apply(&q), &c.gradient.at(&q)) < 1e-28);
         assert!(dist2(&c.apply(&q), &c.apply(&shifted)) < 1e-26, "translation invariant");
     }
 
@@ -334,7 +362,7 @@ mod tests {
             // T = R · diag(s) · Z with s within [0.7, 1.3]: scale the rest shape anisotropically.
             let r = rotation(&mut rng);
             let (sx, sy) = (1.0 + 0.25 * rng.uniform(), 1.0 + 0.25 * rng.uniform());
-            let (u, v, shift) = (c.rest_frame[0], c.rest_frame[1], rng.vec3());
+            let (u, v, shift) = (c.gradient.rest_frame[0], c.gradient.rest_frame[1], rng.vec3());
             let q: Vec<DVec3> =
                 rest.iter().map(|x| r * (u * (sx * u.dot(*x)) + v * (sy * v.dot(*x))) + shift).collect();
             let cq = c.apply(&q);

@@ -39,16 +39,14 @@
 
 use super::area::take_range;
 use super::sets::{bracketed_root, interval_distance};
+use super::tet_strain::TetGradient;
 use super::{
     BuildContext, Constraint, ConstraintError, ConstraintType, Element, OptionKind, OptionSpec, Params, RowSink,
     non_empty,
 };
-use crate::geometry::tet_volume;
 use crate::linalg::svd3_rotations;
 use glam::{DMat3, DVec3};
 
-/// Smallest rest volume that gets a constraint (smaller tetrahedra are skipped).
-const MIN_REST_VOLUME: f64 = 1e-12;
 /// Name in scene files.
 const KIND: &str = "volume";
 
@@ -68,37 +66,22 @@ const MAX_OPTION: OptionSpec = OptionSpec {
 /// A volume constraint on tetrahedron (a, b, c, d).
 #[derive(Debug, Clone)]
 pub struct Volume {
-    vertices: [u32; 4],
-    /// D⁻¹: column k holds the coefficients of (q_b − q_a, q_c − q_a, q_d − q_a) in T's column k.
-    rest_inverse: DMat3,
-    rest_volume: f64,
+    gradient: TetGradient,
     min: f64,
     max: f64,
 }
 
 impl Volume {
     /// A constraint on tetrahedron (a, b, c, d) of the rest shape `rest` keeping its volume
-    /// ratio in `[min, max]` (0 ≤ min ≤ max expected); `None` if its rest volume is ≤ 1e-12.
+    /// ratio in `[min, max]` (0 ≤ min ≤ max expected); `None` if its rest volume is ≤ 1e-12
+    /// ([`TetGradient::new`]: the rows of tetrahedral strain).
     pub fn new(vertices: [u32; 4], rest: &[DVec3], min: f64, max: f64) -> Option<Self> {
-        let [a, b, c, d] = vertices.map(|v| rest[v as usize]);
-        let volume = tet_volume(a, b, c, d).abs();
-        if volume.is_nan() || volume <= MIN_REST_VOLUME {
-            return None;
-        }
-        let rest_inverse = DMat3::from_cols(b - a, c - a, d - a).inverse();
-        Some(Volume { vertices, rest_inverse, rest_volume: volume, min, max })
+        TetGradient::new(vertices, rest).map(|gradient| Volume { gradient, min, max })
     }
 
     /// The range [min, max] of the volume ratio.
     pub fn range(&self) -> (f64, f64) {
         (self.min, self.max)
-    }
-
-    /// T = [q_b − q_a, q_c − q_a, q_d − q_a] D⁻¹.
-    #[inline]
-    fn deformation_gradient(&self, q: &[DVec3]) -> DMat3 {
-        let [a, b, c, d] = self.vertices.map(|v| q[v as usize]);
-        DMat3::from_cols(b - a, c - a, d - a) * self.rest_inverse
     }
 }
 
@@ -171,26 +154,19 @@ impl Constraint for Volume {
         KIND
     }
     fn vertices(&self) -> &[u32] {
-        &self.vertices
+        &self.gradient.vertices
     }
     fn element_weight(&self) -> f64 {
-        self.rest_volume
+        self.gradient.rest_volume
     }
     fn num_rows(&self) -> usize {
         3
     }
     fn rows(&self, sink: &mut RowSink) {
-        let [a, b, c, d] = self.vertices;
-        let m = self.rest_inverse;
-        for (k, col) in [m.x_axis, m.y_axis, m.z_axis].into_iter().enumerate() {
-            sink.push(k, a, -(col.x + col.y + col.z));
-            sink.push(k, b, col.x);
-            sink.push(k, c, col.y);
-            sink.push(k, d, col.z);
-        }
+        self.gradient.rows(sink);
     }
     fn project(&self, q: &[DVec3], out: &mut [DVec3]) {
-        let t = self.deformation_gradient(q);
+        let t = self.gradient.at(q);
         let det = t.determinant();
         let p = if det >= self.min && det <= self.max {
             t
@@ -252,6 +228,7 @@ mod tests {
     use super::*;
     use crate::constraints::test_util::{Rng, dist2};
     use crate::constraints::{Selection, build_constraints};
+    use crate::geometry::tet_volume;
     use crate::geometry::{RestGeometry, WorkingFrame};
     use glam::DQuat;
 

@@ -546,11 +546,6 @@ impl System {
         e
     }
 
-    /// Whether some group carries a load.
-    fn has_loads(&self) -> bool {
-        self.slots.iter().flatten().any(|g| g.constraints.iter().any(|c| c.load().is_some()))
-    }
-
     /// [`System::held_rhs`](Self) from the held vertices' points and the current weights, then
     /// the constant right-hand side.
     fn update_held_rhs(&mut self) {
@@ -1283,7 +1278,8 @@ impl System {
         let g = self.multipliers();
         let projective: f64 =
             self.assembly.groups.iter().zip(&g).map(|(rows, gk)| gk * self.weighted_residual(rows.range())).sum();
-        if self.load_rhs.is_empty() && !self.has_loads() {
+        // `load_rhs` is non-empty exactly when some group carries a load (set on assembly).
+        if self.load_rhs.is_empty() {
             return projective;
         }
         projective + self.load_energy(q, self.order.clone())
