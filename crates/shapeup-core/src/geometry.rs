@@ -142,11 +142,26 @@ pub fn indexed_normals(
     sums.into_iter().map(|s| s.try_normalize()).collect()
 }
 
-/// Mean length of the mesh's edges (of its triangles; of its tetrahedra's when there are no
-/// triangles); 0 for none.
+/// Mean length of the mesh's edges: of its polygon faces as read (a quad's diagonal, which
+/// triangulation adds, is no edge of the mesh), else of its triangles, else of its tetrahedra;
+/// 0 for none.
 pub fn mean_edge_length(rest: &RestGeometry) -> f64 {
     let p = &rest.positions;
     let length = |e: &[u32; 2]| (p[e[1] as usize] - p[e[0] as usize]).length();
+    if !rest.faces.is_empty() {
+        let mut edges: Vec<[u32; 2]> = rest
+            .faces
+            .iter()
+            .flat_map(|f| (0..f.len()).map(move |k| (f[k], f[(k + 1) % f.len()])))
+            .map(|(a, b)| [a.min(b), a.max(b)])
+            .filter(|e| e[0] != e[1])
+            .collect();
+        edges.sort_unstable();
+        edges.dedup();
+        if !edges.is_empty() {
+            return edges.iter().map(length).sum::<f64>() / edges.len() as f64;
+        }
+    }
     if rest.topology.edges.is_empty() {
         let edges = crate::topology::tetrahedron_edges(&rest.tetrahedra);
         if edges.is_empty() { 0.0 } else { edges.iter().map(length).sum::<f64>() / edges.len() as f64 }

@@ -38,6 +38,7 @@ mod sets;
 mod similarity;
 mod smoothing;
 mod sphere;
+mod surface_closeness;
 mod tet_strain;
 mod triangle_strain;
 mod volume;
@@ -68,6 +69,7 @@ pub use rigid::{Rigid, RigidType};
 pub use similarity::{Similarity, SimilarityType};
 pub use smoothing::{Smoothing, SmoothingType};
 pub use sphere::{Sphere, SphereType};
+pub use surface_closeness::{SurfaceCloseness, SurfaceClosenessType};
 pub use tet_strain::{TetStrain, TetStrainType};
 pub use triangle_strain::{TriangleStrain, TriangleStrainType};
 pub use volume::{Volume, VolumeType};
@@ -249,6 +251,12 @@ pub trait Constraint: Any + Send + Sync + Debug {
     /// constraint set, in the rows' units: 0 on the set. The shared test suite checks every
     /// projection with it (`tests/catalogue.rs`).
     fn set_residual(&self, p: &[DVec3]) -> f64;
+    /// The error a report gives for `C q` (`num_rows()` rows), in the rows' units: by default
+    /// [`Constraint::set_residual`]; a type whose field measures its error otherwise (plane:
+    /// the largest distance of a corner from the best-fit plane) says so here.
+    fn violation(&self, cq: &[DVec3]) -> f64 {
+        self.set_residual(cq)
+    }
 
     /// `C_i q`, computed from [`Constraint::rows`] (for tests and diagnostics, not the solver's
     /// hot path, which uses the assembled matrix).
@@ -608,6 +616,7 @@ pub fn registry() -> &'static [&'static dyn ConstraintType] {
         &SimilarityType,
         // Handles, contact and loads.
         &PositionType,
+        &SurfaceClosenessType,
         &FloorType,
         &ForceType,
         &GravityType,

@@ -117,6 +117,13 @@ impl Constraint for Plane {
         let (_, sigma, _) = sets::principal_axes(p);
         (sets::centroid_offset(p).powi(2) + sigma[2] * sigma[2]).sqrt()
     }
+    /// The planarity error: the largest distance of a corner of C q from the best-fit plane,
+    /// max_i |(d_i − d̄)·n| (ShapeUp §6 and the architectural literature report this, over the
+    /// mean edge length).
+    fn violation(&self, cq: &[DVec3]) -> f64 {
+        let (mean, _, axes) = sets::principal_axes(cq);
+        cq.iter().map(|&d| (d - mean).dot(axes[2]).abs()).fold(0.0, f64::max)
+    }
 }
 
 /// Builds a [`Plane`] on every selected polygon face of 4 or more corners, or one over all
@@ -230,6 +237,23 @@ mod tests {
         polygons.push(&[2, 4, 5, 3]);
         polygons.push(&[0, 1, 4]);
         Mesh::from_polygons(positions, polygons).unwrap().0
+    }
+
+    #[test]
+    fn violation_is_the_largest_corner_distance_from_the_best_fit_plane() {
+        // A unit square whose corners alternate ±ε off z = 0: the best-fit plane is z = 0 by
+        // symmetry, every corner is ε from it; σ₃ (the residual) is 2ε.
+        let eps = 1e-3;
+        let c = Plane::new(vec![0, 1, 2, 3]).unwrap();
+        let q = [
+            DVec3::new(0.0, 0.0, eps),
+            DVec3::new(1.0, 0.0, -eps),
+            DVec3::new(1.0, 1.0, eps),
+            DVec3::new(0.0, 1.0, -eps),
+        ];
+        let cq = c.apply(&q);
+        assert!((c.violation(&cq) - eps).abs() < 1e-15);
+        assert!((c.set_residual(&cq) - 2.0 * eps).abs() < 1e-15);
     }
 
     #[test]

@@ -173,12 +173,12 @@ impl ConstraintGroup {
         self.constraints.iter().map(|c| c.num_rows()).sum()
     }
 
-    /// How far q is from meeting the group: the largest [`Constraint::set_residual`] of
+    /// How far q is from meeting the group: the largest [`Constraint::violation`] of
     /// `C_i q` over its constraints (0 when every term is on its set; in the rows' units, a
     /// length for the point-set types: plane, circle, sphere, line, rigid, …). 0 for a group
     /// with no rows (a load).
     pub fn max_violation(&self, q: &[DVec3]) -> f64 {
-        self.constraints.iter().filter(|c| c.num_rows() > 0).map(|c| c.set_residual(&c.apply(q))).fold(0.0, f64::max)
+        self.constraints.iter().filter(|c| c.num_rows() > 0).map(|c| c.violation(&c.apply(q))).fold(0.0, f64::max)
     }
 }
 
