@@ -146,28 +146,17 @@ pub fn indexed_normals(
 /// triangulation adds, is no edge of the mesh), else of its triangles, else of its tetrahedra;
 /// 0 for none.
 pub fn mean_edge_length(rest: &RestGeometry) -> f64 {
+    let mut edges = crate::topology::polygon_edges(rest.faces.iter());
+    if edges.is_empty() {
+        edges = if rest.topology.edges.is_empty() {
+            crate::topology::tetrahedron_edges(&rest.tetrahedra)
+        } else {
+            rest.topology.edges.clone()
+        };
+    }
     let p = &rest.positions;
-    let length = |e: &[u32; 2]| (p[e[1] as usize] - p[e[0] as usize]).length();
-    if !rest.faces.is_empty() {
-        let mut edges: Vec<[u32; 2]> = rest
-            .faces
-            .iter()
-            .flat_map(|f| (0..f.len()).map(move |k| (f[k], f[(k + 1) % f.len()])))
-            .map(|(a, b)| [a.min(b), a.max(b)])
-            .filter(|e| e[0] != e[1])
-            .collect();
-        edges.sort_unstable();
-        edges.dedup();
-        if !edges.is_empty() {
-            return edges.iter().map(length).sum::<f64>() / edges.len() as f64;
-        }
-    }
-    if rest.topology.edges.is_empty() {
-        let edges = crate::topology::tetrahedron_edges(&rest.tetrahedra);
-        if edges.is_empty() { 0.0 } else { edges.iter().map(length).sum::<f64>() / edges.len() as f64 }
-    } else {
-        rest.topology.edges.iter().map(length).sum::<f64>() / rest.topology.edges.len() as f64
-    }
+    let total: f64 = edges.iter().map(|e| (p[e[1] as usize] - p[e[0] as usize]).length()).sum();
+    if edges.is_empty() { 0.0 } else { total / edges.len() as f64 }
 }
 
 /// Lumped masses of a surface: m_i = max(ρ Σ_{t ∋ i} A_t / 3, 1e-9).

@@ -65,6 +65,21 @@ pub fn tetrahedron_edges(tetrahedra: &[[u32; 4]]) -> Vec<[u32; 2]> {
     all
 }
 
+/// Unique undirected edges of `polygons` (`[i, j]`, `i < j`, sorted): the sides of each polygon
+/// as read, not the diagonals a triangulation adds; a side from a corner to itself is skipped.
+/// [O(c log c), c corners]
+pub fn polygon_edges<'a>(polygons: impl IntoIterator<Item = &'a [u32]>) -> Vec<[u32; 2]> {
+    let mut all: Vec<[u32; 2]> = polygons
+        .into_iter()
+        .flat_map(|f| (0..f.len()).map(move |k| (f[k], f[(k + 1) % f.len()])))
+        .filter(|&(a, b)| a != b)
+        .map(|(a, b)| [a.min(b), a.max(b)])
+        .collect();
+    all.sort_unstable();
+    all.dedup();
+    all
+}
+
 /// Unique undirected edges of `triangles` (`[i, j]`, `i < j`, sorted) and, for each, the number
 /// of triangles it belongs to. An edge of three or more triangles counts them all.
 pub fn unique_edges(triangles: &[[u32; 3]]) -> (Vec<[u32; 2]>, Vec<u32>) {
@@ -110,14 +125,21 @@ pub fn vertex_triangles(n: usize, triangles: &[[u32; 3]]) -> Vec<Vec<u32>> {
     around
 }
 
+/// The boundary edges among `edges`: those of exactly one triangle (`edge_triangle_count`, as
+/// [`unique_edges`] gives it).
+pub fn boundary_edges<'a>(
+    edges: &'a [[u32; 2]],
+    edge_triangle_count: &'a [u32],
+) -> impl Iterator<Item = [u32; 2]> + 'a {
+    edges.iter().zip(edge_triangle_count).filter(|&(_, &count)| count == 1).map(|(&e, _)| e)
+}
+
 /// Boundary flags: vertex i is on the boundary when one of its edges has exactly one triangle.
 pub fn boundary_vertices(n: usize, edges: &[[u32; 2]], edge_triangle_count: &[u32]) -> Vec<bool> {
     let mut boundary = vec![false; n];
-    for (e, &count) in edges.iter().zip(edge_triangle_count) {
-        if count == 1 {
-            boundary[e[0] as usize] = true;
-            boundary[e[1] as usize] = true;
-        }
+    for [a, b] in boundary_edges(edges, edge_triangle_count) {
+        boundary[a as usize] = true;
+        boundary[b as usize] = true;
     }
     boundary
 }
@@ -242,6 +264,13 @@ mod tests {
     /// A hexagonal fan: centre 0, ring 1..=6.
     fn hexagon() -> Vec<[u32; 3]> {
         (0..6).map(|k| [0, 1 + k, 1 + (k + 1) % 6]).collect()
+    }
+
+    #[test]
+    fn polygon_edges_are_the_sides_without_diagonals() {
+        // Two quads sharing the side 1–2, and a face that repeats a corner (3, 3).
+        let polygons: [&[u32]; 3] = [&[0, 1, 2, 3], &[1, 4, 5, 2], &[3, 3, 2]];
+        assert_eq!(polygon_edges(polygons), vec![[0, 1], [0, 3], [1, 2], [1, 4], [2, 3], [2, 5], [4, 5]]);
     }
 
     #[test]

@@ -7,7 +7,8 @@
 //! when sign(n̄·H) ≠ sign(n̄⁰·H⁰) and ‖H‖ > 1e-5.
 
 use super::{
-    BuildContext, Constraint, ConstraintError, ConstraintType, Element, OptionSpec, Params, RowSink, non_empty,
+    BuildContext, Constraint, ConstraintError, ConstraintType, Element, OptionSpec, Params, RowSink,
+    per_selected_vertex,
 };
 use crate::geometry::{RestGeometry, triangle_normal};
 use glam::DVec3;
@@ -158,11 +159,9 @@ impl ConstraintType for BendingType {
     fn build(&self, ctx: &BuildContext, params: &mut Params) -> Result<Vec<Box<dyn Constraint>>, ConstraintError> {
         let prevent_flips = params.flag("bending", &PREVENT_FLIPS)?;
         let rest = ctx.rest;
-        let built = (0..rest.num_vertices())
-            .filter(|&i| rest.topology.is_interior(i) && ctx.selection.contains(i as u32))
-            .map(|i| Box::new(Bending::new(rest, i, prevent_flips)) as Box<dyn Constraint>)
-            .collect();
-        non_empty(built, "bending", "interior vertices")
+        per_selected_vertex(ctx, "bending", "interior vertices", |i| {
+            rest.topology.is_interior(i).then(|| Bending::new(rest, i, prevent_flips))
+        })
     }
 }
 

@@ -5,7 +5,8 @@
 //! m_i / ρ = Σ_{T ∋ i} |V_T| / 4 on a tetrahedral mesh.
 
 use super::{
-    BuildContext, Constraint, ConstraintError, ConstraintType, Element, OptionSpec, Params, RowSink, non_empty,
+    BuildContext, Constraint, ConstraintError, ConstraintType, Element, OptionSpec, Params, RowSink,
+    per_selected_vertex,
 };
 use crate::geometry::tet_volume;
 use glam::DVec3;
@@ -108,13 +109,9 @@ impl ConstraintType for FloorType {
         let height = ctx.frame.to_working(DVec3::new(0.0, height_input, 0.0)).y;
         let push = params.number("floor", &PUSH)?.unwrap_or(0.0);
         let weights = floor_weights(ctx);
-        let built = weights
-            .iter()
-            .enumerate()
-            .filter(|&(i, &w)| w > 0.0 && ctx.selection.contains(i as u32))
-            .map(|(i, &w)| Box::new(Floor::new(i as u32, height, push, w)) as Box<dyn Constraint>)
-            .collect();
-        non_empty(built, "floor", "vertices of a triangle or tetrahedron")
+        per_selected_vertex(ctx, "floor", "vertices of a triangle or tetrahedron", |i| {
+            (weights[i] > 0.0).then(|| Floor::new(i as u32, height, push, weights[i]))
+        })
     }
 }
 

@@ -23,7 +23,8 @@
 //!   its boundary surface, so interior tet vertices get no constraint.
 
 use super::{
-    BuildContext, Constraint, ConstraintError, ConstraintType, Element, OptionSpec, Params, RowSink, non_empty,
+    BuildContext, Constraint, ConstraintError, ConstraintType, Element, OptionSpec, Params, RowSink,
+    per_selected_vertex,
 };
 use crate::geometry::RestGeometry;
 use glam::DVec3;
@@ -132,12 +133,7 @@ impl ConstraintType for LaplacianType {
     }
     fn build(&self, ctx: &BuildContext, _params: &mut Params) -> Result<Vec<Box<dyn Constraint>>, ConstraintError> {
         let rest = ctx.rest;
-        let built = (0..rest.num_vertices())
-            .filter(|&i| ctx.selection.contains(i as u32))
-            .filter_map(|i| Laplacian::new(rest, i))
-            .map(|c| Box::new(c) as Box<dyn Constraint>)
-            .collect();
-        non_empty(built, KIND, "vertices with a neighbour")
+        per_selected_vertex(ctx, KIND, "vertices with a neighbour", |i| Laplacian::new(rest, i))
     }
 }
 

@@ -45,7 +45,7 @@
 use super::laplacian::UniformLaplacianRow;
 use super::{
     BuildContext, Constraint, ConstraintError, ConstraintType, Element, OptionKind, OptionSpec, Params, RowSink,
-    non_empty,
+    per_selected_vertex,
 };
 use crate::geometry::RestGeometry;
 use crate::linalg::nearest_rotation3;
@@ -216,12 +216,7 @@ impl ConstraintType for LaplacianDisplacementType {
     fn build(&self, ctx: &BuildContext, params: &mut Params) -> Result<Vec<Box<dyn Constraint>>, ConstraintError> {
         let similarity = params.flag(KIND, &SIMILARITY)?;
         let rest = ctx.rest;
-        let built = (0..rest.num_vertices())
-            .filter(|&i| ctx.selection.contains(i as u32))
-            .filter_map(|i| LaplacianDisplacement::new(rest, i, similarity))
-            .map(|c| Box::new(c) as Box<dyn Constraint>)
-            .collect();
-        non_empty(built, KIND, "vertices with a neighbour")
+        per_selected_vertex(ctx, KIND, "vertices with a neighbour", |i| LaplacianDisplacement::new(rest, i, similarity))
     }
 }
 

@@ -713,6 +713,23 @@ pub fn build_constraints(
 }
 
 /// Fails with [`ConstraintError::NothingSelected`] when a builder produced nothing.
+/// One constraint per selected vertex, in index order, as `make(i)` builds it (`None`: vertex i
+/// gets none), or [`ConstraintError::NothingSelected`] naming `element` when none is built: the
+/// build of every per-vertex type.
+pub(crate) fn per_selected_vertex<C: Constraint>(
+    ctx: &BuildContext,
+    kind: &'static str,
+    element: &'static str,
+    make: impl FnMut(usize) -> Option<C>,
+) -> Result<Vec<Box<dyn Constraint>>, ConstraintError> {
+    let built = (0..ctx.rest.num_vertices())
+        .filter(|&i| ctx.selection.contains(i as u32))
+        .filter_map(make)
+        .map(|c| Box::new(c) as Box<dyn Constraint>)
+        .collect();
+    non_empty(built, kind, element)
+}
+
 pub(crate) fn non_empty(
     built: Vec<Box<dyn Constraint>>,
     kind: &'static str,

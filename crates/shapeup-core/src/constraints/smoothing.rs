@@ -4,7 +4,8 @@
 
 use super::bending::LaplacianRow;
 use super::{
-    BuildContext, Constraint, ConstraintError, ConstraintType, Element, OptionSpec, Params, RowSink, non_empty,
+    BuildContext, Constraint, ConstraintError, ConstraintType, Element, OptionSpec, Params, RowSink,
+    per_selected_vertex,
 };
 use crate::geometry::RestGeometry;
 use glam::DVec3;
@@ -69,11 +70,9 @@ impl ConstraintType for SmoothingType {
     }
     fn build(&self, ctx: &BuildContext, _params: &mut Params) -> Result<Vec<Box<dyn Constraint>>, ConstraintError> {
         let rest = ctx.rest;
-        let built = (0..rest.num_vertices())
-            .filter(|&i| rest.topology.is_interior(i) && ctx.selection.contains(i as u32))
-            .map(|i| Box::new(Smoothing::new(rest, i)) as Box<dyn Constraint>)
-            .collect();
-        non_empty(built, "smoothing", "interior vertices")
+        per_selected_vertex(ctx, "smoothing", "interior vertices", |i| {
+            rest.topology.is_interior(i).then(|| Smoothing::new(rest, i))
+        })
     }
 }
 

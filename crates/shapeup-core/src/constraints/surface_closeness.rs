@@ -27,9 +27,11 @@
 //! so the net cannot slide without bound.
 
 use super::{
-    BuildContext, Constraint, ConstraintError, ConstraintType, Element, OptionSpec, Params, RowSink, non_empty,
+    BuildContext, Constraint, ConstraintError, ConstraintType, Element, OptionSpec, Params, RowSink,
+    per_selected_vertex,
 };
 use crate::geometry::{RestGeometry, vertex_normals};
+use crate::topology::boundary_edges;
 use glam::DVec3;
 
 /// Name in scene files.
@@ -137,40 +139,36 @@ impl ConstraintType for SurfaceClosenessType {
         let x = &rest.positions;
         let normals = vertex_normals(x, &rest.triangles);
         let along_boundary = boundary_neighbours(rest);
-        let built = (0..rest.num_vertices())
-            .filter(|&i| ctx.selection.contains(i as u32) && rest.topology.in_triangle[i])
-            .filter_map(|i| {
-                let v = i as u32;
-                if !rest.topology.boundary[i] {
-                    return SurfaceCloseness::new(v, x[i], normals[i]);
+        per_selected_vertex(ctx, KIND, "vertices of a triangle or polygon", |i| {
+            let v = i as u32;
+            if !rest.topology.in_triangle[i] {
+                return None;
+            }
+            if !rest.topology.boundary[i] {
+                return SurfaceCloseness::new(v, x[i], normals[i]);
+            }
+            let line = match along_boundary[i].as_slice() {
+                &[a, b] => {
+                    let into = (x[i] - x[a as usize]).normalize_or_zero();
+                    let out = (x[b as usize] - x[i]).normalize_or_zero();
+                    (into.dot(out) >= CORNER_ANGLE.cos())
+                        .then(|| SurfaceCloseness::on_line(v, x[i], into + out, normals[i]))
+                        .flatten()
                 }
-                let line = match along_boundary[i].as_slice() {
-                    &[a, b] => {
-                        let into = (x[i] - x[a as usize]).normalize_or_zero();
-                        let out = (x[b as usize] - x[i]).normalize_or_zero();
-                        (into.dot(out) >= CORNER_ANGLE.cos())
-                            .then(|| SurfaceCloseness::on_line(v, x[i], into + out, normals[i]))
-                            .flatten()
-                    }
-                    _ => None,
-                };
-                line.or_else(|| SurfaceCloseness::at_point(v, x[i]))
-            })
-            .map(|c| Box::new(c) as Box<dyn Constraint>)
-            .collect();
-        non_empty(built, KIND, "vertices of a triangle or polygon")
+                _ => None,
+            };
+            line.or_else(|| SurfaceCloseness::at_point(v, x[i]))
+        })
     }
 }
 
-/// For each vertex, the other ends of its boundary edges (edges in one triangle), in edge order.
+/// For each vertex, the other ends of its boundary edges, in edge order.
 fn boundary_neighbours(rest: &RestGeometry) -> Vec<Vec<u32>> {
     let topology = &rest.topology;
     let mut out = vec![Vec::new(); rest.num_vertices()];
-    for (e, &[a, b]) in topology.edges.iter().enumerate() {
-        if topology.edge_triangle_count[e] == 1 {
-            out[a as usize].push(b);
-            out[b as usize].push(a);
-        }
+    for [a, b] in boundary_edges(&topology.edges, &topology.edge_triangle_count) {
+        out[a as usize].push(b);
+        out[b as usize].push(a);
     }
     out
 }
