@@ -50,9 +50,9 @@ LIGHT_CAM = np.array([-0.45, 0.6, 1.0])
 AMBIENT = 0.28
 
 
-def load_obj(path):
-    """Return (vertices (n,3) float, triangles (m,3) int) from an OBJ file."""
-    verts, tris = [], []
+def load_obj_polygons(path):
+    """Return (vertices (n,3) float, faces: lists of 0-based corner indices) from an OBJ file."""
+    verts, faces = [], []
     with open(path) as fh:
         for line in fh:
             if line.startswith("v "):
@@ -62,11 +62,17 @@ def load_obj(path):
                 for tok in line.split()[1:]:
                     i = int(tok.split("/")[0])
                     idx.append(i - 1 if i > 0 else len(verts) + i)
-                for k in range(1, len(idx) - 1):
-                    tris.append((idx[0], idx[k], idx[k + 1]))
-    if not verts or not tris:
+                faces.append(idx)
+    return np.asarray(verts, dtype=np.float64), faces
+
+
+def load_obj(path):
+    """Return (vertices (n,3) float, triangles (m,3) int) from an OBJ file (polygons as fans)."""
+    verts, faces = load_obj_polygons(path)
+    tris = [(f[0], f[k], f[k + 1]) for f in faces for k in range(1, len(f) - 1)]
+    if not len(verts) or not tris:
         sys.exit(f"render.py: {path}: no vertices or faces")
-    return np.asarray(verts, dtype=np.float64), np.asarray(tris, dtype=np.int64)
+    return verts, np.asarray(tris, dtype=np.int64)
 
 
 def camera_basis(view, up):

@@ -10,15 +10,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
-
-def read_obj(path):
-    v, f = [], []
-    for line in open(path):
-        if line.startswith("v "):
-            v.append([float(x) for x in line.split()[1:4]])
-        elif line.startswith("f "):
-            f.append([int(c.split("/")[0]) - 1 for c in line.split()[1:]])
-    return np.array(v), f
+from render import load_obj_polygons  # docs/render.py, beside this script
 
 
 def circle_through(a, b, c, samples=90):
@@ -49,7 +41,7 @@ def main():
     c0, c1 = map(int, a.cols.split(","))
     fig, axes = plt.subplots(1, len(a.meshes), figsize=(6 * len(a.meshes), 6))
     for k, (ax, path) in enumerate(zip(np.atleast_1d(axes), a.meshes)):
-        v, faces = read_obj(path)
+        v, faces = load_obj_polygons(path)
         for i in range(r0, r1):
             for j in range(c0, c1):
                 p = v[faces[i * a.grid + j]]
