@@ -57,7 +57,7 @@
 //! the starts, the parametrization and the schedule above are ours; three points always lie on
 //! a circle or line, so with k = 3 the term is zero.
 
-use super::line::{centred, centred_rows, recentre, vertex_set};
+use super::line::{centred, centred_rows, centred_view, recentre, to_row_frame, vertex_set};
 use super::plane::{WHOLE_SELECTION, selected_faces};
 use super::sphere::{
     Model, Scalar, V3, best_fit, distance, distance_in, from_algebraic, linear_least_squares, rms_radius,
@@ -219,6 +219,7 @@ impl Constraint for Circle {
             for (o, &x) in out.iter_mut().zip(&d) {
                 *o = x - mean;
             }
+            to_row_frame(&self.vertices, q, out);
             return;
         }
         let points: Vec<DVec3> = d.iter().map(|&x| (x - mean) / scale).collect();
@@ -227,12 +228,14 @@ impl Constraint for Circle {
             *o = fit.nearest(x) * scale;
         }
         recentre(out);
+        to_row_frame(&self.vertices, q, out);
     }
     /// √(‖Σ p_i‖²/k + σ₄²), σ₄ the fourth singular value of the lifted rows
     /// (‖y_i‖²/L, y_i, L): zero exactly on one circle (or line), centred.
     fn set_residual(&self, p: &[DVec3]) -> f64 {
-        let sigma = sets::lifted_singular_values(p);
-        (sets::centroid_offset(p).powi(2) + sigma[3] * sigma[3]).sqrt()
+        let p = centred_view(p);
+        let sigma = sets::lifted_singular_values(&p);
+        (sets::centroid_offset(&p).powi(2) + sigma[3] * sigma[3]).sqrt()
     }
 }
 

@@ -33,13 +33,61 @@ use glam::DVec3;
 /// Name in scene files.
 const KIND: &str = "line";
 
-/// Emits the rows of C = I − 11ᵀ/k over `vertices` (row i: q_i − (1/k) Σ_j q_j).
+/// The largest vertex set whose rows are mean-centred. C = I − 11ᵀ/k makes CᵀC a dense k×k
+/// block (k² entries, k³ work to assemble: about 2 s at k = 500, minutes and tens of GB at a
+/// few thousand); above this size a set's rows are its vertices themselves (C = I, CᵀC
+/// diagonal) and its projection is the nearest point of the set at the current centroid,
+/// p = p_c + q̄. Every set here (rigid and similar copies, lines, planes, circles, spheres) is
+/// closed under translation, so min_{p ∈ S} ‖q − p‖² = min_{p ∈ S} ‖(q − q̄) − (p − p̄)‖²: the
+/// energy is the same function of q either way (math reference, "Large vertex sets"). The
+/// global step differs: with C = I it holds the set near its last centroid, so a large set
+/// that must travel far takes more iterations.
+pub(super) const DENSE_SET_MAX: usize = 512;
+
+/// Whether a set of `k` vertices has mean-centred rows (see [`DENSE_SET_MAX`]).
+pub(super) fn has_centred_rows(k: usize) -> bool {
+    k <= DENSE_SET_MAX
+}
+
+/// Emits the rows of C over `vertices`: C = I − 11ᵀ/k (row i: q_i − (1/k) Σ_j q_j) up to
+/// [`DENSE_SET_MAX`] vertices, else C = I (row i: q_i).
 pub(super) fn centred_rows(vertices: &[u32], sink: &mut RowSink) {
+    if !has_centred_rows(vertices.len()) {
+        for (row, &v) in vertices.iter().enumerate() {
+            sink.push(row, v, 1.0);
+        }
+        return;
+    }
     let share = 1.0 / vertices.len() as f64;
     for (row, &v) in vertices.iter().enumerate() {
         for &w in vertices {
             sink.push(row, w, if w == v { 1.0 - share } else { -share });
         }
+    }
+}
+
+/// A projection `out` computed about the centroid, as C q's rows have it: moved back to the
+/// current centroid of `vertices` when the rows are the vertices themselves (C = I).
+pub(super) fn to_row_frame(vertices: &[u32], q: &[DVec3], out: &mut [DVec3]) {
+    if has_centred_rows(vertices.len()) {
+        return;
+    }
+    let mean = vertices.iter().map(|&v| q[v as usize]).sum::<DVec3>() / vertices.len().max(1) as f64;
+    for o in out.iter_mut() {
+        *o += mean;
+    }
+}
+
+/// Rows `p` (in the frame of C q) about their centroid, as the centred residuals take them:
+/// themselves for centred rows, a recentred copy when C = I (its sets are closed under
+/// translation).
+pub(super) fn centred_view(p: &[DVec3]) -> std::borrow::Cow<'_, [DVec3]> {
+    if has_centred_rows(p.len()) {
+        std::borrow::Cow::Borrowed(p)
+    } else {
+        let mut c = p.to_vec();
+        recentre(&mut c);
+        std::borrow::Cow::Owned(c)
     }
 }
 
@@ -119,12 +167,14 @@ impl Constraint for Line {
         for (o, &x) in out.iter_mut().zip(&d) {
             *o = (x - mean).dot(u) * u;
         }
+        to_row_frame(&self.vertices, q, out);
     }
     /// √(‖Σ p_i‖²/k + σ₂² + σ₃²), σ the singular values of p about its centroid: the exact
     /// distance of p from the centred collinear configurations.
     fn set_residual(&self, p: &[DVec3]) -> f64 {
-        let (_, sigma, _) = sets::principal_axes(p);
-        (sets::centroid_offset(p).powi(2) + sigma[1] * sigma[1] + sigma[2] * sigma[2]).sqrt()
+        let p = centred_view(p);
+        let (_, sigma, _) = sets::principal_axes(&p);
+        (sets::centroid_offset(&p).powi(2) + sigma[1] * sigma[1] + sigma[2] * sigma[2]).sqrt()
     }
 }
 
@@ -179,6 +229,44 @@ mod tests {
         s.sort_by(|a, b| b.total_cmp(a));
         s.resize(3, 0.0);
         s
+    }
+
+    #[test]
+    fn large_sets_have_diagonal_rows_the_centred_energy_and_translate_with_q() {
+        // Line, plane, circle, sphere, similarity over more than DENSE_SET_MAX vertices: rows
+        // are the vertices, the projection lies on the set, E is that of the centred rows (the
+        // projection's distance to q equals the centred one), and translating q translates p.
+        use crate::constraints::{Circle, Plane, Similarity, Sphere};
+        let mut rng = Rng(211);
+        let k = DENSE_SET_MAX + 21;
+        let all: Vec<u32> = (0..k as u32).collect();
+        let rest: Vec<DVec3> = (0..k).map(|_| rng.vec3()).collect();
+        let constraints: Vec<Box<dyn Constraint>> = vec![
+            Box::new(Line::new(all.clone()).unwrap()),
+            Box::new(Plane::new(all.clone()).unwrap()),
+            Box::new(Circle::new(all.clone()).unwrap()),
+            Box::new(Sphere::new(all.clone()).unwrap()),
+            Box::new(Similarity::new(all.clone(), &rest).unwrap()),
+        ];
+        let q: Vec<DVec3> = (0..k).map(|_| rng.vec3() + DVec3::new(5.0, -2.0, 1.0)).collect();
+        let shift = DVec3::new(0.3, 0.7, -1.1);
+        let moved: Vec<DVec3> = q.iter().map(|x| *x + shift).collect();
+        for c in &constraints {
+            let mut sink = RowSink::default();
+            c.rows(&mut sink);
+            assert_eq!(sink.entries.len(), k, "{}: one entry per row", c.kind());
+            let p = project(c.as_ref(), &q);
+            assert!(c.set_residual(&p) < 1e-9, "{}: off the set by {}", c.kind(), c.set_residual(&p));
+            // The same projection about the centroid, as centred rows would give it.
+            let mean = q.iter().copied().sum::<DVec3>() / k as f64;
+            let d: Vec<DVec3> = q.iter().map(|x| *x - mean).collect();
+            let pc: Vec<DVec3> = p.iter().map(|x| *x - mean).collect();
+            assert!((dist2(&q, &p) - dist2(&d, &pc)).abs() < 1e-9);
+            assert!(sets::centroid_offset(&pc) < 1e-9, "{}: p sits at q's centroid", c.kind());
+            let pm = project(c.as_ref(), &moved);
+            let back: Vec<DVec3> = pm.iter().map(|x| *x - shift).collect();
+            assert!(dist2(&back, &p) < 1e-18, "{}: translating q translates p", c.kind());
+        }
     }
 
     #[test]

@@ -665,8 +665,8 @@ pub fn catalogue_markdown() -> String {
     out
 }
 
-/// One option for [`catalogue_markdown`]: `key = default` and its range.
-fn option_markdown(o: &OptionSpec) -> String {
+/// One option as [`catalogue_markdown`] lists it: `key = default` and its range.
+pub fn option_markdown(o: &OptionSpec) -> String {
     match o.kind {
         OptionKind::Number { default, min, max } => {
             let d = default.map_or("rest".to_string(), |d| format!("{d}"));

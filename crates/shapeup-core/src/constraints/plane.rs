@@ -25,7 +25,7 @@
 //! read (its quads and n-gons, not their triangles, which are always planar; faces that are
 //! triangles are skipped), or one over the whole selection.
 
-use super::line::{centred, centred_rows, vertex_set};
+use super::line::{centred, centred_rows, centred_view, to_row_frame, vertex_set};
 use super::{
     BuildContext, Constraint, ConstraintError, ConstraintType, Element, OptionKind, OptionSpec, Params, RowSink,
     non_empty, sets,
@@ -110,12 +110,14 @@ impl Constraint for Plane {
             let y = x - mean;
             *o = y - y.dot(n) * n;
         }
+        to_row_frame(&self.vertices, q, out);
     }
     /// √(‖Σ p_i‖²/k + σ₃²), σ₃ the smallest singular value of p about its centroid: the exact
     /// distance of p from the centred coplanar configurations.
     fn set_residual(&self, p: &[DVec3]) -> f64 {
-        let (_, sigma, _) = sets::principal_axes(p);
-        (sets::centroid_offset(p).powi(2) + sigma[2] * sigma[2]).sqrt()
+        let p = centred_view(p);
+        let (_, sigma, _) = sets::principal_axes(&p);
+        (sets::centroid_offset(&p).powi(2) + sigma[2] * sigma[2]).sqrt()
     }
     /// The planarity error: the largest distance of a corner of C q from the best-fit plane,
     /// max_i |(d_i − d̄)·n| (ShapeUp §6 and the architectural literature report this, over the

@@ -5,7 +5,9 @@
 //! rotation that minimizes it.
 //!
 //! - Rows of C (k, translation-invariant as in ShapeOp): row i is q_i − (1/k) Σ_j q_j, i.e.
-//!   C[i, i] = 1 − 1/k and C[i, j] = −1/k (j ≠ i).
+//!   C[i, i] = 1 − 1/k and C[i, j] = −1/k (j ≠ i); for more than
+//!   [`DENSE_SET_MAX`](super::line::DENSE_SET_MAX) vertices row i is q_i and p_i = c + R d⁰_i
+//!   (the same energy, without a dense k×k block in CᵀC).
 //! - Set: the centred rotated copies {R d⁰_i : R ∈ SO(3)} of the rest shape.
 //! - Projection (shape matching, Müller et al. 2005; the rotation part of Umeyama 1991):
 //!   S = Σ_i (q_i − c) d⁰_iᵀ = UΣVᵀ, R = U diag(1, 1, det(UVᵀ)) Vᵀ
@@ -27,6 +29,7 @@
 //! choice); rows relative to one vertex would be sparser but the fit would then not be the
 //! shape-matching one.
 
+use super::line::{centred_view, to_row_frame};
 use super::{BuildContext, Constraint, ConstraintError, ConstraintType, Element, OptionSpec, Params, RowSink};
 use crate::linalg::nearest_rotation3;
 use glam::{DMat3, DVec3};
@@ -34,16 +37,11 @@ use glam::{DMat3, DVec3};
 /// Name in scene files.
 const KIND: &str = "rigid";
 
-/// Emits the translation-invariant rows q_i − (1/k) Σ_j q_j of `vertices` (k = its length),
-/// one row per vertex in order.
+/// Emits the rows of `vertices` (one per vertex, in order): q_i − (1/k) Σ_j q_j (translation
+/// invariant, as in ShapeOp), or q_i for sets larger than [`super::line::DENSE_SET_MAX`]
+/// (see there: the same energy, a diagonal CᵀC).
 pub(super) fn push_centred_rows(vertices: &[u32], sink: &mut RowSink) {
-    let k = vertices.len();
-    let inv = 1.0 / k as f64;
-    for row in 0..k {
-        for (col, &vj) in vertices.iter().enumerate() {
-            sink.push(row, vj, if row == col { 1.0 - inv } else { -inv });
-        }
-    }
+    super::line::centred_rows(vertices, sink);
 }
 
 /// Writes q_i − (1/k) Σ_j q_j for each of `vertices` into `out` (the rows of
@@ -189,9 +187,10 @@ impl Constraint for Rigid {
         for (o, d0) in out.iter_mut().zip(self.shape.rest.iter()) {
             *o = r * *d0;
         }
+        to_row_frame(&self.shape.vertices, q, out);
     }
     fn set_residual(&self, p: &[DVec3]) -> f64 {
-        self.shape.residual(p, 1.0)
+        self.shape.residual(&centred_view(p), 1.0)
     }
 }
 
@@ -304,6 +303,40 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn a_large_set_has_one_entry_per_row_and_the_same_energy_as_centred_rows() {
+        // Above DENSE_SET_MAX the rows are the vertices; the projection is the rotated rest
+        // copy at the current centroid, and E equals the centred form ‖(q − q̄) − R d⁰‖².
+        let mut rng = Rng(113);
+        let k = super::super::line::DENSE_SET_MAX + 37;
+        let x = cloud(&mut rng, k);
+        let c = Rigid::new(all(k), &x).unwrap();
+        let mut sink = RowSink::default();
+        c.rows(&mut sink);
+        assert_eq!(sink.entries.len(), k, "one entry per row: CᵀC is diagonal");
+        let r0 = rotation(&mut rng);
+        let q: Vec<DVec3> = x.iter().map(|p| r0 * (*p + 0.2 * rng.vec3()) + DVec3::new(3.0, -1.0, 2.0)).collect();
+        let p = project(&c, &q);
+        assert!(c.set_residual(&p) < 1e-12, "off the set by {}", c.set_residual(&p));
+        let mean = q.iter().copied().sum::<DVec3>() / k as f64;
+        let r = c.rotation(&q);
+        let centred: f64 = q.iter().zip(c.shape.rest.iter()).map(|(a, d)| (*a - mean - r * *d).length_squared()).sum();
+        assert!((c.energy(&q) - centred).abs() <= 1e-12 * centred.max(1.0));
+        // No sampled rigid copy (rotation and translation) is closer to C q = q.
+        let d = dist2(&q, &p);
+        for _ in 0..200 {
+            let (rot, t) = (rotation(&mut rng), mean + 0.1 * rng.vec3());
+            let copy: Vec<DVec3> = c.shape.rest.iter().map(|e| rot * *e + t).collect();
+            assert!(d <= dist2(&q, &copy) + 1e-12, "a random rigid copy is closer");
+            let near = r * DMat3::from_axis_angle(rng.vec3().normalize(), 1e-3 * rng.uniform());
+            let copy: Vec<DVec3> = c.shape.rest.iter().map(|e| near * *e + mean + 1e-3 * t).collect();
+            assert!(d <= dist2(&q, &copy) + 1e-12, "a nearby rigid copy is closer");
+        }
+        // The residual measures the shape, not where it is.
+        let shifted: Vec<DVec3> = p.iter().map(|e| *e + DVec3::X).collect();
+        assert!(c.set_residual(&shifted) < 1e-12);
     }
 
     #[test]

@@ -24,6 +24,7 @@
 //! (clamp s: R does not depend on s, and the energy is a parabola in s) but is left out until a
 //! scene needs it. Vertices weigh equally and ω = 1, as rigid.
 
+use super::line::{centred_view, to_row_frame};
 use super::rigid::{ShapeMatch, centre_into, push_centred_rows};
 use super::{BuildContext, Constraint, ConstraintError, ConstraintType, Element, OptionSpec, Params, RowSink};
 use crate::linalg::nearest_rotation3;
@@ -88,8 +89,10 @@ impl Constraint for Similarity {
         for (o, d0) in out.iter_mut().zip(self.shape.rest.iter()) {
             *o = sr * *d0;
         }
+        to_row_frame(&self.shape.vertices, q, out);
     }
     fn set_residual(&self, p: &[DVec3]) -> f64 {
+        let p = &*centred_view(p);
         let s = if self.shape.rest_norm2 > 0.0 {
             (p.iter().map(|x| x.length_squared()).sum::<f64>() / self.shape.rest_norm2).sqrt()
         } else {

@@ -52,7 +52,7 @@
 //! small Cholesky solve ([`solve_spd`]), numbers with derivatives ([`Scalar`], [`V3`]) and the
 //! multi-start Levenberg–Marquardt fit ([`Model`], [`best_fit`]).
 
-use super::line::{centred, centred_rows, recentre, vertex_set};
+use super::line::{centred, centred_rows, centred_view, recentre, to_row_frame, vertex_set};
 use super::{BuildContext, Constraint, ConstraintError, ConstraintType, Element, OptionSpec, Params, RowSink, sets};
 use glam::{DQuat, DVec3};
 
@@ -617,6 +617,7 @@ impl Constraint for Sphere {
             for (o, &x) in out.iter_mut().zip(&d) {
                 *o = x - mean;
             }
+            to_row_frame(&self.vertices, q, out);
             return;
         }
         let points: Vec<DVec3> = d.iter().map(|&x| (x - mean) / scale).collect();
@@ -626,12 +627,14 @@ impl Constraint for Sphere {
             *o = (x - dist.d * dist.direction(fit.n)) * scale;
         }
         recentre(out);
+        to_row_frame(&self.vertices, q, out);
     }
     /// √(‖Σ p_i‖²/k + σ₅²), σ₅ the smallest singular value of the lifted rows
     /// (‖y_i‖²/L, y_i, L): zero exactly on one sphere (or plane), centred.
     fn set_residual(&self, p: &[DVec3]) -> f64 {
-        let sigma = sets::lifted_singular_values(p);
-        (sets::centroid_offset(p).powi(2) + sigma[4] * sigma[4]).sqrt()
+        let p = centred_view(p);
+        let sigma = sets::lifted_singular_values(&p);
+        (sets::centroid_offset(&p).powi(2) + sigma[4] * sigma[4]).sqrt()
     }
 }
 
