@@ -814,6 +814,7 @@ impl Document {
                 ..self.solver_settings
             },
             groups,
+            output: Default::default(),
             base_dir: PathBuf::new(),
             file: PathBuf::new(),
         }

@@ -11,7 +11,7 @@
 use anyhow::{Context, Result, bail};
 use clap::{Args, Parser, Subcommand};
 use shapeup_core::bench::{Scenario, load_scenario};
-use shapeup_core::io::{PlyEncoding, WriteFormat, read_mesh, write_atomic, write_mesh_with};
+use shapeup_core::io::{PlyEncoding, read_mesh, write_atomic};
 use shapeup_core::scene::Scene;
 use shapeup_core::scene::SolverSettings;
 use shapeup_core::solver::{Acceleration, Factorization, MAX_ANDERSON_WINDOW, MAX_LBFGS_MEMORY, SolverParams};
@@ -46,13 +46,14 @@ enum Command {
     Deform {
         /// Scene file (.toml or .json).
         scene: PathBuf,
-        /// Output mesh (.obj, .ply, .off, .stl, .vtu or .msh); keeps the input's vertex count and order, faces and attributes (STL cannot).
+        /// Output mesh (.obj, .ply, .off, .stl, .vtu or .msh); keeps the input's vertex count and order, faces and attributes (STL cannot). Default: the scene's `[output] path`.
         #[arg(short, long, value_name = "OUT")]
-        output: PathBuf,
+        output: Option<PathBuf>,
         /// Total local-global iterations (default: the scene's steps × iterations).
         #[arg(long, value_name = "N")]
         iterations: Option<usize>,
-        /// Write a JSON report (energies per iteration, timings, warnings).
+        /// Write a JSON report (energies per iteration, timings, warnings). Default: the scene's
+        /// `[output] report`, if any.
         #[arg(long, value_name = "REPORT.json")]
         report: Option<PathBuf>,
         /// PLY output encoding: ascii, binary_little_endian or binary_big_endian (default: the
@@ -72,9 +73,10 @@ enum Command {
         /// Time steps to run (overrides the scene's steps).
         #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
         frames: u64,
-        /// Output directory for the frames (created if missing).
+        /// Output directory for the frames (created if missing). Default: the scene's
+        /// `[output] path`.
         #[arg(short, long, value_name = "DIR")]
-        output: PathBuf,
+        output: Option<PathBuf>,
         /// Write only frames that are multiples of K (and always the last).
         #[arg(long, default_value_t = 1, value_name = "K")]
         every: usize,
@@ -207,7 +209,7 @@ fn run(cli: Cli) -> Result<()> {
     }
     match cli.command {
         Command::Deform { scene, output, iterations, report, ply_encoding, acceleration } => {
-            deform(&scene, &output, iterations, report.as_deref(), ply_encoding, acceleration)
+            deform(&scene, output.as_deref(), iterations, report.as_deref(), ply_encoding, acceleration)
         }
         Command::Energy { scene, positions } => energy(&scene, &positions),
         Command::Types => {
@@ -219,7 +221,7 @@ fn run(cli: Cli) -> Result<()> {
                 scene: &scene,
                 overrides: &|solver| acceleration.apply(solver),
                 frames: usize::try_from(frames).unwrap_or(usize::MAX),
-                output: &output,
+                output: output.as_deref(),
                 every,
                 format: &format,
                 report: report.as_deref(),
@@ -251,90 +253,57 @@ fn check_output_extension(path: &Path, allowed: &[&str]) -> Result<()> {
 }
 
 /// Fails early (before any work, so that nothing is written) when the folder `path` goes in
-/// does not exist.
+/// does not exist or cannot take a new file (read-only, no permission, not a file system that
+/// holds files): a run that writes a mesh and a report must not write one and then fail on the
+/// other.
 pub(crate) fn check_parent_dir(path: &Path) -> Result<()> {
-    match path.parent().filter(|d| !d.as_os_str().is_empty()) {
+    let dir = match path.parent().filter(|d| !d.as_os_str().is_empty()) {
         Some(dir) if !dir.is_dir() => bail!("{}: the folder {} does not exist", path.display(), dir.display()),
-        _ => Ok(()),
-    }
+        Some(dir) => dir,
+        None => Path::new("."),
+    };
+    // The same kind of temporary file the atomic write makes there, removed on drop.
+    tempfile::Builder::new()
+        .prefix(".shapeup-check")
+        .tempfile_in(dir)
+        .map(drop)
+        .map_err(|e| anyhow::anyhow!("{}: cannot write in {}: {e}", path.display(), dir.display()))
 }
 
 fn deform(
     scene_path: &Path,
-    output: &Path,
+    output: Option<&Path>,
     iterations: Option<usize>,
     report_path: Option<&Path>,
     ply_encoding: Option<PlyEncoding>,
     acceleration: AccelerationArgs,
 ) -> Result<()> {
     let start = Instant::now();
+    let mut scene = Scene::from_file(scene_path)?;
+    let output = match output {
+        Some(o) => o.to_path_buf(),
+        None => scene.output_path().with_context(|| {
+            format!("{}: no output mesh: give -o OUT, or `path` in the scene's [output] table", scene_path.display())
+        })?,
+    };
+    let output = output.as_path();
+    let report_path = report_path.map(Path::to_path_buf).or_else(|| scene.report_path());
+    let report_path = report_path.as_deref();
     check_output_extension(output, &["obj", "ply", "off", "stl", "vtu", "msh"])?;
     check_parent_dir(output)?;
     if let Some(r) = report_path {
         check_output_extension(r, &["json"])?;
         check_parent_dir(r)?;
     }
-    let mut scene = Scene::from_file(scene_path)?;
     acceleration.apply(&mut scene.solver);
     let mut loaded = scene.load()?;
     let (q, solve) = loaded.solve_static(iterations)?;
     let mut warnings = loaded.warnings.clone();
-    let format = match WriteFormat::from_path(output)? {
-        WriteFormat::Ply(_) => WriteFormat::Ply(ply_encoding),
-        other => other,
-    };
-    let volume = matches!(format, WriteFormat::Msh | WriteFormat::Vtu | WriteFormat::TetGen);
-    let mesh = loaded.output_mesh(&q, volume, |v| loaded.system.is_solved(v));
-    warnings.extend(write_mesh_with(output, &mesh, format)?);
+    let (mesh, written) = loaded.write_result(output, &q, ply_encoding)?;
+    warnings.extend(written);
     let total = start.elapsed().as_secs_f64();
     if let Some(path) = report_path {
-        // Violations are relative to the rest mesh's mean edge length (working frame), so that
-        // a plane group's is the planarity error: the largest distance of a face's vertices to
-        // its best-fit plane over the mean edge length.
-        let mean_edge = shapeup_core::geometry::mean_edge_length(&loaded.rest).max(f64::MIN_POSITIVE);
-        let rest = loaded.rest_positions().to_vec();
-        let groups: Vec<_> = loaded
-            .group_ids
-            .iter()
-            .filter_map(|&id| loaded.system.group(id))
-            .map(|g| {
-                serde_json::json!({
-                    "name": g.name, "type": g.kind, "weight": g.multiplier, "constraints": g.constraints.len(),
-                    "hard": g.hard,
-                    "max_violation": {"rest": g.max_violation(&rest) / mean_edge, "result": g.max_violation(&q) / mean_edge},
-                })
-            })
-            .collect();
-        let (lo, hi) = loaded.mesh.bounding_box();
-        let diagonal = (hi - lo).length().max(f64::MIN_POSITIVE);
-        let moved =
-            mesh.positions.iter().zip(&loaded.mesh.positions).map(|(a, b)| (*a - *b).length()).fold(0.0, f64::max);
-        let (nnz_a, nnz_l) = loaded.system.factor_sizes();
-        let report = serde_json::json!({
-            "vertices": loaded.mesh.num_vertices(),
-            "triangles": loaded.mesh.num_triangles(),
-            "solved_vertices": loaded.system.num_solved_vertices(),
-            "constraints": loaded.system.num_constraints(),
-            "groups": groups,
-            // The largest vertex displacement from the input, over its bounding-box diagonal.
-            "max_displacement": moved / diagonal,
-            "iterations": solve.energies.len(),
-            "initial_energy": solve.initial_energy,
-            "energy": solve.energies,
-            // |E_k − E_{k−1}| / E_{k−1}, from E_0 = initial_energy.
-            "relative_change": relative_changes(solve.initial_energy, &solve.energies),
-            "acceleration": loaded.system.params().acceleration,
-            "rejected": solve.rejected,
-            "factor": {"nnz_lower": nnz_a, "nnz_l": nnz_l},
-            "warnings": warnings.to_json(),
-            "timings": {
-                "load_s": loaded.load_seconds,
-                "setup_s": loaded.build_seconds + solve.setup_seconds,
-                "local_s": solve.local_seconds,
-                "global_s": solve.global_seconds,
-                "total_s": total,
-            },
-        });
+        let report = loaded.deform_report(&q, &solve, &mesh, &warnings, total);
         let text = serde_json::to_string_pretty(&report)?;
         write_atomic(path, |w| w.write_all(text.as_bytes()))?;
     }
@@ -542,14 +511,6 @@ fn threads_label() -> String {
 /// "1 iteration", "0 iterations", "2 iterations".
 fn count(n: usize, what: &str) -> String {
     if n == 1 { format!("1 {what}") } else { format!("{n} {what}s") }
-}
-
-fn relative_changes(initial: f64, energies: &[f64]) -> Vec<f64> {
-    std::iter::once(initial)
-        .chain(energies.iter().copied())
-        .zip(energies)
-        .map(|(before, &after)| if before == after { 0.0 } else { (before - after).abs() / before.abs() })
-        .collect()
 }
 
 /// The relative energy gaps `shapeup bench --converge` reports.

@@ -539,6 +539,39 @@ fn deform_resolves_mesh_paths_against_the_scene_file() {
     assert!((moved - DVec3::new(0.0, 0.1, 0.0)).length() < 0.05, "the handle moved by {moved}");
 }
 
+#[test]
+fn deform_and_simulate_write_where_the_output_table_says() {
+    let ws = Workspace::new();
+    let body = format!("{}\n[output]\npath = \"out/spot.obj\"\nreport = \"out/spot.json\"\n", handle_body(1.0));
+    let scene = ws.scene("spot.toml", &toml_scene(Path::new(SPOT), "", &body));
+    let explicit = deform_ok(&ws, &scene, "explicit.obj", &[]).0;
+    shapeup(["deform".as_ref(), scene.as_os_str()]).success();
+    let from_table = read(&ws.out("spot.obj"));
+    assert_eq!(from_table.positions, explicit.positions, "[output] path and -o give the same result");
+    assert!(report(&ws.out("spot.json"))["energy"].is_array());
+
+    // Without -o and without [output]: one line saying what to give, nothing written.
+    let bare = ws.scene("bare.toml", &toml_scene(Path::new(SPOT), "", &handle_body(1.0)));
+    for f in ["explicit.obj", "explicit.obj.report.json", "spot.obj", "spot.json"] {
+        std::fs::remove_file(ws.out(f)).unwrap();
+    }
+    ws.expect_failure(&["deform".as_ref(), bare.as_os_str()], &["bare.toml", "-o", "[output]"]);
+    ws.expect_failure(
+        &["simulate".as_ref(), bare.as_os_str(), "--frames".as_ref(), "2".as_ref()],
+        &["bare.toml", "-o DIR"],
+    );
+
+    // simulate: [output] path is the frames' folder.
+    let dynamic = ws.scene(
+        "cloth.toml",
+        "[mesh]\ngenerate = { kind = \"cloth\", vertices = [5, 5], size = [1.0, 1.0] }\n[solver]\nmode = \"dynamic\"\n\
+         [[constraints]]\ntype = \"edge_spring\"\n[[constraints]]\ntype = \"position\"\nvertices = [0]\n\
+         [output]\npath = \"out/frames\"\n",
+    );
+    shapeup(["simulate".as_ref(), dynamic.as_os_str(), "--frames".as_ref(), "2".as_ref()]).success();
+    assert!(ws.out("frames/frame_0002.obj").is_file());
+}
+
 // ---------------------------------------------------------------------------------------------
 // energy
 // ---------------------------------------------------------------------------------------------

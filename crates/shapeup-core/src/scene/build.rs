@@ -99,7 +99,7 @@ impl Scene {
         let mut group_ids = Vec::with_capacity(self.groups.len());
         for (i, spec) in self.groups.iter().enumerate() {
             let entry = format!("constraints[{i}] (\"{}\")", spec.name);
-            let group = build_group(spec, &mesh, &rest, &frame).map_err(|m| invalid(&entry, m))?;
+            let group = spec.build(&mesh, &rest, &frame).map_err(|m| invalid(&entry, m))?;
             group_ids.push(system.add_group(group).map_err(|e| invalid(&entry, e.to_string()))?);
         }
         // Vertices that only zero-area triangles use follow their edge (math reference, "Edge cases").
@@ -148,6 +148,22 @@ fn fill_with_tetrahedra(_mesh: &Mesh) -> Result<Mesh, String> {
         .into())
 }
 
+/// Lumped masses m_i of `rest` (working frame): ρ Σ|V_T|/4 on a tetrahedral mesh, else
+/// ρ Σ A_t/3 (floored at 1e-9); 0 for a vertex in no element, which is not simulated and keeps
+/// its position (as in static mode).
+pub fn lumped_masses(rest: &RestGeometry, density: f64) -> Vec<f64> {
+    let mut in_element = vec![false; rest.num_vertices()];
+    let mut masses = if rest.tetrahedra.is_empty() {
+        rest.triangles.iter().flatten().for_each(|&v| in_element[v as usize] = true);
+        lumped_masses_surface(rest.num_vertices(), &rest.triangles, &rest.triangle_areas, density)
+    } else {
+        rest.tetrahedra.iter().flatten().for_each(|&v| in_element[v as usize] = true);
+        lumped_masses_volume(&rest.positions, &rest.tetrahedra, density)
+    };
+    masses.iter_mut().zip(&in_element).filter(|(_, inside)| !**inside).for_each(|(m, _)| *m = 0.0);
+    masses
+}
+
 /// A position group whose targets turn at a constant rate in dynamic mode.
 #[derive(Debug, Clone)]
 pub struct SpinningHandle {
@@ -170,8 +186,18 @@ impl SpinningHandle {
     }
 }
 
-/// A scene entry as the library's one group route takes it ([`crate::constraints::build_group`]):
-/// its selection resolved, its targets (for types with targets) mapped to the working frame.
+impl GroupSpec {
+    /// The group on `mesh` (input frame; `rest` its rest geometry in the working frame), as the
+    /// library's one group route takes it ([`crate::constraints::build_group`]): its selection
+    /// resolved, its targets (for types with targets) mapped to the working frame.
+    ///
+    /// # Errors
+    /// A one-line message: a selection out of range, bad targets, a bad option (named).
+    pub fn build(&self, mesh: &Mesh, rest: &RestGeometry, frame: &WorkingFrame) -> Result<ConstraintGroup, String> {
+        build_group(self, mesh, rest, frame)
+    }
+}
+
 fn build_group(
     spec: &GroupSpec,
     mesh: &Mesh,
@@ -297,17 +323,7 @@ impl LoadedScene {
     /// (floored at 1e-9); 0 for a vertex in no element, which is not simulated and keeps its
     /// position (as in static mode).
     pub fn masses(&self) -> Vec<f64> {
-        let density = self.scene.solver.density;
-        let mut in_element = vec![false; self.rest.num_vertices()];
-        let mut masses = if self.rest.tetrahedra.is_empty() {
-            self.rest.triangles.iter().flatten().for_each(|&v| in_element[v as usize] = true);
-            lumped_masses_surface(self.rest.num_vertices(), &self.rest.triangles, &self.rest.triangle_areas, density)
-        } else {
-            self.rest.tetrahedra.iter().flatten().for_each(|&v| in_element[v as usize] = true);
-            lumped_masses_volume(&self.rest.positions, &self.rest.tetrahedra, density)
-        };
-        masses.iter_mut().zip(&in_element).filter(|(_, inside)| !**inside).for_each(|(m, _)| *m = 0.0);
-        masses
+        lumped_masses(&self.rest, self.scene.solver.density)
     }
 
     /// The scene's time-stepping settings in the working frame (gravity, an acceleration in

@@ -6,9 +6,12 @@
 //! reads its mesh and builds a ready-to-solve [`LoadedScene`].
 
 mod build;
+pub mod frames;
+mod run;
 mod write;
 
-pub use build::{LoadedScene, SpinningHandle, resolve_selection};
+pub use build::{LoadedScene, SpinningHandle, lumped_masses, resolve_selection};
+pub use run::{SceneSimulation, StepError, relative_changes};
 
 use crate::mesh::Mesh;
 use crate::solver::{Acceleration, Factorization, MAX_ANDERSON_WINDOW, MAX_LBFGS_MEMORY, SolverParams};
@@ -100,6 +103,21 @@ pub struct MeshSettings {
 
 fn yes() -> bool {
     true
+}
+
+/// The `[output]` table: where a run's results go when the command line does not say
+/// (`shapeup deform` without `-o`, `shapeup.batch.run_scenes`). Paths are relative to the scene
+/// file.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct OutputSettings {
+    /// Static mode: the deformed mesh (its extension picks the format); dynamic mode: the
+    /// folder of the frames.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub path: Option<PathBuf>,
+    /// The JSON report.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub report: Option<PathBuf>,
 }
 
 /// A mesh the scene generates instead of reading a file (`[mesh] generate = { kind = … }`).
@@ -343,6 +361,8 @@ pub struct Scene {
     pub solver: SolverSettings,
     /// The constraint groups, in file order.
     pub groups: Vec<GroupSpec>,
+    /// The `[output]` table.
+    pub output: OutputSettings,
     /// Directory that relative paths start from.
     pub base_dir: PathBuf,
     /// The scene file, for messages.
@@ -405,6 +425,8 @@ struct RawScene {
     solver: SolverSettings,
     #[serde(default)]
     constraints: Vec<Map<String, Value>>,
+    #[serde(default)]
+    output: OutputSettings,
 }
 
 /// Scene file syntax.
@@ -467,19 +489,29 @@ impl Scene {
             .enumerate()
             .map(|(i, entry)| {
                 let name = entry.get("name").and_then(Value::as_str).map(|n| format!(" (\"{n}\")")).unwrap_or_default();
-                parse_group(entry).map_err(|message| SceneError::Invalid {
+                GroupSpec::from_entry(entry).map_err(|message| SceneError::Invalid {
                     path: path.into(),
                     entry: format!("constraints[{i}]{name}"),
                     message,
                 })
             })
             .collect::<Result<Vec<_>, _>>()?;
-        Ok(Scene { mesh: raw.mesh, solver: raw.solver, groups, base_dir, file: path.into() })
+        Ok(Scene { mesh: raw.mesh, solver: raw.solver, groups, output: raw.output, base_dir, file: path.into() })
     }
 
     /// The mesh file's path, resolved against the scene's directory.
     pub fn mesh_path(&self) -> PathBuf {
         self.base_dir.join(&self.mesh.path)
+    }
+
+    /// `[output] path`, resolved against the scene's directory.
+    pub fn output_path(&self) -> Option<PathBuf> {
+        self.output.path.as_ref().map(|p| self.base_dir.join(p))
+    }
+
+    /// `[output] report`, resolved against the scene's directory.
+    pub fn report_path(&self) -> Option<PathBuf> {
+        self.output.report.as_ref().map(|p| self.base_dir.join(p))
     }
 }
 
@@ -529,6 +561,19 @@ fn validate_solver(s: &SolverSettings) -> Result<(), String> {
 
 /// Keys every group takes; the rest go to the type's builder (which rejects unknown ones).
 const SELECTION_KEYS: [&str; 4] = ["vertices", "faces", "box", "sphere"];
+
+impl GroupSpec {
+    /// A group from one `[[constraints]]` entry as JSON values (the keys of the scene
+    /// contract: `type`, `name`, `weight`, one selection key, targets for types with targets,
+    /// and the type's options, which [`GroupSpec::build`] checks). The scene parser and the
+    /// Python package both come through here.
+    ///
+    /// # Errors
+    /// A one-line message naming the bad key.
+    pub fn from_entry(entry: Map<String, Value>) -> Result<GroupSpec, String> {
+        parse_group(entry)
+    }
+}
 
 fn parse_group(mut entry: Map<String, Value>) -> Result<GroupSpec, String> {
     let kind = match entry.remove("type") {

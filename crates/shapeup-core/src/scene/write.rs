@@ -10,7 +10,7 @@ use toml::Value;
 
 impl Scene {
     /// The scene as TOML text: `[mesh]` (path, normalize, and tetrahedralize when set), every
-    /// field of `[solver]`, then one `[[constraints]]` entry per group with its type, name,
+    /// field of `[solver]`, `[output]` when set, then one `[[constraints]]` entry per group with its type, name,
     /// weight, selection (`vertices`, `box` or `sphere`; none for all vertices), targets
     /// (`targets = [[x, y, z], …]` when explicit, else `translate` / `rotate`) and options.
     ///
@@ -56,6 +56,16 @@ impl Scene {
         line(&mut out, "acceleration", Value::String(s.acceleration.name().into()));
         line(&mut out, "anderson_window", integer(s.anderson_window as u64));
         line(&mut out, "lbfgs_memory", integer(s.lbfgs_memory as u64));
+
+        let o = &self.output;
+        if o.path.is_some() || o.report.is_some() {
+            out.push_str("\n[output]\n");
+            for (key, path) in [("path", &o.path), ("report", &o.report)] {
+                if let Some(p) = path {
+                    line(&mut out, key, Value::String(p.to_string_lossy().into_owned()));
+                }
+            }
+        }
 
         for group in &self.groups {
             out.push_str("\n[[constraints]]\n");
@@ -209,6 +219,7 @@ mod tests {
                 ..SolverSettings::default()
             },
             groups: vec![strain, group("bending", "bend", 1e-4, SelectionSpec::All), handle, rotated, floor],
+            output: super::super::OutputSettings { path: Some("out/result.obj".into()), report: None },
             base_dir: PathBuf::from("dir"),
             file: PathBuf::from("s.toml"),
         };

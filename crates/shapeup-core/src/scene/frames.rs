@@ -1,0 +1,146 @@
+//! Frames of a scene's simulation as mesh files (`shapeup simulate`, the Python package's
+//! `Scene.simulate`): `DIR/frame_000k.EXT` in one of the mesh formats, and for VTU a ParaView
+//! `frames.pvd` time series.
+
+use super::LoadedScene;
+use crate::Mesh;
+use crate::dynamics::Simulation;
+use crate::io::vtu::{PointVectors, write_pvd, write_vtu};
+use crate::io::{IoError, write_atomic, write_mesh};
+use crate::warnings::Warnings;
+use glam::DVec3;
+use std::path::{Path, PathBuf};
+
+/// The file format of the frames, named by `--format`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FrameFormat {
+    /// Wavefront OBJ (the surface).
+    Obj,
+    /// PLY (the surface).
+    Ply,
+    /// OFF (the surface).
+    Off,
+    /// Binary STL (the surface; STL keeps no shared or unreferenced vertices).
+    Stl,
+    /// VTK XML unstructured grid: the whole mesh with its tetrahedra and a `velocity` array,
+    /// plus a `frames.pvd` time series.
+    Vtu,
+    /// Gmsh MSH 4.1: the whole mesh with its tetrahedra.
+    Msh,
+}
+
+impl FrameFormat {
+    /// Every format with its `--format` name, which is also the files' extension.
+    pub const ALL: [(&'static str, FrameFormat); 6] = [
+        ("obj", FrameFormat::Obj),
+        ("ply", FrameFormat::Ply),
+        ("off", FrameFormat::Off),
+        ("stl", FrameFormat::Stl),
+        ("vtu", FrameFormat::Vtu),
+        ("msh", FrameFormat::Msh),
+    ];
+
+    /// The format named `name` (as `--format` takes it, case-insensitive).
+    ///
+    /// # Errors
+    /// An unknown name, with the list of known ones.
+    pub fn parse(name: &str) -> Result<Self, String> {
+        match Self::ALL.iter().find(|(n, _)| n.eq_ignore_ascii_case(name)) {
+            Some(&(_, format)) => Ok(format),
+            None => {
+                let known: Vec<&str> = Self::ALL.iter().map(|(n, _)| *n).collect();
+                Err(format!("unsupported --format \"{name}\" (use one of: {})", known.join(", ")))
+            }
+        }
+    }
+
+    /// The extension of its files.
+    pub fn extension(self) -> &'static str {
+        Self::ALL.iter().find(|(_, f)| *f == self).map_or("obj", |(n, _)| n)
+    }
+
+    /// Whether it stores the whole mesh with its tetrahedra (else the input's surface).
+    pub fn is_volume(self) -> bool {
+        matches!(self, FrameFormat::Vtu | FrameFormat::Msh)
+    }
+}
+
+/// `DIR/frame_0000.EXT`, with at least four digits and enough for the last frame.
+pub fn frame_path(dir: &Path, k: usize, last: usize, format: FrameFormat) -> PathBuf {
+    let width = last.to_string().len().max(4);
+    dir.join(format!("frame_{k:0width$}.{}", format.extension()))
+}
+
+/// The ParaView time series of a VTU sequence, next to its frames.
+pub const PVD_NAME: &str = "frames.pvd";
+
+/// Writes the frames of a simulation, collecting what the first one reports.
+pub struct FrameWriter<'a> {
+    loaded: &'a LoadedScene,
+    dir: &'a Path,
+    last: usize,
+    format: FrameFormat,
+    /// What writing the first frame reported (the same holds for every frame).
+    pub warnings: Option<Warnings>,
+    /// (time in s, file name) of each frame written, for the `.pvd`.
+    pub written: Vec<(f64, String)>,
+}
+
+impl<'a> FrameWriter<'a> {
+    /// Frames of `loaded`'s simulation into `dir` (which must exist), `last` the number of the
+    /// last frame (it sets the digits of the names).
+    pub fn new(loaded: &'a LoadedScene, dir: &'a Path, last: usize, format: FrameFormat) -> Self {
+        FrameWriter { loaded, dir, last, format, warnings: None, written: Vec::new() }
+    }
+}
+
+impl FrameWriter<'_> {
+    /// Writes frame `k` (the state of `simulation` after k steps), atomically.
+    ///
+    /// # Errors
+    /// [`IoError`] naming the frame's file.
+    pub fn write(&mut self, k: usize, simulation: &Simulation) -> Result<(), IoError> {
+        let path = frame_path(self.dir, k, self.last, self.format);
+        let system = simulation.system();
+        let mesh = self.loaded.output_mesh(simulation.positions(), self.format.is_volume(), |v| system.is_solved(v));
+        let warnings = if self.format == FrameFormat::Vtu {
+            self.write_vtu(&path, &mesh, simulation)?
+        } else {
+            write_mesh(&path, &mesh)?
+        };
+        if self.warnings.is_none() {
+            self.warnings = Some(warnings);
+        }
+        let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        self.written.push((simulation.time(), name));
+        Ok(())
+    }
+
+    /// A VTU frame with the velocities, in input units per second.
+    fn write_vtu(&self, path: &Path, mesh: &Mesh, simulation: &Simulation) -> Result<Warnings, IoError> {
+        mesh.validate().map_err(|source| IoError::Mesh { path: path.to_path_buf(), source })?;
+        let scale = self.loaded.frame.scale;
+        let system = simulation.system();
+        // Working-frame lengths are input lengths times the scale; time is not scaled.
+        let velocity: Vec<DVec3> = simulation
+            .velocities()
+            .iter()
+            .enumerate()
+            .map(|(v, &velocity)| if system.is_solved(v) { velocity / scale } else { DVec3::ZERO })
+            .collect();
+        let mut warnings = Warnings::new();
+        let vectors = [PointVectors { name: "velocity", values: &velocity }];
+        write_atomic(path, |w| write_vtu(w, mesh, &vectors, &mut warnings))?;
+        Ok(warnings.for_file(path))
+    }
+
+    /// Writes `DIR/frames.pvd` listing every frame written so far with its time.
+    ///
+    /// # Errors
+    /// [`IoError`] naming the file.
+    pub fn write_pvd(&self) -> Result<(), IoError> {
+        let entries: Vec<(f64, &str)> = self.written.iter().map(|(t, name)| (*t, name.as_str())).collect();
+        write_atomic(&self.dir.join(PVD_NAME), |w| write_pvd(w, &entries))?;
+        Ok(())
+    }
+}

@@ -1,0 +1,159 @@
+//! Running a loaded scene the way the command line does: the static solve's report, and time
+//! steps with spinning handles. The CLI, the Python package and library users share these, so
+//! that a scene gives the same result (and the same report) whichever door it comes through.
+
+use super::{LoadedScene, SceneError, SpinningHandle};
+use crate::dynamics::{Simulation, StepReport};
+use crate::io::{IoError, PlyEncoding, WriteFormat, write_mesh_with};
+use crate::mesh::Mesh;
+use crate::solver::{SolveError, SolveReport};
+use crate::warnings::Warnings;
+use glam::DVec3;
+use serde_json::{Value, json};
+use std::path::Path;
+
+/// |E_k − E_{k−1}| / |E_{k−1}| for each iteration k, from E_0 = `initial` (0 where the
+/// energy did not change, so that 0 → 0 is no change rather than NaN).
+pub fn relative_changes(initial: f64, energies: &[f64]) -> Vec<f64> {
+    std::iter::once(initial)
+        .chain(energies.iter().copied())
+        .zip(energies)
+        .map(|(before, &after)| if before == after { 0.0 } else { (before - after).abs() / before.abs() })
+        .collect()
+}
+
+impl LoadedScene {
+    /// The JSON report of a static solve (`shapeup deform --report`): sizes, each group's
+    /// largest violation at rest and in the result (over the rest mesh's mean edge length, so
+    /// that a plane group's is the planarity error), the largest vertex displacement over the
+    /// bounding-box diagonal, the energy after each iteration and the timings. `q` is the
+    /// result (working frame), `output` the mesh written from it, `warnings` what loading and
+    /// writing said, `total_seconds` the wall-clock time of the whole run.
+    pub fn deform_report(
+        &self,
+        q: &[DVec3],
+        solve: &SolveReport,
+        output: &Mesh,
+        warnings: &Warnings,
+        total_seconds: f64,
+    ) -> Value {
+        let mean_edge = crate::geometry::mean_edge_length(&self.rest).max(f64::MIN_POSITIVE);
+        let rest = self.rest_positions();
+        let groups: Vec<Value> = self
+            .group_ids
+            .iter()
+            .filter_map(|&id| self.system.group(id))
+            .map(|g| {
+                json!({
+                    "name": g.name, "type": g.kind, "weight": g.multiplier, "constraints": g.constraints.len(),
+                    "hard": g.hard,
+                    "max_violation": {"rest": g.max_violation(rest) / mean_edge, "result": g.max_violation(q) / mean_edge},
+                })
+            })
+            .collect();
+        let (lo, hi) = self.mesh.bounding_box();
+        let diagonal = (hi - lo).length().max(f64::MIN_POSITIVE);
+        let moved =
+            output.positions.iter().zip(&self.mesh.positions).map(|(a, b)| (*a - *b).length()).fold(0.0, f64::max);
+        let (nnz_a, nnz_l) = self.system.factor_sizes();
+        json!({
+            "vertices": self.mesh.num_vertices(),
+            "triangles": self.mesh.num_triangles(),
+            "solved_vertices": self.system.num_solved_vertices(),
+            "constraints": self.system.num_constraints(),
+            "groups": groups,
+            // The largest vertex displacement from the input, over its bounding-box diagonal.
+            "max_displacement": moved / diagonal,
+            "iterations": solve.energies.len(),
+            "initial_energy": solve.initial_energy,
+            "energy": solve.energies,
+            // |E_k − E_{k−1}| / E_{k−1}, from E_0 = initial_energy.
+            "relative_change": relative_changes(solve.initial_energy, &solve.energies),
+            "acceleration": self.system.params().acceleration,
+            "rejected": solve.rejected,
+            "factor": {"nnz_lower": nnz_a, "nnz_l": nnz_l},
+            "warnings": warnings.to_json(),
+            "timings": {
+                "load_s": self.load_seconds,
+                "setup_s": self.build_seconds + solve.setup_seconds,
+                "local_s": solve.local_seconds,
+                "global_s": solve.global_seconds,
+                "total_s": total_seconds,
+            },
+        })
+    }
+
+    /// Writes the result `q` (working frame) to `path` as `shapeup deform` does (the format
+    /// from the extension; a volume format writes the tetrahedra too; `ply_encoding` for a
+    /// PLY file, default the input's or binary little-endian), atomically. Returns the mesh
+    /// written and what writing it said.
+    ///
+    /// # Errors
+    /// [`IoError`] naming the file (an unknown extension, a folder that does not exist…).
+    pub fn write_result(
+        &self,
+        path: &Path,
+        q: &[DVec3],
+        ply_encoding: Option<PlyEncoding>,
+    ) -> Result<(Mesh, Warnings), IoError> {
+        let format = match WriteFormat::from_path(path)? {
+            WriteFormat::Ply(_) => WriteFormat::Ply(ply_encoding),
+            other => other,
+        };
+        let volume = matches!(format, WriteFormat::Msh | WriteFormat::Vtu | WriteFormat::TetGen);
+        let mesh = self.output_mesh(q, volume, |v| self.system.is_solved(v));
+        let warnings = write_mesh_with(path, &mesh, format)?;
+        Ok((mesh, warnings))
+    }
+
+    /// Starts the scene's Projective Dynamics run (`shapeup simulate`): the simulation at rest
+    /// and its spinning handles. The constraint system moves into it.
+    ///
+    /// # Errors
+    /// As [`LoadedScene::start_simulation`] and [`LoadedScene::spinning_handles`].
+    pub fn start_scene_simulation(&mut self) -> Result<SceneSimulation, SceneError> {
+        let simulation = self.start_simulation()?;
+        let spinning = self.spinning_handles(simulation.system())?;
+        Ok(SceneSimulation { simulation, spinning })
+    }
+}
+
+/// Why a scene's time step failed.
+#[derive(Debug, thiserror::Error)]
+pub enum StepError {
+    /// The solver refused (non-finite positions, a singular system…).
+    #[error(transparent)]
+    Solve(#[from] SolveError),
+    /// ½ Σ m v² overflowed: a rigid fall keeps E finite (even 0) while the velocities blow up.
+    #[error(
+        "the kinetic energy is not a finite number (velocities too large); check the gravity, time step and targets"
+    )]
+    Diverged,
+}
+
+/// A scene's simulation: [`Simulation`] plus the handles that turn with time.
+#[derive(Debug)]
+pub struct SceneSimulation {
+    /// The state and the system in dynamic mode.
+    pub simulation: Simulation,
+    spinning: Vec<SpinningHandle>,
+}
+
+impl SceneSimulation {
+    /// One time step: spinning handles take their targets at the end of the step, then
+    /// [`Simulation::step`].
+    ///
+    /// # Errors
+    /// [`StepError`]; on [`StepError::Diverged`] the step has been taken.
+    pub fn step(&mut self) -> Result<StepReport, StepError> {
+        let t = (self.simulation.steps() + 1) as f64 * self.simulation.params().time_step;
+        for handle in &self.spinning {
+            self.simulation.system_mut().set_targets(handle.id, &handle.targets_at(t))?;
+        }
+        let report = self.simulation.step()?;
+        if !self.simulation.kinetic_energy().is_finite() {
+            return Err(StepError::Diverged);
+        }
+        Ok(report)
+    }
+}
