@@ -1,0 +1,113 @@
+"""Bad arguments raise the right exception with one clear line."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import shapeup
+
+from conftest import DATA, grid
+
+
+def solver():
+    V, F = grid(3, 3)
+    return shapeup.Solver(V, F)
+
+
+@pytest.mark.parametrize(
+    "V, exc, needle",
+    [
+        (np.zeros((4, 2)), ValueError, "shape (n, 3)"),
+        (np.zeros(12), ValueError, "shape (n, 3)"),
+        (np.array([["a", "b", "c"]]), TypeError, "dtype"),
+        (np.array([[0, 0, np.nan], [1, 0, 0], [0, 1, 0]]), ValueError, "row 0"),
+        (np.array([[0, 0, 0], [np.inf, 0, 0], [0, 1, 0]]), ValueError, "row 1"),
+    ],
+)
+def test_bad_vertices(V, exc, needle):
+    with pytest.raises(exc, match=None) as e:
+        shapeup.Solver(V, [[0, 1, 2]])
+    assert needle in str(e.value)
+
+
+def test_bad_faces():
+    V = np.zeros((3, 3))
+    with pytest.raises(IndexError, match="index 3"):
+        shapeup.Solver(V, [[0, 1, 3]])
+    with pytest.raises(IndexError, match="index -1"):
+        shapeup.Solver(V, np.array([[0, 1, -1]]))
+    with pytest.raises(TypeError, match="integer"):
+        shapeup.Solver(V, np.array([[0.0, 1.0, 2.0]]))
+    with pytest.raises(ValueError, match="at least 3"):
+        shapeup.Solver(V, [[0, 1]])
+
+
+def test_bad_groups():
+    s = solver()
+    with pytest.raises(ValueError, match="edge_sprin"):
+        s.add("edge_sprin")
+    with pytest.raises(ValueError, match="strain_fredom"):
+        s.add("edge_strain", strain_fredom=0.1)
+    with pytest.raises(ValueError, match="weight"):
+        s.add("edge_spring", weight=-1.0)
+    with pytest.raises(ValueError, match="weight"):
+        s.add("edge_spring", weight=float("nan"))
+    with pytest.raises(IndexError, match="out of range"):
+        s.add("position", [0, 99])
+    with pytest.raises(ValueError, match="strain_freedom"):
+        s.add("edge_strain", strain_freedom=np.inf)
+    with pytest.raises(ValueError, match="min"):
+        s.add("angle", min=-1.0)
+    with pytest.raises(ValueError):
+        s.add("circle", {"vertices": [0, 1]}, whole_selection=True)
+    with pytest.raises(ValueError, match="rigid"):
+        s.add("rigid", [3])
+    g = s.add("position", [0, 1])
+    with pytest.raises(ValueError, match="2"):
+        s.set_targets(g, np.zeros((3, 3)))
+    with pytest.raises(KeyError):
+        s.set_weight("nope", 1.0)
+    with pytest.raises(ValueError, match="weight"):
+        s.set_weight(g, -2)
+
+
+def test_face_type_on_triangles_is_refused():
+    V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], dtype=float)
+    s = shapeup.Solver(V, [[0, 1, 2]])
+    with pytest.raises(ValueError, match="plane"):
+        s.add("plane")
+
+
+def test_solve_errors():
+    s = solver()
+    with pytest.raises(shapeup.SolveFailed, match="no constraints"):
+        s.solve()
+    s.add("edge_spring")
+    with pytest.raises(shapeup.SolveFailed, match="position"):
+        s.solve()
+    s.add("position", [0])
+    with pytest.raises(ValueError, match="rows"):
+        s.solve(np.zeros((3, 3)))
+    with pytest.raises(ValueError, match="acceleration"):
+        s.solve(acceleration="fast")
+    with pytest.raises(TypeError, match="iterations"):
+        s.solve(iterations=2.5)
+
+
+def test_file_errors(tmp_path):
+    with pytest.raises(FileNotFoundError, match="nope.obj"):
+        shapeup.read_mesh(tmp_path / "nope.obj")
+    bad = tmp_path / "bad.obj"
+    bad.write_text("v 0 0 0\nv 1 0 0\nf 1 2 7\n")
+    with pytest.raises(ValueError, match="bad.obj"):
+        shapeup.read_mesh(bad)
+    with pytest.raises(FileNotFoundError, match="nope.toml"):
+        shapeup.Scene.load(tmp_path / "nope.toml")
+    scene = tmp_path / "s.toml"
+    scene.write_text(f'[mesh]\npath = "{DATA / "stanford-bunny.obj"}"\n[solver]\niteratons = 3\n')
+    with pytest.raises(ValueError, match="iteratons"):
+        shapeup.Scene.load(scene)
+    V, F = grid(2, 2)
+    with pytest.raises(OSError):
+        shapeup.write_mesh(tmp_path / "no-such-folder" / "x.obj", V, F)
+    assert not (tmp_path / "no-such-folder").exists()

@@ -1,0 +1,80 @@
+"""numpy <-> library round trips: what a file carries comes back out, moved."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import shapeup
+
+from conftest import DATA, grid
+
+
+def test_read_gives_arrays_in_file_order():
+    m = shapeup.read_mesh(DATA / "stanford-bunny.obj")
+    lines = (DATA / "stanford-bunny.obj").read_text().splitlines()
+    rows = [list(map(float, l.split()[1:4])) for l in lines if l.startswith("v ")]
+    assert m.V.dtype == np.float64 and m.V.shape == (len(rows), 3)
+    np.testing.assert_array_equal(m.V, np.array(rows))
+    assert m.F.dtype == np.int64 and m.F.shape[1] == 3
+    assert m.F.min() >= 0 and m.F.max() < len(m)
+
+
+def test_quads_stay_quads_and_move(tmp_path):
+    m = shapeup.read_mesh(DATA / "suzanne.obj")
+    sizes = {len(p) for p in m.polygons}
+    assert 4 in sizes
+    V2 = m.V + np.array([0.5, -1.0, 2.0])
+    out = tmp_path / "moved.obj"
+    shapeup.write_mesh(out, V2, like=m)
+    back = shapeup.read_mesh(out)
+    np.testing.assert_allclose(back.V, V2, rtol=0, atol=1e-12)
+    assert [p.tolist() for p in back.polygons] == [p.tolist() for p in m.polygons]
+
+
+def test_texture_coordinates_round_trip(tmp_path):
+    m = shapeup.read_mesh(DATA / "spot.obj")
+    uv = m.texcoords
+    assert uv is not None and uv[0].shape[1] == 2
+    out = tmp_path / "spot.obj"
+    shapeup.write_mesh(out, m.V * 2.0, like=m)
+    back = shapeup.read_mesh(out)
+    np.testing.assert_allclose(back.V, m.V * 2.0, atol=1e-12)
+    np.testing.assert_array_equal(back.texcoords[0], uv[0])
+    np.testing.assert_array_equal(back.texcoords[1], uv[1])
+
+
+@pytest.mark.parametrize("ext", ["obj", "ply", "off"])
+def test_arrays_round_trip(tmp_path, ext):
+    V, F = grid(3, 2)
+    out = tmp_path / f"grid.{ext}"
+    shapeup.write_mesh(out, V, F)
+    back = shapeup.read_mesh(out)
+    np.testing.assert_allclose(back.V, V, atol=1e-12)
+    assert [p.tolist() for p in back.polygons] == F.tolist()
+
+
+def test_polygon_lists_and_tetrahedra(tmp_path):
+    V = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0.5, 1.5, 0]], dtype=float)
+    F = [[0, 1, 2, 3], [3, 2, 4]]
+    m = shapeup.Mesh.from_arrays(V, F)
+    assert [p.tolist() for p in m.polygons] == F
+    assert m.F.shape == (3, 3)
+    from conftest import tet_cube
+
+    Vt, T = tet_cube()
+    out = tmp_path / "cube.msh"
+    shapeup.write_mesh(out, Vt, T=T)
+    back = shapeup.read_mesh(out)
+    np.testing.assert_allclose(back.V, Vt, atol=1e-12)
+    assert sorted(map(sorted, back.T.tolist())) == sorted(map(sorted, T.tolist()))
+
+
+def test_c_contiguous_float64_is_not_copied():
+    from shapeup._api import _vertices
+
+    V = np.zeros((4, 3))
+    assert _vertices(V) is V
+    # Other layouts are converted (a copy), not refused.
+    Vf = np.asfortranarray(np.ones((4, 3)))
+    assert _vertices(Vf).flags.c_contiguous
+    assert _vertices(np.ones((4, 3), dtype=np.float32)).dtype == np.float64

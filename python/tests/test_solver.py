@@ -1,0 +1,112 @@
+"""The Solver: every registered type is reachable, the energy never increases, and a solve
+equals the command line's on the same scene."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+
+import numpy as np
+import pytest
+import shapeup
+
+from conftest import DATA, grid, tet_cube
+
+TYPES = [t.name for t in shapeup.constraint_types()]
+
+
+def test_registry_is_complete():
+    # The same list `shapeup types` prints; and help() on add lists every type.
+    table = shapeup.catalogue_markdown()
+    for name in TYPES:
+        assert f"`{name}`" in table
+        assert name in shapeup.Solver.add.__doc__
+    assert {"plane", "circle", "rigid", "position", "surface_closeness", "gravity"} <= set(TYPES)
+
+
+@pytest.mark.parametrize("kind", TYPES)
+def test_every_type_solves_and_never_raises_the_energy(kind):
+    info = {t.name: t for t in shapeup.constraint_types()}[kind]
+    if info.acts_on == "tetrahedra":
+        V, T = tet_cube()
+        s = shapeup.Solver(V, T=T)
+        anchor = [0]
+    else:
+        V, F = grid(4, 3, bump=0.3)
+        s = shapeup.Solver(V, F)
+        anchor = [0, 4]
+    kwargs = {"translate": [0.0, 0.1, 0.0]} if info.has_targets else {}
+    g = s.add(kind, **kwargs)
+    assert g.type == kind and g.constraints > 0
+    if kind != "position":
+        s.add("position", anchor, weight=10.0, name="anchor")
+    # Something to work against, so that the energy is not already 0.
+    s.add("edge_spring" if kind != "edge_spring" else "laplacian", weight=0.1, name="extra")
+    q0 = V + 0.05 * np.random.default_rng(1).standard_normal(V.shape)
+    q, report = s.solve(q0, iterations=8, acceleration="none")
+    assert q.shape == V.shape and np.isfinite(q).all()
+    e = [report["initial_energy"]] + report["energy"]
+    assert all(b <= a + 1e-9 * abs(a) + 1e-12 for a, b in zip(e, e[1:])), e
+    energy = s.energy(q)
+    assert energy["total"] == pytest.approx(report["energy"][-1], rel=1e-9, abs=1e-12)
+    assert set(energy["groups"]) == {g.name for g in s.groups}
+
+
+def test_handles_move_and_groups_change():
+    V, F = grid(6, 6)
+    s = shapeup.Solver(V, F)
+    s.add("edge_spring")
+    base = s.add("position", V[:, 0] < 1e-9, name="base")
+    tip = s.add("position", V[:, 0] > 1 - 1e-9, name="tip")
+    held = s.held(tip)
+    np.testing.assert_array_equal(held, np.flatnonzero(V[:, 0] > 1 - 1e-9))
+    s.set_targets("tip", V[held] + [0.0, 0.3, 0.0])
+    q, _ = s.solve(iterations=50)
+    np.testing.assert_allclose(q[held, 1], 0.3, atol=0.05)
+    s.set_weight(base, 0.0)
+    s.remove(tip)
+    assert [g.name for g in s.groups] == ["edge_spring", "base"]
+    # A second group of the same type gets its own name.
+    assert s.add("edge_spring").name == "edge_spring_2"
+
+
+def test_rigid_motion_commutes():
+    V, F = grid(5, 5, bump=0.2)
+    rot = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+    shift = np.array([1.0, 2.0, -3.0])
+    d = np.array([0.0, 0.0, 0.2])
+    results = []
+    for W, dd in ((V, d), (V @ rot.T + shift, d @ rot.T)):
+        s = shapeup.Solver(W, F)
+        s.add("plane")
+        s.add("position", [0, 1, 2], name="a")
+        s.set_targets("a", W[[0, 1, 2]] + dd)
+        results.append(s.solve(iterations=20)[0])
+    np.testing.assert_allclose(results[0] @ rot.T + shift, results[1], atol=1e-9)
+
+
+def test_equals_the_command_line(tmp_path, cli):
+    # A scene without normalization works in the file's coordinates, as the Solver does.
+    mesh = DATA / "stanford-bunny.obj"
+    scene = tmp_path / "s.toml"
+    scene.write_text(
+        f'[mesh]\npath = "{mesh}"\nnormalize = false\n[solver]\niterations = 30\n'
+        '[[constraints]]\ntype = "edge_spring"\nweight = 10.0\n'
+        '[[constraints]]\ntype = "position"\nname = "base"\nbox = { min = [-1, -1, -1], max = [1, 0.05, 1] }\n'
+        '[[constraints]]\ntype = "position"\nname = "ears"\nbox = { min = [-1, 0.16, -1], max = [1, 1, 1] }\n'
+        "translate = [0.02, 0.01, 0.0]\n"
+    )
+    out = tmp_path / "cli.obj"
+    subprocess.run([str(cli), "deform", str(scene), "-o", str(out)], check=True, capture_output=True)
+    expected = shapeup.read_mesh(out).V
+
+    m = shapeup.read_mesh(mesh)
+    V = m.V
+    s = shapeup.Solver(m.V, m.F)
+    s.add("edge_spring", weight=10.0)
+    s.add("position", (V[:, 1] <= 0.05), name="base")
+    ears = V[:, 1] >= 0.16
+    s.add("position", ears, name="ears", translate=[0.02, 0.01, 0.0])
+    q, report = s.solve(iterations=30)
+    assert report["iterations"] == 30
+    np.testing.assert_allclose(q, expected, rtol=0, atol=1e-12)
