@@ -4,8 +4,8 @@
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
 use shapeup_core::io::write_atomic;
-use shapeup_core::scene::Scene;
 use shapeup_core::scene::frames::{FrameFormat, FrameWriter};
+use shapeup_core::scene::{Scene, StepTotals};
 use std::io::{IsTerminal, Write};
 use std::path::Path;
 use std::time::Instant;
@@ -71,8 +71,7 @@ pub fn run(args: &SimulateArgs<'_>) -> Result<()> {
     } else {
         ProgressBar::hidden()
     };
-    let (mut energies, mut local, mut global, mut setup, mut energy_seconds, mut rejected) =
-        (Vec::with_capacity(args.frames.min(1 << 20)), 0.0, 0.0, 0.0, 0.0, 0);
+    let mut totals = StepTotals { energies: Vec::with_capacity(args.frames.min(1 << 20)), ..StepTotals::default() };
     let mut steps = || -> Result<()> {
         frames.write(0, &run.simulation)?;
         for k in 1..=args.frames {
@@ -91,16 +90,13 @@ pub fn run(args: &SimulateArgs<'_>) -> Result<()> {
                         let e = simulation
                             .energy()
                             .map_err(|e| anyhow::anyhow!("{}: energy after step {k}: {e}", args.scene.display()))?;
-                        energy_seconds += t.elapsed().as_secs_f64();
+                        totals.energy_seconds += t.elapsed().as_secs_f64();
                         e
                     }
                 };
-                energies.push(energy);
+                totals.energies.push(energy);
             }
-            local += step.local_seconds;
-            rejected += step.rejected;
-            global += step.global_seconds;
-            setup += step.setup_seconds;
+            totals.add(&step);
             if k % args.every == 0 || k == args.frames {
                 frames.write(k, simulation)?;
             }
@@ -127,30 +123,8 @@ pub fn run(args: &SimulateArgs<'_>) -> Result<()> {
     let simulation = &run.simulation;
     let system = simulation.system();
     if let Some(path) = report.as_deref() {
-        let report = serde_json::json!({
-            "vertices": loaded.mesh.num_vertices(),
-            "triangles": loaded.mesh.num_triangles(),
-            "tetrahedra": loaded.mesh.num_tetrahedra(),
-            "constraints": system.num_constraints(),
-            "steps": args.frames,
-            "format": format.extension(),
-            "frames_written": written,
-            "time_step": simulation.params().time_step,
-            "simulated_s": simulation.time(),
-            "energy": energies,
-            "kinetic_energy_end": simulation.kinetic_energy(),
-            "acceleration": system.params().acceleration.name(),
-            "rejected": rejected,
-            "warnings": warnings.to_json(),
-            "timings": {
-                "load_s": loaded.load_seconds,
-                "setup_s": loaded.build_seconds + setup,
-                "local_s": local,
-                "global_s": global,
-                "energy_s": energy_seconds,
-                "total_s": total,
-            },
-        });
+        let report =
+            loaded.simulate_report(simulation, &totals, args.frames, format.extension(), written, &warnings, total);
         let text = serde_json::to_string_pretty(&report)?;
         write_atomic(path, |w| w.write_all(text.as_bytes()))?;
     }

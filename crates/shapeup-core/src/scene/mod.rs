@@ -11,7 +11,7 @@ mod run;
 mod write;
 
 pub use build::{LoadedScene, SpinningHandle, lumped_masses, resolve_selection};
-pub use run::{SceneSimulation, StepError, relative_changes};
+pub use run::{SceneSimulation, StepError, StepTotals, relative_changes};
 
 use crate::mesh::Mesh;
 use crate::solver::{Acceleration, Factorization, MAX_ANDERSON_WINDOW, MAX_LBFGS_MEMORY, SolverParams};

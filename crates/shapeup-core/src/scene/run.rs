@@ -118,6 +118,76 @@ impl LoadedScene {
     }
 }
 
+/// What a run of time steps adds up for its report.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct StepTotals {
+    /// E after each step (when the run records it).
+    pub energies: Vec<f64>,
+    /// Seconds in local steps.
+    pub local_seconds: f64,
+    /// Seconds in global steps.
+    pub global_seconds: f64,
+    /// Seconds (re)assembling and factoring.
+    pub setup_seconds: f64,
+    /// Seconds spent computing E after plain steps (which skip it).
+    pub energy_seconds: f64,
+    /// Accelerated iterations replaced by plain ones.
+    pub rejected: usize,
+}
+
+impl StepTotals {
+    /// Adds one step's timings and rejections.
+    pub fn add(&mut self, step: &StepReport) {
+        self.local_seconds += step.local_seconds;
+        self.global_seconds += step.global_seconds;
+        self.setup_seconds += step.setup_seconds;
+        self.rejected += step.rejected;
+    }
+}
+
+impl LoadedScene {
+    /// The JSON report of a simulation (`shapeup simulate --report`): sizes, `steps` asked
+    /// for, the frames' `format` and how many were written, E after each step, the kinetic
+    /// energy at the end, the acceleration, the warnings and the timings.
+    #[allow(clippy::too_many_arguments)]
+    pub fn simulate_report(
+        &self,
+        simulation: &Simulation,
+        totals: &StepTotals,
+        steps: usize,
+        format: &str,
+        frames_written: usize,
+        warnings: &Warnings,
+        total_seconds: f64,
+    ) -> Value {
+        let system = simulation.system();
+        json!({
+            "vertices": self.mesh.num_vertices(),
+            "triangles": self.mesh.num_triangles(),
+            "tetrahedra": self.mesh.num_tetrahedra(),
+            "constraints": system.num_constraints(),
+            "steps": steps,
+            "format": format,
+            "frames_written": frames_written,
+            "time_step": simulation.params().time_step,
+            "simulated_s": simulation.time(),
+            "energy": totals.energies,
+            "kinetic_energy_end": simulation.kinetic_energy(),
+            "acceleration": system.params().acceleration.name(),
+            "rejected": totals.rejected,
+            "warnings": warnings.to_json(),
+            "timings": {
+                "load_s": self.load_seconds,
+                "setup_s": self.build_seconds + totals.setup_seconds,
+                "local_s": totals.local_seconds,
+                "global_s": totals.global_seconds,
+                "energy_s": totals.energy_seconds,
+                "total_s": total_seconds,
+            },
+        })
+    }
+}
+
 /// Why a scene's time step failed.
 #[derive(Debug, thiserror::Error)]
 pub enum StepError {
