@@ -39,8 +39,9 @@ def main() -> None:
     parser.add_argument("--screenshot", metavar="OUT.png")
     args = parser.parse_args()
 
-    # process=False: trimesh keeps every vertex in file order (no merging), as shapeup does.
-    mesh = trimesh.load(args.mesh, process=False, force="mesh")
+    # process=False, maintain_order=True: trimesh keeps every vertex in file order (no merging,
+    # unreferenced vertices kept), as shapeup does, so indices match the file's.
+    mesh = trimesh.load(args.mesh, process=False, maintain_order=True, force="mesh")
     V, F = np.asarray(mesh.vertices), np.asarray(mesh.faces)
     q, report = deform(V, F)
     print(f"{len(V)} vertices: E {report['initial_energy']:.3e} -> {report['energy'][-1]:.3e} "

@@ -57,15 +57,16 @@ def _indices(values: Any, n: int, name: str, kind: str = "vertex") -> np.ndarray
         return np.zeros(a.shape, dtype=np.int64)
     if a.dtype.kind not in "iu":
         raise TypeError(f"{name} must hold integer {kind} indices, found dtype {a.dtype}")
-    a = a.astype(np.int64, copy=False)
-    bad = (a < 0) | (a >= n)
+    # Checked before the cast, so that a huge unsigned index is not reported wrapped.
+    bad = (a >= n) if a.dtype.kind == "u" else (a < 0) | (a >= n)
     if bad.any():
         at = tuple(int(i) for i in np.argwhere(bad)[0])
         where = at[0] if len(at) == 1 else at
+        plural = "vertices" if kind == "vertex" else f"{kind}s"
         raise IndexError(
-            f"{name}: {kind} index {int(a[at])} at {where} is out of range (there are {n} {kind}s: 0..{n - 1})"
+            f"{name}: {kind} index {int(a[at])} at {where} is out of range (there are {n} {plural}: 0..{n - 1})"
         )
-    return a
+    return a.astype(np.int64, copy=False)
 
 
 def _polygons(F: Any, n: int) -> tuple[np.ndarray, np.ndarray]:
@@ -157,7 +158,7 @@ class Mesh:
 
     @property
     def F(self) -> np.ndarray:
-        """Triangles, int64 (m, 3): the polygons' triangulation (each polygon fanned)."""
+        """Triangles, int64 (m, 3): the polygons' triangulation (ear clipping; see docs/math.md)."""
         return self._native.triangles
 
     @property
@@ -237,6 +238,8 @@ def write_mesh(path: PathLike, V: Any, F: Any = None, T: Any = None, *, like: Me
     Returns what writing said (what the format cannot store, with a count). Raises as
     :meth:`Mesh.from_arrays`, and OSError when the file cannot be written."""
     if like is not None:
+        if not isinstance(like, Mesh):
+            raise TypeError(f"like must be a shapeup.Mesh (from read_mesh), found {type(like).__name__}")
         if F is not None or T is not None:
             raise ValueError("give either like= (a mesh to move) or F/T, not both")
         mesh = like.with_vertices(V)
@@ -374,9 +377,16 @@ class _Groups:
                 elif a.ndim != 1:
                     raise ValueError(f"selection must be a 1-D array of vertex indices, found shape {a.shape}")
                 entry["vertices"] = _indices(a, self._n, "selection").tolist()
+        if "spin" in options:
+            raise ValueError(
+                "spin turns scene handles in `shapeup simulate`; from Python, move the targets each "
+                "step with set_targets(group, targets)"
+            )
         for key, value in options.items():
             if key in entry:
                 raise ValueError(f"{key} given twice")
+            if key == "vertices":
+                value = _indices(value, self._n, "vertices")
             entry[key] = _json(value, key)
         gid, gname, gtype, count = self._native.add(json.dumps(entry))
         group = Group(gid, gname, gtype, count)
@@ -426,6 +436,8 @@ class _Groups:
 
 
 def _mesh_of(V: Any, F: Any, T: Any, mesh: Mesh | None) -> Mesh:
+    if mesh is not None and not isinstance(mesh, Mesh):
+        raise TypeError(f"mesh must be a shapeup.Mesh (from read_mesh or Mesh.from_arrays), found {type(mesh).__name__}")
     if mesh is not None:
         if V is not None or F is not None or T is not None:
             raise ValueError("give either mesh= or V/F/T, not both")
@@ -442,7 +454,10 @@ class Solver(_Groups):
 
     ``Solver(V, F, T=None)`` or ``Solver(mesh=read_mesh(...))``. ``F`` may be triangles
     (m, 3), polygons (m, k) or a list of polygons; face types (plane, circle, rectangle…) act
-    on polygons as given."""
+    on polygons as given.
+
+    One thread at a time: a call from another thread while it solves raises RuntimeError
+    ("Already borrowed"); give each thread its own Solver."""
 
     def __init__(self, V: Any = None, F: Any = None, T: Any = None, *, mesh: Mesh | None = None) -> None:
         self.mesh = _mesh_of(V, F, T, mesh)
@@ -650,7 +665,8 @@ class Scene:
 
         FileNotFoundError when the scene is missing; ValueError naming the file and the entry
         (unknown key, bad value, bad selection) otherwise."""
-        path = Path(os.fspath(path))
+        # Absolute, so that a later os.chdir does not move the scene's mesh.
+        path = Path(os.path.abspath(os.fspath(path)))
         if not overrides:
             return Scene(_shapeup._Scene(str(path)))
         try:

@@ -5,6 +5,9 @@ shapes beyond one process.
 >>> results = run_scenes(["a.toml", ("a.toml", {"constraints.0.weight": 3.0,
 ...                                             "output.path": "out/a-w3.obj"})])  # doctest: +SKIP
 
+In a script, call it under ``if __name__ == "__main__":``: the local cluster starts worker
+processes, which import the script again.
+
 Each scene runs as the command line runs it: a static scene is deformed (``shapeup deform``),
 a dynamic one simulated for its ``steps`` (``shapeup simulate``). Results land where the
 scene's ``[output]`` table says (``path``: the mesh, or the frames' folder; ``report``: the

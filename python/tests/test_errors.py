@@ -111,3 +111,17 @@ def test_file_errors(tmp_path):
     with pytest.raises(OSError):
         shapeup.write_mesh(tmp_path / "no-such-folder" / "x.obj", V, F)
     assert not (tmp_path / "no-such-folder").exists()
+
+
+def test_spin_and_keyword_vertices_are_checked():
+    s = solver()
+    with pytest.raises(ValueError, match="set_targets"):
+        s.add("position", [0], spin={"axis": [1, 0, 0], "deg_per_s": 60})
+    with pytest.raises(IndexError, match="out of range"):
+        s.add("position", vertices=[0, 99])
+    with pytest.raises(TypeError, match="integer"):
+        s.add("position", vertices=[0.5])
+    with pytest.raises(IndexError, match="18446744073709551615"):
+        s.add("position", np.array([2**64 - 1], dtype=np.uint64))
+    with pytest.raises(TypeError, match="shapeup.Mesh"):
+        shapeup.Solver(mesh="x.obj")

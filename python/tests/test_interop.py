@@ -23,7 +23,9 @@ def deform(V, F):
 
 def test_trimesh():
     trimesh = pytest.importorskip("trimesh")
-    m = trimesh.load(DATA / "stanford-bunny.obj", process=False)
+    m = trimesh.load(DATA / "stanford-bunny.obj", process=False, maintain_order=True)
+    ref = shapeup.read_mesh(DATA / "stanford-bunny.obj")
+    np.testing.assert_array_equal(m.vertices, ref.V)  # every vertex, in file order
     q = deform(m.vertices, m.faces)
     assert q.shape == m.vertices.shape
 

@@ -21,15 +21,17 @@ def python_blocks() -> list[str]:
 def test_readme_python_section(tmp_path, monkeypatch, capsys):
     blocks = python_blocks()
     assert len(blocks) == 2, "the README's Python section has its example and the batch example"
+    assert 'if __name__ == "__main__":' in blocks[1], "Dask's worker processes re-import a script"
     for name in ("data", "examples"):
         os.symlink(ROOT / name, tmp_path / name)
     monkeypatch.chdir(tmp_path)
-    exec(compile(blocks[0], "README.md (Python example)", "exec"), {})
+    exec(compile(blocks[0], "README.md (Python example)", "exec"), {"__name__": "__main__"})
     out = shapeup.read_mesh(tmp_path / "bunny-py.obj")
     moved = np.abs(out.V - shapeup.read_mesh(ROOT / "data" / "stanford-bunny.obj").V).max()
     assert moved > 0.01
     assert "->" in capsys.readouterr().out
-    exec(compile(blocks[1], "README.md (batch example)", "exec"), {})
+    # As a script: under `if __name__ == "__main__":`.
+    exec(compile(blocks[1], "README.md (batch example)", "exec"), {"__name__": "__main__"})
     printed = capsys.readouterr().out.strip().splitlines()
     assert len(printed) == 3 and all(" True " in line for line in printed), printed
     for w in (1.0, 10.0, 100.0):

@@ -55,3 +55,38 @@ def test_overrides(tmp_path):
         shapeup.Scene.load(scene, {"constraints.9.weight": 1.0})
     with pytest.raises(ValueError, match="iteratons"):
         shapeup.Scene.load(scene, {"solver.iteratons": 1})
+
+
+def test_nothing_is_written_when_a_result_cannot_be(tmp_path):
+    scene = shapeup.Scene.load(EXAMPLES / "bunny-springs.toml")
+    out = tmp_path / "left.obj"
+    with pytest.raises(OSError, match="proc"):
+        scene.deform(output=out, report="/proc/x.json")
+    with pytest.raises(ValueError, match="obj, ply, off, stl, vtu, msh"):
+        scene.deform(output=tmp_path / "roof.xyz")
+    with pytest.raises(ValueError, match="json"):
+        scene.deform(output=out, report=tmp_path / "r.txt")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_simulate_report_has_the_cli_keys(tmp_path, cli):
+    scene = EXAMPLES / "cloth-drape.toml"
+    rep = tmp_path / "cli.json"
+    subprocess.run(
+        [str(cli), "simulate", str(scene), "--frames", "3", "-o", str(tmp_path / "f"), "--report", str(rep)],
+        check=True,
+        capture_output=True,
+    )
+    cli_report = json.loads(rep.read_text())
+    _, report = shapeup.Scene.load(scene).simulate(3)
+    assert set(cli_report) <= set(report), set(cli_report) - set(report)
+    assert set(cli_report["timings"]) == set(report["timings"])
+    np.testing.assert_allclose(report["energy"], cli_report["energy"], rtol=1e-12)
+
+
+def test_a_loaded_scene_survives_chdir(tmp_path, monkeypatch):
+    monkeypatch.chdir(EXAMPLES.parent)
+    scene = shapeup.Scene.load("examples/bunny-springs.toml")
+    monkeypatch.chdir(tmp_path)
+    V, _ = scene.deform(iterations=1)
+    assert V.shape[1] == 3

@@ -18,7 +18,7 @@ use shapeup_core::geometry::{RestGeometry, WorkingFrame};
 use shapeup_core::io::IoError;
 use shapeup_core::mesh::{Mesh as CoreMesh, Polygons};
 use shapeup_core::scene::frames::{FrameFormat, FrameWriter};
-use shapeup_core::scene::{GroupSpec, Scene as CoreScene, SceneError, SceneFormat, lumped_masses};
+use shapeup_core::scene::{GroupSpec, Scene as CoreScene, SceneError, SceneFormat, StepTotals, lumped_masses};
 use shapeup_core::solver::{Acceleration, GroupId, SolveError, SolveReport, SolverParams, System};
 use shapeup_core::warnings::Warnings;
 use std::ops::ControlFlow;
@@ -662,6 +662,14 @@ impl PyScene {
         report: Option<PathBuf>,
     ) -> PyResult<(PyMesh, String)> {
         let start = Instant::now();
+        if let Some(path) = &output {
+            check_output_extension(path)?;
+        }
+        if let Some(path) = &report
+            && !path.extension().is_some_and(|e| e.eq_ignore_ascii_case("json"))
+        {
+            return Err(value_error(format!("{}: the report must be a .json file", path.display())));
+        }
         for path in output.iter().chain(&report) {
             check_folder(path)?;
         }
@@ -707,6 +715,9 @@ impl PyScene {
         }
         let format = FrameFormat::parse(format).map_err(value_error)?;
         if let Some(r) = &report {
+            if !r.extension().is_some_and(|e| e.eq_ignore_ascii_case("json")) {
+                return Err(value_error(format!("{}: the report must be a .json file", r.display())));
+            }
             check_folder(r)?;
         }
         let mut loaded = py.detach(|| self.scene.load()).map_err(scene_error)?;
@@ -714,12 +725,12 @@ impl PyScene {
             std::fs::create_dir_all(dir).map_err(|e| {
                 PyOSError::new_err(format!("cannot create the output directory {}: {e}", dir.display()))
             })?;
+            check_folder(&dir.join("frame"))?;
         }
         let mut run = loaded.start_scene_simulation().map_err(scene_error)?;
         let loaded = &loaded;
         let mut writer = output.as_deref().map(|dir| FrameWriter::new(loaded, dir, frames, format));
         let mut kept: Vec<(usize, Vec<DVec3>)> = Vec::new();
-        let mut energies = Vec::new();
         let mut keep = |k: usize, sim: &CoreSimulation, writer: &mut Option<FrameWriter<'_>>| -> PyResult<()> {
             let system = sim.system();
             let mesh = loaded.output_mesh(sim.positions(), false, |v| system.is_solved(v));
@@ -731,11 +742,22 @@ impl PyScene {
         };
         keep(0, &run.simulation, &mut writer)?;
         let mut last_check = Instant::now();
+        let mut totals = StepTotals::default();
         for k in 1..=frames {
-            py.detach(|| run.step())
+            let step = py
+                .detach(|| run.step())
                 .map_err(|e| value_error(format!("{}: step {k} of {frames} failed: {e}", self.scene.file.display())))?;
-            let energy = py.detach(|| run.simulation.energy()).map_err(solve_error)?;
-            energies.push(energy);
+            totals.add(&step);
+            let energy = match step.energy {
+                Some(e) => e,
+                None => {
+                    let t = Instant::now();
+                    let e = py.detach(|| run.simulation.energy()).map_err(solve_error)?;
+                    totals.energy_seconds += t.elapsed().as_secs_f64();
+                    e
+                }
+            };
+            totals.energies.push(energy);
             if k % every == 0 || k == frames {
                 keep(k, &run.simulation, &mut writer)?;
             }
@@ -753,21 +775,17 @@ impl PyScene {
         if let Some(w) = &mut writer {
             warnings.extend(w.warnings.take().unwrap_or_default());
         }
-        let sim = &run.simulation;
-        let text = serde_json::to_string_pretty(&serde_json::json!({
-            "vertices": loaded.mesh.num_vertices(),
-            "tetrahedra": loaded.mesh.num_tetrahedra(),
-            "constraints": sim.system().num_constraints(),
-            "steps": frames,
-            "frames_written": writer.as_ref().map_or(0, |w| w.written.len()),
-            "time_step": sim.params().time_step,
-            "simulated_s": sim.time(),
-            "energy": energies,
-            "kinetic_energy_end": sim.kinetic_energy(),
-            "warnings": warnings.to_json(),
-            "timings": {"load_s": loaded.load_seconds, "total_s": start.elapsed().as_secs_f64()},
-        }))
-        .map_err(value_error)?;
+        let written = writer.as_ref().map_or(0, |w| w.written.len());
+        let json = loaded.simulate_report(
+            &run.simulation,
+            &totals,
+            frames,
+            format.extension(),
+            written,
+            &warnings,
+            start.elapsed().as_secs_f64(),
+        );
+        let text = serde_json::to_string_pretty(&json).map_err(value_error)?;
         if let Some(path) = &report {
             shapeup_core::io::write_atomic(path, |w| w.write_all(text.as_bytes())).map_err(io_error)?;
         }
@@ -786,15 +804,40 @@ fn annotate(py: Python<'_>, e: PyErr, file: &Path) -> PyErr {
     }
 }
 
-/// Fails before any work when the folder a result goes in does not exist (nothing is written).
+/// Fails before any work when the folder a result goes in does not exist or cannot take a
+/// file, so that a run writing a mesh and a report never writes one and fails on the other
+/// (as the command line checks).
 fn check_folder(path: &Path) -> PyResult<()> {
-    match path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        Some(dir) if !dir.is_dir() => Err(pyo3::exceptions::PyFileNotFoundError::new_err(format!(
-            "{}: the folder {} does not exist",
+    let dir = match path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        Some(dir) if !dir.is_dir() => {
+            return Err(pyo3::exceptions::PyFileNotFoundError::new_err(format!(
+                "{}: the folder {} does not exist",
+                path.display(),
+                dir.display()
+            )));
+        }
+        Some(dir) => dir,
+        None => Path::new("."),
+    };
+    std::fs::File::create_new(dir.join(format!(".shapeup-check-{}", std::process::id())))
+        .and_then(|_| std::fs::remove_file(dir.join(format!(".shapeup-check-{}", std::process::id()))))
+        .map_err(|e| PyOSError::new_err(format!("{}: cannot write in {}: {e}", path.display(), dir.display())))
+}
+
+/// The mesh formats `deform` writes, by extension.
+const OUTPUT_EXTENSIONS: [&str; 6] = ["obj", "ply", "off", "stl", "vtu", "msh"];
+
+/// Fails before any work on an output extension `deform` cannot write.
+fn check_output_extension(path: &Path) -> PyResult<()> {
+    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).unwrap_or_default();
+    if OUTPUT_EXTENSIONS.contains(&ext.as_str()) {
+        Ok(())
+    } else {
+        Err(value_error(format!(
+            "{}: unsupported output format \"{ext}\" (use one of: {})",
             path.display(),
-            dir.display()
-        ))),
-        _ => Ok(()),
+            OUTPUT_EXTENSIONS.join(", ")
+        )))
     }
 }
 
