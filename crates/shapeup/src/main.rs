@@ -28,7 +28,7 @@ mod view;
 #[command(
     name = "shapeup",
     version,
-    about = "Constraint-based shape deformation (ShapeUp) and simulation (Projective Dynamics) of triangle and tetrahedral meshes"
+    about = "Constraint-based shape deformation (ShapeUp) and simulation (Projective Dynamics) of polygon, triangle and tetrahedral meshes"
 )]
 struct Cli {
     /// Worker threads for the parallel local step (default: all cores).
