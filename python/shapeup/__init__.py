@@ -23,22 +23,9 @@ from ._api import (
 )
 from ._shapeup import __version__, catalogue_markdown, set_threads
 
-__all__ = [
-    "ConstraintType",
-    "Group",
-    "Mesh",
-    "Scene",
-    "Simulation",
-    "SolveFailed",
-    "Solver",
-    "__version__",
-    "batch",
-    "catalogue_markdown",
-    "constraint_types",
-    "read_mesh",
-    "set_threads",
-    "write_mesh",
-]
+from . import _api
+
+__all__ = [*_api.__all__, "__version__", "batch", "catalogue_markdown", "set_threads"]
 
 
 def __getattr__(name: str):

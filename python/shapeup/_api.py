@@ -465,6 +465,13 @@ class Solver(_Groups):
         self._n = len(self.mesh)
         self._init_groups()
 
+    def _positions(self, q: Any) -> np.ndarray:
+        """``q`` checked as :func:`_vertices`, with one row per vertex of the mesh."""
+        x = _vertices(q, "q")
+        if x.shape[0] != self._n:
+            raise ValueError(f"q has {x.shape[0]} rows but the mesh has {self._n} vertices")
+        return x
+
     def solve(
         self,
         q: Any = None,
@@ -486,17 +493,13 @@ class Solver(_Groups):
         tolerance = float(tolerance)
         if not (math.isfinite(tolerance) and tolerance >= 0):
             raise ValueError(f"tolerance must be a finite number >= 0, found {tolerance}")
-        x = None if q is None else _vertices(q, "q")
-        if x is not None and x.shape[0] != self._n:
-            raise ValueError(f"q has {x.shape[0]} rows but the mesh has {self._n} vertices")
+        x = None if q is None else self._positions(q)
         out, report = self._native.solve(x, iterations, tolerance, acceleration)
         return out, json.loads(report)
 
     def energy(self, q: Any) -> dict[str, Any]:
         """E(q) = Σ w_i ‖C_i q − p_i(q)‖²: ``{"total": E, "groups": {name: E_group}}``."""
-        x = _vertices(q, "q")
-        if x.shape[0] != self._n:
-            raise ValueError(f"q has {x.shape[0]} rows but the mesh has {self._n} vertices")
+        x = self._positions(q)
         total, per_group = self._native.energy(x)
         return {"total": total, "groups": {self._groups[g].name: e for g, e in per_group if g in self._groups}}
 

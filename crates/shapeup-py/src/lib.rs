@@ -15,7 +15,7 @@ use pyo3::prelude::*;
 use shapeup_core::constraints::held_vertices;
 use shapeup_core::dynamics::{DynamicsParams, Simulation as CoreSimulation};
 use shapeup_core::geometry::{RestGeometry, WorkingFrame};
-use shapeup_core::io::IoError;
+use shapeup_core::io::{IoError, MESH_OUTPUT_EXTENSIONS, OutputError, check_output_extension, check_output_folder};
 use shapeup_core::mesh::{Mesh as CoreMesh, Polygons};
 use shapeup_core::scene::frames::{FrameFormat, FrameWriter};
 use shapeup_core::scene::{GroupSpec, Scene as CoreScene, SceneError, SceneFormat, StepTotals, lumped_masses};
@@ -89,6 +89,13 @@ fn to_array<'py>(py: Python<'py>, points: &[DVec3]) -> Bound<'py, PyArray2<f64>>
     Array2::from_shape_vec((points.len(), 3), flat).unwrap_or_else(|_| Array2::zeros((0, 3))).into_pyarray(py)
 }
 
+/// Index rows (triangles, tetrahedra) as a new (m, K) int64 array.
+fn index_array<'py, const K: usize>(py: Python<'py>, rows: &[[u32; K]]) -> Bound<'py, PyArray2<i64>> {
+    let flat: Vec<i64> = rows.iter().flatten().map(|&v| i64::from(v)).collect();
+    // The shape matches the data by construction.
+    Array2::from_shape_vec((rows.len(), K), flat).unwrap_or_else(|_| Array2::zeros((0, K))).into_pyarray(py)
+}
+
 /// Rows of an (m, k) int64 array as `[u32; K]` (the Python side checked range and sign).
 fn rows<const K: usize>(array: &PyReadonlyArray2<'_, i64>, what: &str) -> PyResult<Vec<[u32; K]>> {
     let shape = array.shape();
@@ -130,19 +137,13 @@ impl PyMesh {
     /// The triangulation of the polygons, int64 (m, 3).
     #[getter]
     fn triangles<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<i64>> {
-        let flat: Vec<i64> = self.mesh.triangles.iter().flatten().map(|&v| i64::from(v)).collect();
-        Array2::from_shape_vec((self.mesh.triangles.len(), 3), flat)
-            .unwrap_or_else(|_| Array2::zeros((0, 3)))
-            .into_pyarray(py)
+        index_array(py, &self.mesh.triangles)
     }
 
     /// Tetrahedra, int64 (t, 4).
     #[getter]
     fn tetrahedra<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<i64>> {
-        let flat: Vec<i64> = self.mesh.tetrahedra.iter().flatten().map(|&v| i64::from(v)).collect();
-        Array2::from_shape_vec((self.mesh.tetrahedra.len(), 4), flat)
-            .unwrap_or_else(|_| Array2::zeros((0, 4)))
-            .into_pyarray(py)
+        index_array(py, &self.mesh.tetrahedra)
     }
 
     /// The polygons as (corner indices, offsets): polygon i is `indices[offsets[i]:offsets[i+1]]`.
@@ -289,19 +290,40 @@ fn catalogue_markdown() -> String {
     shapeup_core::constraints::catalogue_markdown()
 }
 
-/// Parses one group entry (JSON text in scene keys) and builds it on `mesh` (working frame
-/// `frame`).
-fn build_entry(
-    entry: &str,
+/// Adds a group from one entry (JSON text in scene keys: the scene parser and builder) on
+/// `mesh` / `rest` (user coordinates) to `system`; returns (id, name, type, constraints). The
+/// group calls below serve Solver and Simulation alike.
+fn add_entry(
+    system: &mut System,
     mesh: &CoreMesh,
     rest: &RestGeometry,
-    frame: &WorkingFrame,
-) -> PyResult<(GroupSpec, shapeup_core::solver::ConstraintGroup)> {
+    entry: &str,
+) -> PyResult<(u32, String, String, usize)> {
     let map: serde_json::Map<String, serde_json::Value> =
         serde_json::from_str(entry).map_err(|e| value_error(format!("bad group entry: {e}")))?;
     let spec = GroupSpec::from_entry(map).map_err(value_error)?;
-    let group = spec.build(mesh, rest, frame).map_err(value_error)?;
-    Ok((spec, group))
+    let group = spec.build(mesh, rest, &WorkingFrame::IDENTITY).map_err(value_error)?;
+    let (name, kind, count) = (group.name.clone(), group.kind.to_string(), group.constraints.len());
+    let id = system.add_group(group).map_err(value_error)?;
+    Ok((id.0, name, kind, count))
+}
+
+fn held(system: &System, id: u32) -> PyResult<Vec<u32>> {
+    let group = system.group(GroupId(id)).ok_or_else(|| value_error(format!("no group {id}")))?;
+    Ok(held_vertices(group))
+}
+
+fn set_targets(system: &mut System, id: u32, targets: &PyReadonlyArray2<'_, f64>) -> PyResult<()> {
+    let targets = points(targets, "targets")?;
+    system.set_targets(GroupId(id), &targets).map_err(value_error)
+}
+
+fn set_weight(system: &mut System, id: u32, weight: f64) -> PyResult<()> {
+    system.set_multiplier(GroupId(id), weight).map_err(value_error)
+}
+
+fn remove(system: &mut System, id: u32) -> PyResult<()> {
+    system.remove_group(GroupId(id)).map(|_| ()).ok_or_else(|| value_error(format!("no group {id}")))
 }
 
 /// The report of a solve as JSON text.
@@ -373,28 +395,23 @@ impl PySolver {
 
     /// Adds a group from a scene entry (JSON text); returns (id, name, type, constraints).
     fn add(&mut self, entry: &str) -> PyResult<(u32, String, String, usize)> {
-        let (_, group) = build_entry(entry, &self.mesh, &self.rest, &WorkingFrame::IDENTITY)?;
-        let (name, kind, count) = (group.name.clone(), group.kind.to_string(), group.constraints.len());
-        let id = self.system.add_group(group).map_err(value_error)?;
-        Ok((id.0, name, kind, count))
+        add_entry(&mut self.system, &self.mesh, &self.rest, entry)
     }
 
     fn held(&self, id: u32) -> PyResult<Vec<u32>> {
-        let group = self.system.group(GroupId(id)).ok_or_else(|| value_error(format!("no group {id}")))?;
-        Ok(held_vertices(group))
+        held(&self.system, id)
     }
 
     fn set_targets(&mut self, id: u32, targets: PyReadonlyArray2<'_, f64>) -> PyResult<()> {
-        let targets = points(&targets, "targets")?;
-        self.system.set_targets(GroupId(id), &targets).map_err(value_error)
+        set_targets(&mut self.system, id, &targets)
     }
 
     fn set_weight(&mut self, id: u32, weight: f64) -> PyResult<()> {
-        self.system.set_multiplier(GroupId(id), weight).map_err(value_error)
+        set_weight(&mut self.system, id, weight)
     }
 
     fn remove(&mut self, id: u32) -> PyResult<()> {
-        self.system.remove_group(GroupId(id)).map(|_| ()).ok_or_else(|| value_error(format!("no group {id}")))
+        remove(&mut self.system, id)
     }
 
     /// Solves from `q` (default the rest shape); returns (q, report as JSON text).
@@ -472,32 +489,23 @@ impl PySimulation {
     }
 
     fn add(&mut self, entry: &str) -> PyResult<(u32, String, String, usize)> {
-        let (_, group) = build_entry(entry, &self.mesh, &self.rest, &WorkingFrame::IDENTITY)?;
-        let (name, kind, count) = (group.name.clone(), group.kind.to_string(), group.constraints.len());
-        let id = self.simulation.system_mut().add_group(group).map_err(value_error)?;
-        Ok((id.0, name, kind, count))
+        add_entry(self.simulation.system_mut(), &self.mesh, &self.rest, entry)
     }
 
     fn held(&self, id: u32) -> PyResult<Vec<u32>> {
-        let group = self.simulation.system().group(GroupId(id)).ok_or_else(|| value_error(format!("no group {id}")))?;
-        Ok(held_vertices(group))
+        held(self.simulation.system(), id)
     }
 
     fn set_targets(&mut self, id: u32, targets: PyReadonlyArray2<'_, f64>) -> PyResult<()> {
-        let targets = points(&targets, "targets")?;
-        self.simulation.system_mut().set_targets(GroupId(id), &targets).map_err(value_error)
+        set_targets(self.simulation.system_mut(), id, &targets)
     }
 
     fn set_weight(&mut self, id: u32, weight: f64) -> PyResult<()> {
-        self.simulation.system_mut().set_multiplier(GroupId(id), weight).map_err(value_error)
+        set_weight(self.simulation.system_mut(), id, weight)
     }
 
     fn remove(&mut self, id: u32) -> PyResult<()> {
-        self.simulation
-            .system_mut()
-            .remove_group(GroupId(id))
-            .map(|_| ())
-            .ok_or_else(|| value_error(format!("no group {id}")))
+        remove(self.simulation.system_mut(), id)
     }
 
     /// `n` time steps without the GIL (Ctrl+C stops between steps); returns the steps' reports
@@ -663,18 +671,16 @@ impl PyScene {
     ) -> PyResult<(PyMesh, String)> {
         let start = Instant::now();
         if let Some(path) = &output {
-            check_output_extension(path)?;
+            check_extension(path, MESH_OUTPUT_EXTENSIONS)?;
         }
-        if let Some(path) = &report
-            && !path.extension().is_some_and(|e| e.eq_ignore_ascii_case("json"))
-        {
-            return Err(value_error(format!("{}: the report must be a .json file", path.display())));
+        if let Some(path) = &report {
+            check_extension(path, &["json"])?;
         }
         for path in output.iter().chain(&report) {
             check_folder(path)?;
         }
         let mut loaded = py.detach(|| self.scene.load()).map_err(scene_error)?;
-        let iterations = iterations.unwrap_or(self.scene.solver.iterations.saturating_mul(self.scene.solver.steps));
+        let iterations = loaded.static_iterations(iterations);
         let mut q = loaded.rest.positions.clone();
         let tolerance = self.scene.solver.tolerance;
         let solve = solve_interruptible(py, &mut loaded.system, &mut q, iterations, tolerance)
@@ -715,9 +721,7 @@ impl PyScene {
         }
         let format = FrameFormat::parse(format).map_err(value_error)?;
         if let Some(r) = &report {
-            if !r.extension().is_some_and(|e| e.eq_ignore_ascii_case("json")) {
-                return Err(value_error(format!("{}: the report must be a .json file", r.display())));
-            }
+            check_extension(r, &["json"])?;
             check_folder(r)?;
         }
         let mut loaded = py.detach(|| self.scene.load()).map_err(scene_error)?;
@@ -804,41 +808,22 @@ fn annotate(py: Python<'_>, e: PyErr, file: &Path) -> PyErr {
     }
 }
 
-/// Fails before any work when the folder a result goes in does not exist or cannot take a
-/// file, so that a run writing a mesh and a report never writes one and fails on the other
-/// (as the command line checks).
-fn check_folder(path: &Path) -> PyResult<()> {
-    let dir = match path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        Some(dir) if !dir.is_dir() => {
-            return Err(pyo3::exceptions::PyFileNotFoundError::new_err(format!(
-                "{}: the folder {} does not exist",
-                path.display(),
-                dir.display()
-            )));
-        }
-        Some(dir) => dir,
-        None => Path::new("."),
-    };
-    std::fs::File::create_new(dir.join(format!(".shapeup-check-{}", std::process::id())))
-        .and_then(|_| std::fs::remove_file(dir.join(format!(".shapeup-check-{}", std::process::id()))))
-        .map_err(|e| PyOSError::new_err(format!("{}: cannot write in {}: {e}", path.display(), dir.display())))
+/// The library's before-any-work output checks as Python exceptions: a missing folder is a
+/// `FileNotFoundError`, an unwritable one an `OSError`, an extension a `ValueError`.
+fn output_error(e: OutputError) -> PyErr {
+    match e {
+        OutputError::MissingFolder { .. } => pyo3::exceptions::PyFileNotFoundError::new_err(e.to_string()),
+        OutputError::Unwritable { .. } => PyOSError::new_err(e.to_string()),
+        OutputError::Extension { .. } => value_error(e),
+    }
 }
 
-/// The mesh formats `deform` writes, by extension.
-const OUTPUT_EXTENSIONS: [&str; 6] = ["obj", "ply", "off", "stl", "vtu", "msh"];
+fn check_folder(path: &Path) -> PyResult<()> {
+    check_output_folder(path).map_err(output_error)
+}
 
-/// Fails before any work on an output extension `deform` cannot write.
-fn check_output_extension(path: &Path) -> PyResult<()> {
-    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).unwrap_or_default();
-    if OUTPUT_EXTENSIONS.contains(&ext.as_str()) {
-        Ok(())
-    } else {
-        Err(value_error(format!(
-            "{}: unsupported output format \"{ext}\" (use one of: {})",
-            path.display(),
-            OUTPUT_EXTENSIONS.join(", ")
-        )))
-    }
+fn check_extension(path: &Path, allowed: &'static [&'static str]) -> PyResult<()> {
+    check_output_extension(path, allowed).map_err(output_error)
 }
 
 /// Sets the worker threads of the parallel local step (once, before the first solve).

@@ -11,7 +11,9 @@
 use anyhow::{Context, Result, bail};
 use clap::{Args, Parser, Subcommand};
 use shapeup_core::bench::{Scenario, load_scenario};
-use shapeup_core::io::{PlyEncoding, read_mesh, write_atomic};
+use shapeup_core::io::{
+    MESH_OUTPUT_EXTENSIONS, PlyEncoding, check_output_extension, check_output_folder, read_mesh, write_atomic,
+};
 use shapeup_core::scene::Scene;
 use shapeup_core::scene::SolverSettings;
 use shapeup_core::solver::{Acceleration, Factorization, MAX_ANDERSON_WINDOW, MAX_LBFGS_MEMORY, SolverParams};
@@ -242,32 +244,10 @@ fn run(cli: Cli) -> Result<()> {
     }
 }
 
-/// Fails early (before any work) on an output extension we cannot write.
-fn check_output_extension(path: &Path, allowed: &[&str]) -> Result<()> {
-    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).unwrap_or_default();
-    if allowed.contains(&ext.as_str()) {
-        Ok(())
-    } else {
-        bail!("{}: unsupported output format \"{ext}\" (use one of: {})", path.display(), allowed.join(", "))
-    }
-}
-
 /// Fails early (before any work, so that nothing is written) when the folder `path` goes in
-/// does not exist or cannot take a new file (read-only, no permission, not a file system that
-/// holds files): a run that writes a mesh and a report must not write one and then fail on the
-/// other.
+/// does not exist or cannot take a new file ([`shapeup_core::io::check_output_folder`]).
 pub(crate) fn check_parent_dir(path: &Path) -> Result<()> {
-    let dir = match path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        Some(dir) if !dir.is_dir() => bail!("{}: the folder {} does not exist", path.display(), dir.display()),
-        Some(dir) => dir,
-        None => Path::new("."),
-    };
-    // The same kind of temporary file the atomic write makes there, removed on drop.
-    tempfile::Builder::new()
-        .prefix(".shapeup-check")
-        .tempfile_in(dir)
-        .map(drop)
-        .map_err(|e| anyhow::anyhow!("{}: cannot write in {}: {e}", path.display(), dir.display()))
+    Ok(check_output_folder(path)?)
 }
 
 fn deform(
@@ -289,7 +269,7 @@ fn deform(
     let output = output.as_path();
     let report_path = report_path.map(Path::to_path_buf).or_else(|| scene.report_path());
     let report_path = report_path.as_deref();
-    check_output_extension(output, &["obj", "ply", "off", "stl", "vtu", "msh"])?;
+    check_output_extension(output, MESH_OUTPUT_EXTENSIONS)?;
     check_parent_dir(output)?;
     if let Some(r) = report_path {
         check_output_extension(r, &["json"])?;

@@ -354,15 +354,7 @@ static TEMP_COUNTER: AtomicU64 = AtomicU64::new(0);
 /// rename.
 pub fn write_atomic(path: &Path, write: impl FnOnce(&mut dyn Write) -> io::Result<()>) -> Result<(), IoError> {
     let write_error = |source| IoError::Write { path: path.to_path_buf(), source };
-    let file_name = path
-        .file_name()
-        .ok_or_else(|| write_error(io::Error::new(io::ErrorKind::InvalidInput, "the path names no file")))?;
-    let dir = match path.parent() {
-        Some(dir) if !dir.as_os_str().is_empty() => dir,
-        _ => Path::new("."),
-    };
-    let n = TEMP_COUNTER.fetch_add(1, Ordering::Relaxed);
-    let temp = dir.join(format!(".{}.tmp-{}-{n}", file_name.to_string_lossy(), std::process::id()));
+    let (dir, temp) = temp_path(path).map_err(write_error)?;
 
     let file = OpenOptions::new().write(true).create(true).truncate(true).open(&temp).map_err(write_error)?;
     let result = (|| {
@@ -383,6 +375,85 @@ pub fn write_atomic(path: &Path, write: impl FnOnce(&mut dyn Write) -> io::Resul
         let _ = d.sync_all();
     }
     Ok(())
+}
+
+/// The folder of `path` (`.` for a bare name) and a fresh temp file name `.NAME.tmp-PID-N` in
+/// it, as [`write_atomic`] writes through.
+fn temp_path(path: &Path) -> io::Result<(&Path, PathBuf)> {
+    let file_name =
+        path.file_name().ok_or_else(|| io::Error::new(io::ErrorKind::InvalidInput, "the path names no file"))?;
+    let dir = match path.parent() {
+        Some(dir) if !dir.as_os_str().is_empty() => dir,
+        _ => Path::new("."),
+    };
+    let n = TEMP_COUNTER.fetch_add(1, Ordering::Relaxed);
+    Ok((dir, dir.join(format!(".{}.tmp-{}-{n}", file_name.to_string_lossy(), std::process::id()))))
+}
+
+/// The mesh formats a result can be written in, by extension (`shapeup deform -o`,
+/// `Scene.deform(output=…)`).
+pub const MESH_OUTPUT_EXTENSIONS: &[&str] = &["obj", "ply", "off", "stl", "vtu", "msh"];
+
+/// Why a result cannot go where it was asked to: checked before any work, so that a run that
+/// writes a mesh and a report never writes one and then fails on the other.
+#[derive(Debug, thiserror::Error)]
+pub enum OutputError {
+    /// An extension that is not one of `allowed`.
+    #[error("{}: unsupported output format \"{ext}\" (use one of: {})", path.display(), allowed.join(", "))]
+    Extension {
+        /// The output.
+        path: PathBuf,
+        /// Its extension, lower case.
+        ext: String,
+        /// What may be written there.
+        allowed: &'static [&'static str],
+    },
+    /// The folder it goes in does not exist.
+    #[error("{}: the folder {} does not exist", path.display(), dir.display())]
+    MissingFolder {
+        /// The output.
+        path: PathBuf,
+        /// Its folder.
+        dir: PathBuf,
+    },
+    /// The folder cannot take a new file (read-only, no permission, not a file system).
+    #[error("{}: cannot write in {}: {source}", path.display(), dir.display())]
+    Unwritable {
+        /// The output.
+        path: PathBuf,
+        /// Its folder.
+        dir: PathBuf,
+        /// Why.
+        source: io::Error,
+    },
+}
+
+/// Fails unless `path`'s extension (case-insensitive) is one of `allowed`.
+///
+/// # Errors
+/// [`OutputError::Extension`].
+pub fn check_output_extension(path: &Path, allowed: &'static [&'static str]) -> Result<(), OutputError> {
+    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).unwrap_or_default();
+    if allowed.contains(&ext.as_str()) {
+        Ok(())
+    } else {
+        Err(OutputError::Extension { path: path.to_path_buf(), ext, allowed })
+    }
+}
+
+/// Fails unless the folder `path` goes in exists and takes a new file: it creates (and
+/// removes) the kind of temp file [`write_atomic`] writes through.
+///
+/// # Errors
+/// [`OutputError::MissingFolder`] or [`OutputError::Unwritable`].
+pub fn check_output_folder(path: &Path) -> Result<(), OutputError> {
+    let unwritable = |dir: &Path, source| OutputError::Unwritable { path: path.to_path_buf(), dir: dir.into(), source };
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty() && !d.is_dir()) {
+        return Err(OutputError::MissingFolder { path: path.to_path_buf(), dir: dir.into() });
+    }
+    let (dir, temp) = temp_path(path).map_err(|e| unwritable(Path::new("."), e))?;
+    OpenOptions::new().write(true).create_new(true).open(&temp).map_err(|e| unwritable(dir, e))?;
+    fs::remove_file(&temp).map_err(|e| unwritable(dir, e))
 }
 
 /// The UTF-8 byte-order mark, skipped at the start of every text file.

@@ -268,14 +268,19 @@ impl LoadedScene {
     /// # Errors
     /// [`SceneError::Solve`] for a singular system.
     pub fn solve_static(&mut self, iterations: Option<usize>) -> Result<(Vec<DVec3>, SolveReport), SceneError> {
-        // steps × iterations beyond usize is far more than anyone can wait for: saturate.
-        let iterations = iterations.unwrap_or(self.scene.solver.iterations.saturating_mul(self.scene.solver.steps));
+        let iterations = self.static_iterations(iterations);
         let mut q = self.rest.positions.clone();
         let report = self
             .system
             .solve(&mut q, iterations, self.scene.solver.tolerance)
             .map_err(|source| SceneError::Solve { path: self.scene.file.clone(), source })?;
         Ok((q, report))
+    }
+
+    /// The iterations of a static solve: `iterations`, or the scene's steps × iterations.
+    pub fn static_iterations(&self, iterations: Option<usize>) -> usize {
+        // steps × iterations beyond usize is far more than anyone can wait for: saturate.
+        iterations.unwrap_or(self.scene.solver.iterations.saturating_mul(self.scene.solver.steps))
     }
 
     /// Working-frame positions mapped back to the input frame.
