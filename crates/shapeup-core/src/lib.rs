@@ -55,6 +55,7 @@ pub mod dynamics;
 pub mod error;
 pub mod generate;
 pub mod geometry;
+pub mod inspect;
 pub mod io;
 pub mod linalg;
 pub mod mesh;
