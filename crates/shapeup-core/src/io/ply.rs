@@ -12,7 +12,16 @@
 //! then the triangles of a `tristrips` element's list `vertex_indices`: −1 restarts a strip,
 //! every other triangle is flipped so that all turn the same way (OpenGL's order), and a
 //! triangle that repeats a vertex (strips use them to join) is skipped and counted. In ascii,
-//! each element instance is one line.
+//! each element instance is one line. A file must start with `ply`; an ascii one saved as UTF-16
+//! (byte-order mark `FF FE` or `FE FF`) is decoded, a binary one cannot be UTF-16 text and is
+//! refused naming the encoding.
+//!
+//! **Hostile sizes.** Header counts reserve at most [`MAX_PREALLOCATION`] values in all, however
+//! many elements and properties the header declares; the rest grows as data actually arrives, and
+//! every instance, list item and strip index is read (and checked) once, so a file of a few KB
+//! that claims 2³¹ elements or lists of 4·10⁹ items fails at its end, in time and memory
+//! proportional to its size, and a face of any number of corners reads in linear time. Text
+//! quoted in errors (names, values, header lines) is cut to 60 characters.
 //!
 //! **Written** ([`write_ply`]), a mesh read from PLY gets its header back line for line (only
 //! `format` changes when the encoding does) and every element and property with its type; only
@@ -30,7 +39,11 @@ use std::path::Path;
 
 use glam::DVec3;
 
-use super::{IoError, Lines, LoadedMesh, bounded_vec, build_mesh, report_dropped, write_f64};
+use super::msh::shown;
+use super::{
+    IoError, Lines, LoadedMesh, MAX_PREALLOCATION, build_mesh, decode_text, read_error, report_dropped, utf16_encoding,
+    write_f64,
+};
 use crate::attributes::{AttributeKind, Attributes, NO_INDEX, TexCoords, VertexScalar};
 use crate::mesh::{Mesh, Polygons};
 use crate::warnings::Warnings;
@@ -628,12 +641,16 @@ struct Header {
 /// range, a face with fewer than 3 indices, a strip with fewer than 3 indices, a non-blank line
 /// after the last element); [`IoError::Binary`] with the byte offset and element index for
 /// truncated binary data and the same face, index and strip errors, or with the offset of any
-/// bytes after the last element;
-/// [`IoError::Invalid`] for zero vertices; [`IoError::Mesh`] for a non-finite coordinate;
-/// [`IoError::Read`] if reading fails.
-pub fn read_ply(reader: impl BufRead, path: &Path) -> Result<LoadedMesh, IoError> {
+/// bytes after the last element, or for malformed UTF-16 text; [`IoError::Parse`] also for a
+/// binary `format` in a UTF-16 file; [`IoError::Invalid`] for zero vertices; [`IoError::Mesh`]
+/// for a non-finite coordinate; [`IoError::Read`] if reading fails.
+pub fn read_ply(mut reader: impl BufRead, path: &Path) -> Result<LoadedMesh, IoError> {
+    let utf16 = utf16_encoding(reader.fill_buf().map_err(|e| read_error(path, e))?);
+    // An ascii file in UTF-16 is transcoded; other files pass through byte for byte.
+    let reader = decode_text(reader).map_err(|e| read_error(path, e))?;
     let mut lines = Lines::new(reader);
-    let Header { encoding, lines: header, mut elements, declared, end_line } = parse_header(&mut lines, path)?;
+    let Header { encoding, lines: header, mut elements, declared, end_line } = parse_header(&mut lines, path, utf16)?;
+    reserve(&mut elements);
     let plan = plan(&elements, &declared, end_line, path)?;
     let num_vertices = elements.get(plan.vertex.0).map_or(0, |v| v.count);
     let checks = Checks { plan: &plan, num_vertices };
@@ -690,14 +707,37 @@ fn mesh_parts(elements: &[PlyElement], plan: &Plan) -> (Vec<DVec3>, Polygons, Wa
     (positions, polygons, warnings)
 }
 
-fn parse_header<R: BufRead>(lines: &mut Lines<R>, path: &Path) -> Result<Header, IoError> {
+/// Room in every property for the instances its element announces, within one shared bound
+/// ([`MAX_PREALLOCATION`] values in all, however many properties a header declares); lists
+/// and anything beyond grow as data arrives.
+fn reserve(elements: &mut [PlyElement]) {
+    let vectors: usize = elements
+        .iter()
+        .flat_map(|e| &e.properties)
+        .map(|p| if matches!(p.ty, PlyType::List { .. }) { 2 } else { 1 })
+        .sum();
+    let share = MAX_PREALLOCATION / vectors.max(1);
+    for element in elements {
+        let room = element.count.min(share);
+        for property in &mut element.properties {
+            property.values.reserve(room);
+            if matches!(property.ty, PlyType::List { .. }) {
+                property.offsets.reserve(room);
+            }
+        }
+    }
+}
+
+fn parse_header<R: BufRead>(lines: &mut Lines<R>, path: &Path, utf16: Option<&'static str>) -> Result<Header, IoError> {
     let parse_error = |line: usize, message: String| IoError::Parse { path: path.to_path_buf(), line, message };
-    let read_error = |source| IoError::Read { path: path.to_path_buf(), source };
+    let read_error = |source| read_error(path, source);
     match lines.next_line().map_err(read_error)? {
         Some((_, first)) if first.trim() == "ply" => {}
         Some((_, first)) => {
-            let shown: String = first.chars().take(40).collect();
-            return Err(parse_error(1, format!("not a PLY file: expected 'ply' on the first line, found '{shown}'")));
+            return Err(parse_error(
+                1,
+                format!("not a PLY file: expected 'ply' on the first line, found '{}'", shown(first)),
+            ));
         }
         None => return Err(parse_error(1, "empty file (expected 'ply' on the first line)".to_owned())),
     }
@@ -712,19 +752,31 @@ fn parse_header<R: BufRead>(lines: &mut Lines<R>, path: &Path) -> Result<Header,
                 "the header has no 'end_header' line (the file ends inside the header)".to_owned(),
             ));
         };
-        let tokens: Vec<&str> = text.split_whitespace().collect();
+        // No header line has more than 5 words but comments, which are kept whole: a sixth word
+        // is enough to tell a malformed line, without collecting a huge line's every word.
+        let tokens: Vec<&str> = text.split_whitespace().take(6).collect();
         match tokens.as_slice() {
             [] | ["comment", ..] | ["obj_info", ..] => {}
             ["format", format, ..] => {
                 encoding = Some(match *format {
                     "ascii" => PlyEncoding::Ascii,
+                    "binary_little_endian" | "binary_big_endian" if utf16.is_some() => {
+                        return Err(parse_error(
+                            line,
+                            format!(
+                                "a {format} file cannot be {} text (the file starts with its byte-order mark)",
+                                utf16.unwrap_or_default()
+                            ),
+                        ));
+                    }
                     "binary_little_endian" => PlyEncoding::BinaryLittleEndian,
                     "binary_big_endian" => PlyEncoding::BinaryBigEndian,
                     other => {
                         return Err(parse_error(
                             line,
                             format!(
-                                "unknown format '{other}' (expected ascii, binary_little_endian or binary_big_endian)"
+                                "unknown format '{}' (expected ascii, binary_little_endian or binary_big_endian)",
+                                shown(other)
                             ),
                         ));
                     }
@@ -732,7 +784,14 @@ fn parse_header<R: BufRead>(lines: &mut Lines<R>, path: &Path) -> Result<Header,
             }
             ["element", name, count] => {
                 let count = count.parse::<usize>().map_err(|_| {
-                    parse_error(line, format!("element '{name}' has count '{count}', expected a non-negative integer"))
+                    parse_error(
+                        line,
+                        format!(
+                            "element '{}' has count '{}', expected a non-negative integer",
+                            shown(name),
+                            shown(count)
+                        ),
+                    )
                 })?;
                 elements.push(PlyElement { name: (*name).to_owned(), count, properties: Vec::new() });
                 declared.push(line);
@@ -743,7 +802,7 @@ fn parse_header<R: BufRead>(lines: &mut Lines<R>, path: &Path) -> Result<Header,
                 };
                 let scalar = |name: &str| {
                     PlyScalar::parse(name).ok_or_else(|| {
-                        parse_error(line, format!("unknown property type '{name}' (expected {TYPE_NAMES})"))
+                        parse_error(line, format!("unknown property type '{}' (expected {TYPE_NAMES})", shown(name)))
                     })
                 };
                 let (ty, name) = match rest {
@@ -752,7 +811,7 @@ fn parse_header<R: BufRead>(lines: &mut Lines<R>, path: &Path) -> Result<Header,
                         if !count_type.is_integer() {
                             return Err(parse_error(
                                 line,
-                                format!("list count type '{count}' must be an integer type"),
+                                format!("list count type '{}' must be an integer type", shown(count)),
                             ));
                         }
                         (PlyType::List { count: count_type, item: scalar(item)? }, name)
@@ -762,15 +821,13 @@ fn parse_header<R: BufRead>(lines: &mut Lines<R>, path: &Path) -> Result<Header,
                         return Err(parse_error(
                             line,
                             format!(
-                                "malformed property '{text}' (expected 'property TYPE NAME' or 'property list COUNT_TYPE ITEM_TYPE NAME')"
+                                "malformed property '{}' (expected 'property TYPE NAME' or 'property list COUNT_TYPE ITEM_TYPE NAME')",
+                                shown(text)
                             ),
                         ));
                     }
                 };
-                let mut property = PlyProperty::new(name, ty);
-                // Room for what the header announces, within bounds; lists grow as read.
-                property.values = bounded_vec(element.count);
-                element.properties.push(property);
+                element.properties.push(PlyProperty::new(name, ty));
             }
             ["end_header"] => {
                 let encoding =
@@ -778,12 +835,12 @@ fn parse_header<R: BufRead>(lines: &mut Lines<R>, path: &Path) -> Result<Header,
                 return Ok(Header { encoding, lines: header, elements, declared, end_line: line });
             }
             [keyword, ..] => {
-                let shown: String = keyword.chars().take(40).collect();
                 let hint = if elements.is_empty() { "" } else { "; is 'end_header' missing?" };
                 return Err(parse_error(
                     line,
                     format!(
-                        "unexpected header line starting with '{shown}' (expected format, element, property, comment, obj_info or end_header{hint})"
+                        "unexpected header line starting with '{}' (expected format, element, property, comment, obj_info or end_header{hint})",
+                        shown(keyword)
                     ),
                 ));
             }
@@ -799,7 +856,7 @@ fn plan(elements: &[PlyElement], declared: &[usize], end_line: usize, path: &Pat
         let mut found = elements.iter().enumerate().filter(|(_, e)| e.name == name).map(|(i, _)| i);
         let first = found.next();
         if let Some(second) = found.next() {
-            return Err(parse_error(line_of(second), format!("a second '{name}' element")));
+            return Err(parse_error(line_of(second), format!("a second '{}' element", shown(name))));
         }
         Ok(first)
     };
@@ -844,19 +901,21 @@ impl Checks<'_> {
     /// indices, a face or strip index that is no vertex, a strip too short.
     fn instance(&self, e: usize, element: &PlyElement, i: usize) -> Result<(), String> {
         let n = self.num_vertices;
-        let name = &element.name;
+        // Only errors spell the name out (cut short: it may be a long word).
+        let name = || shown(&element.name);
         let list = |p: usize| element.properties.get(p).and_then(|p| p.list(i)).unwrap_or(&[]);
         let out_of_range =
-            |v: f64| format!("{name} {i} refers to vertex {v}, but the file has {n} vertices (valid: 0..{n})");
+            |v: f64| format!("{} {i} refers to vertex {v}, but the file has {n} vertices (valid: 0..{n})", name());
         if let Some((_, p)) = self.plan.face.filter(|(fe, _)| *fe == e) {
             let k = list(p).len();
             if k < 3 {
-                return Err(format!("{name} {i} has {k} vertex indices, expected at least 3"));
+                return Err(format!("{} {i} has {k} vertex indices, expected at least 3", name()));
             }
             for &v in list(p) {
                 if !(v >= 0.0 && v.fract() == 0.0) {
                     return Err(format!(
-                        "element '{name}' {i}: vertex index {v} is not a valid index (expected an integer ≥ 0)"
+                        "element '{}' {i}: vertex index {v} is not a valid index (expected an integer ≥ 0)",
+                        name()
                     ));
                 }
                 if v >= n as f64 {
@@ -869,19 +928,20 @@ impl Checks<'_> {
             for &v in items {
                 if !(v == -1.0 || (v >= 0.0 && v.fract() == 0.0)) {
                     return Err(format!(
-                        "element '{name}' {i}: vertex index {v} is not a valid index (expected an integer ≥ 0, or -1 to restart the strip)"
+                        "element '{}' {i}: vertex index {v} is not a valid index (expected an integer ≥ 0, or -1 to restart the strip)",
+                        name()
                     ));
                 }
                 if v >= n as f64 {
                     return Err(out_of_range(v));
                 }
             }
-            let runs: Vec<usize> = items.split(|&v| v < 0.0).map(<[f64]>::len).collect();
-            if let Some(short) = runs.iter().find(|&&k| k == 1 || k == 2) {
-                return Err(format!("element '{name}' {i}: a strip of {short} indices (a triangle needs 3)"));
+            let mut runs = items.split(|&v| v < 0.0).map(<[f64]>::len);
+            if let Some(short) = runs.clone().find(|&k| k == 1 || k == 2) {
+                return Err(format!("element '{}' {i}: a strip of {short} indices (a triangle needs 3)", name()));
             }
-            if runs.iter().all(|&k| k < 3) {
-                return Err(format!("element '{name}' {i}: a strip with fewer than 3 indices"));
+            if runs.all(|k| k < 3) {
+                return Err(format!("element '{}' {i}: a strip with fewer than 3 indices", name()));
             }
         }
         Ok(())
@@ -902,15 +962,13 @@ fn read_ascii_body<R: BufRead>(
         }
         for i in 0..element.count {
             loop {
-                let Some((line, text)) =
-                    lines.next_line().map_err(|source| IoError::Read { path: path.to_path_buf(), source })?
-                else {
+                let Some((line, text)) = lines.next_line().map_err(|source| read_error(path, source))? else {
                     let count = element.count;
                     return Err(parse_error(
                         lines.number + 1,
                         format!(
                             "file ends before element '{}' {i} of {count} (the header declares {count})",
-                            element.name
+                            shown(&element.name)
                         ),
                     ));
                 };
@@ -924,14 +982,14 @@ fn read_ascii_body<R: BufRead>(
         }
     }
     // Content after the last instance means the header's counts disagree with the data.
-    while let Some((line, text)) =
-        lines.next_line().map_err(|source| IoError::Read { path: path.to_path_buf(), source })?
-    {
+    while let Some((line, text)) = lines.next_line().map_err(|source| read_error(path, source))? {
         if !text.trim().is_empty() {
-            let shown: String = text.trim().chars().take(40).collect();
             return Err(parse_error(
                 line,
-                format!("content after the last element: '{shown}' (the header's counts disagree with the data)"),
+                format!(
+                    "content after the last element: '{}' (the header's counts disagree with the data)",
+                    shown(text.trim())
+                ),
             ));
         }
     }
@@ -941,11 +999,14 @@ fn read_ascii_body<R: BufRead>(
 /// Reads instance `i` of `element` from its line's `text` into its properties.
 fn parse_ascii_instance(text: &str, element: &mut PlyElement, i: usize) -> Result<(), String> {
     let PlyElement { name, properties, .. } = element;
+    let name = &*name;
     let mut tokens = text.split_whitespace();
     let mut next_value = |ty: PlyScalar, what: &dyn Fn() -> String| -> Result<f64, String> {
-        let token =
-            tokens.next().ok_or_else(|| format!("element '{name}' {i} has too few values: {} is missing", what()))?;
+        let token = tokens
+            .next()
+            .ok_or_else(|| format!("element '{}' {i} has too few values: {} is missing", shown(name), what()))?;
         ty.parse_ascii(token).ok_or_else(|| {
+            let (name, token) = (shown(name), shown(token));
             if ty.is_integer() && token.parse::<f64>().is_ok() {
                 format!("element '{name}' {i}: {} '{token}' is not a {} (an integer in its range)", what(), ty.name())
             } else {
@@ -954,21 +1015,26 @@ fn parse_ascii_instance(text: &str, element: &mut PlyElement, i: usize) -> Resul
         })
     };
     for property in properties.iter_mut() {
+        // Spelled out (cut short) only in errors.
         let pname = &property.name;
         match property.ty {
             PlyType::Scalar(ty) => {
-                let v = next_value(ty, &|| format!("property '{pname}'"))?;
+                let v = next_value(ty, &|| format!("property '{}'", shown(pname)))?;
                 property.values.push(v);
             }
             PlyType::List { count, item } => {
-                let len = next_value(count, &|| format!("the length of property '{pname}'"))?;
+                let len = next_value(count, &|| format!("the length of property '{}'", shown(pname)))?;
                 if len < 0.0 {
-                    return Err(format!("element '{name}' {i}: property '{pname}' has a negative length {len}"));
+                    return Err(format!(
+                        "element '{}' {i}: property '{}' has a negative length {len}",
+                        shown(name),
+                        shown(pname)
+                    ));
                 }
                 // An integer in 0..=u32::MAX (parse_ascii checked the count type's range).
                 let len = len as usize;
                 for _ in 0..len {
-                    let v = next_value(item, &|| format!("an item of property '{pname}'"))?;
+                    let v = next_value(item, &|| format!("an item of property '{}'", shown(pname)))?;
                     property.values.push(v);
                 }
                 property.offsets.push(property.values.len());
@@ -977,7 +1043,7 @@ fn parse_ascii_instance(text: &str, element: &mut PlyElement, i: usize) -> Resul
     }
     let extra = tokens.count();
     if extra > 0 {
-        return Err(format!("element '{name}' {i} has {extra} more values than its properties declare"));
+        return Err(format!("element '{}' {i} has {extra} more values than its properties declare", shown(name)));
     }
     Ok(())
 }
@@ -1026,7 +1092,7 @@ fn read_binary_body<R: Read>(
             let map = |err: BinaryError, offset: u64| match err {
                 BinaryError::Eof => error(
                     offset,
-                    format!("file ends inside element '{name}' {i} of {count} (the header declares {count})"),
+                    format!("file ends inside element '{}' {i} of {count} (the header declares {count})", shown(name)),
                 ),
                 BinaryError::Io(source) => IoError::Read { path: path.to_path_buf(), source },
             };
@@ -1039,7 +1105,8 @@ fn read_binary_body<R: Read>(
                     PlyType::List { count: count_type, item } => {
                         let len = body.read(count_type).map_err(|err| map(err, body.offset))?;
                         if len < 0.0 {
-                            return Err(error(start, format!("element '{name}' {i}: list length {len} is negative")));
+                            let message = format!("element '{}' {i}: list length {len} is negative", shown(name));
+                            return Err(error(start, message));
                         }
                         // A u32 at most: items are only stored as they arrive.
                         for _ in 0..len as usize {
