@@ -5,23 +5,34 @@
 //!   (OBJ by default; `--format` ply, off, stl, vtu with a ParaView `.pvd`, msh).
 //! - `shapeup energy SCENE POSITIONS` — E of given positions under a scene's constraints.
 //! - `shapeup bench` — the standard benchmark scenarios, as a table.
+//! - `shapeup info MESH` — counts, pieces, boundary loops, defects, bounding box of a mesh.
+//! - `shapeup samples` — the sample meshes built into the binary (`--write DIR` writes them).
+//! - `shapeup completions SHELL`, `shapeup man` — shell completions and manual pages.
 //!
-//! Every error is one line on stderr and a non-zero exit; nothing is written on failure.
+//! Every error is one line on stderr and a non-zero exit; nothing is written on failure. Log
+//! records and progress bars: [`logging`].
 
 use anyhow::{Context, Result, bail};
 use clap::{Args, Parser, Subcommand};
+use glam::DVec3;
 use shapeup_core::bench::{Scenario, load_scenario};
 use shapeup_core::io::{
-    MESH_OUTPUT_EXTENSIONS, PlyEncoding, check_output_extension, check_output_folder, read_mesh, write_atomic,
+    LoadedMesh, MESH_OUTPUT_EXTENSIONS, PlyEncoding, check_output_extension, check_output_folder, read_mesh,
+    write_atomic,
 };
-use shapeup_core::scene::Scene;
-use shapeup_core::scene::SolverSettings;
-use shapeup_core::solver::{Acceleration, Factorization, MAX_ANDERSON_WINDOW, MAX_LBFGS_MEMORY, SolverParams};
+use shapeup_core::scene::{LoadedScene, Scene, SceneError, SolverSettings};
+use shapeup_core::solver::{
+    Acceleration, Factorization, MAX_ANDERSON_WINDOW, MAX_LBFGS_MEMORY, SolveReport, SolverParams,
+};
 use std::io::Write;
+use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
 
+mod logging;
+mod manual;
+mod samples;
 mod simulate;
 #[cfg(feature = "gui")]
 mod view;
@@ -30,12 +41,23 @@ mod view;
 #[command(
     name = "shapeup",
     version,
-    about = "Constraint-based shape deformation (ShapeUp) and simulation (Projective Dynamics) of polygon, triangle and tetrahedral meshes"
+    about = "Constraint-based shape deformation (ShapeUp) and simulation (Projective Dynamics) of polygon, triangle and tetrahedral meshes",
+    after_long_help = "Environment: RUST_LOG sets the log filter (env_logger's syntax, e.g. RUST_LOG=info or \
+                       RUST_LOG=wgpu_core=debug); -q and -v set the default level over it.\n\
+                       Samples: wherever a MESH is taken, the name of a mesh built into shapeup \
+                       (`shapeup samples`) stands for it when no file of that name exists."
 )]
 struct Cli {
     /// Worker threads for the parallel local step (default: all cores).
     #[arg(long, global = true, value_name = "N")]
     threads: Option<usize>,
+    /// Errors only: no warnings, no progress bars (RUST_LOG's default level becomes error).
+    #[arg(short, long, global = true, conflicts_with = "verbose")]
+    quiet: bool,
+    /// More log output on stderr: -v info, -vv debug, -vvv trace (over RUST_LOG's default
+    /// level; its per-module directives stay). Default: warnings.
+    #[arg(short, long, global = true, action = clap::ArgAction::Count)]
+    verbose: u8,
     #[command(subcommand)]
     command: Command,
 }
@@ -97,13 +119,45 @@ enum Command {
     Energy {
         /// Scene file (.toml or .json).
         scene: PathBuf,
-        /// Mesh with the positions to evaluate (.obj, .ply, …), same vertex count as the scene's.
+        /// Mesh with the positions to evaluate (.obj, .ply, …, or a bundled sample's name), same
+        /// vertex count as the scene's.
         positions: PathBuf,
+    },
+    /// Describes a mesh: counts (vertices, faces by corner count, triangles, tetrahedra, edges),
+    /// pieces, boundary loops, degenerate and non-manifold elements, bounding box and a guess
+    /// of its units.
+    Info {
+        /// Mesh file (.obj .ply .stl .off .msh .node/.ele .vtu) or a bundled sample's name.
+        mesh: PathBuf,
+        /// Print the description as JSON instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Lists the sample meshes built into this binary (name, vertices, faces, source); any
+    /// MESH argument takes a sample's name when no file of that name exists.
+    Samples {
+        /// Write them into this folder (created if missing) as NAME.obj instead.
+        #[arg(long, value_name = "DIR")]
+        write: Option<PathBuf>,
+    },
+    /// Prints a shell completion script for shapeup on stdout (e.g. `shapeup completions bash >
+    /// ~/.local/share/bash-completion/completions/shapeup`).
+    Completions {
+        /// bash, zsh, fish, elvish or powershell.
+        shell: clap_complete::Shell,
+    },
+    /// Prints the manual page shapeup.1 (roff) on stdout, or writes it and one page per
+    /// subcommand (shapeup-deform.1, …) into a folder.
+    Man {
+        /// Write shapeup.1 and the subcommands' pages into this folder (created if missing).
+        #[arg(short, long, value_name = "DIR")]
+        output: Option<PathBuf>,
     },
     /// Opens the interactive editor on a mesh or a scene (default: the bundled bunny).
     #[cfg(feature = "gui")]
     View {
-        /// Mesh (.obj .ply .stl .off) or scene (.toml .json).
+        /// Mesh (.obj .ply .stl .off …), scene (.toml .json) or the name of a bundled sample
+        /// (`shapeup samples`).
         input: Option<PathBuf>,
         /// Render one frame to this PNG and exit (no window; a scene is solved first).
         #[arg(long, value_name = "OUT.png")]
@@ -117,7 +171,8 @@ enum Command {
     },
     /// Runs the standard benchmark scenarios (springs, strain+bending, iso) and prints a table.
     Bench {
-        /// Mesh to benchmark on (default: the bundled Stanford bunny).
+        /// Mesh to benchmark on, a file or a bundled sample's name (default: the Stanford
+        /// bunny, data/stanford-bunny.obj when there, else the bundled copy).
         #[arg(long, value_name = "MESH")]
         mesh: Option<PathBuf>,
         /// Timed iterations per scenario.
@@ -183,9 +238,13 @@ fn parse_acceleration(s: &str) -> Result<Acceleration, String> {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    logging::init(cli.quiet, cli.verbose);
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
+        // `shapeup man | head`: the reader left, nothing is wrong.
+        Err(e) if is_broken_pipe(&e) => ExitCode::SUCCESS,
         Err(e) => {
+            logging::print_held();
             // One line. shapeup-core's errors already quote their cause in their own message,
             // so only the outermost message is printed (the `{:#}` chain would repeat it).
             let message = e.to_string().replace('\n', " ");
@@ -193,6 +252,11 @@ fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+/// Whether `e` is a write to a closed pipe (stdout read by a program that stopped reading).
+fn is_broken_pipe(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| c.downcast_ref::<std::io::Error>().is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe))
 }
 
 /// The most worker threads `--threads` accepts: far beyond any core count a solve can use (each
@@ -214,6 +278,10 @@ fn run(cli: Cli) -> Result<()> {
             deform(&scene, output.as_deref(), iterations, report.as_deref(), ply_encoding, acceleration)
         }
         Command::Energy { scene, positions } => energy(&scene, &positions),
+        Command::Info { mesh, json } => info(&mesh, json),
+        Command::Samples { write } => samples::run(write.as_deref()),
+        Command::Completions { shell } => manual::completions(shell),
+        Command::Man { output } => manual::man(output.as_deref()),
         Command::Types => {
             std::io::stdout().lock().write_all(shapeup_core::constraints::catalogue_markdown().as_bytes())?;
             Ok(())
@@ -276,8 +344,24 @@ fn deform(
         check_parent_dir(r)?;
     }
     acceleration.apply(&mut scene.solver);
+    let spinner = logging::spinner(format!("loading {}", scene_path.display()));
     let mut loaded = scene.load()?;
-    let (q, solve) = loaded.solve_static(iterations)?;
+    drop(spinner);
+    log::info!(
+        "{}: {} vertices, {} constraints (mesh read in {:.2} s, constraints built in {:.2} s)",
+        scene_path.display(),
+        loaded.mesh.num_vertices(),
+        loaded.system.num_constraints(),
+        loaded.load_seconds,
+        loaded.build_seconds
+    );
+    let (q, solve) = solve_static(&mut loaded, iterations)?;
+    log::info!(
+        "solve: setup {:.3} s, local steps {:.3} s, global steps {:.3} s",
+        solve.setup_seconds,
+        solve.local_seconds,
+        solve.global_seconds
+    );
     let mut warnings = loaded.warnings.clone();
     let (mesh, written) = loaded.write_result(output, &q, ply_encoding)?;
     warnings.extend(written);
@@ -303,18 +387,37 @@ fn deform(
     Ok(())
 }
 
-/// Each warning once, as one line on stderr.
+/// [`LoadedScene::solve_static`] (the same solve: from the rest shape, the scene's tolerance),
+/// with a progress bar of the iterations and the current energy on a terminal.
+fn solve_static(loaded: &mut LoadedScene, iterations: Option<usize>) -> Result<(Vec<DVec3>, SolveReport)> {
+    let iterations = loaded.static_iterations(iterations);
+    let progress = logging::bar(iterations as u64, "{bar:40} {pos}/{len} iterations  E {msg}  {per_sec}  ETA {eta}");
+    progress.bar.set_message("…");
+    let mut q = loaded.rest.positions.clone();
+    let tolerance = loaded.scene.solver.tolerance;
+    let report = loaded
+        .system
+        .solve_with(&mut q, iterations, tolerance, |k, energy| {
+            progress.bar.set_position(k as u64);
+            progress.bar.set_message(format!("{energy:.6e}"));
+            ControlFlow::Continue(())
+        })
+        .map_err(|source| SceneError::Solve { path: loaded.scene.file.clone(), source })?;
+    Ok((q, report))
+}
+
+/// Each warning once, as one line on stderr (`shapeup: warning: FILE: COUNT MESSAGE (first:
+/// …)`): a warn record of shapeup's own target, so `-q` silences it.
 pub(crate) fn print_warnings(warnings: &shapeup_core::warnings::Warnings) {
-    let mut err = std::io::stderr().lock();
     for w in warnings.iter() {
-        let _ = writeln!(err, "shapeup: warning: {w}");
+        log::warn!(target: logging::TARGET, "{w}");
     }
 }
 
 fn energy(scene_path: &Path, positions_path: &Path) -> Result<()> {
     let scene = Scene::from_file(scene_path)?;
     let mut loaded = scene.load()?;
-    let positions = read_mesh(positions_path)?.mesh.positions;
+    let positions = samples::read_mesh_arg(positions_path)?.0.mesh.positions;
     if positions.len() != loaded.mesh.num_vertices() {
         bail!(
             "{}: has {} vertices but the scene's mesh has {} (positions must match the mesh vertex by vertex)",
@@ -331,6 +434,26 @@ fn energy(scene_path: &Path, positions_path: &Path) -> Result<()> {
             writeln!(out, "  {:<20} {:<16} {value:.12e}", g.name, g.kind)?;
         }
     }
+    Ok(())
+}
+
+/// `shapeup info MESH`: [`shapeup_core::inspect::MeshInfo`] of the mesh, as text or JSON (with
+/// the file's name under `"path"`); the reader's warnings go to stderr as usual.
+fn info(mesh: &Path, json: bool) -> Result<()> {
+    let (loaded, path) = samples::read_mesh_arg(mesh)?;
+    let info = shapeup_core::inspect::MeshInfo::of(&loaded.mesh);
+    let mut out = std::io::stdout().lock();
+    if json {
+        let mut value = serde_json::to_value(&info)?;
+        if let Some(object) = value.as_object_mut() {
+            object.insert("path".into(), path.display().to_string().into());
+        }
+        writeln!(out, "{}", serde_json::to_string_pretty(&value)?)?;
+    } else {
+        writeln!(out, "{}", path.display())?;
+        writeln!(out, "{}", info.to_string().trim_end())?;
+    }
+    print_warnings(&loaded.warnings);
     Ok(())
 }
 
@@ -370,13 +493,17 @@ fn bench_dynamic(steps: usize, names: &[String]) -> Result<()> {
         }
         let setup_s = t.elapsed().as_secs_f64();
         let (mut local, mut global) = (0.0, 0.0);
+        let progress = logging::bar(steps.max(1) as u64, &bar_template(s.name(), "steps"));
         let t = Instant::now();
         for _ in 0..steps.max(1) {
             let r = simulation.step().with_context(|| format!("{}: step failed", s.name()))?;
             local += r.local_seconds;
             global += r.global_seconds;
+            progress.bar.inc(1);
         }
         let per_step = t.elapsed().as_secs_f64() / steps.max(1) as f64;
+        // The row goes to stdout, the bar to stderr: clear it first (same screen on a terminal).
+        drop(progress);
         let n = steps.max(1) as f64;
         writeln!(
             out,
@@ -395,13 +522,14 @@ fn bench_dynamic(steps: usize, names: &[String]) -> Result<()> {
     Ok(())
 }
 
-/// The bundled bunny, found from the working directory or from the source tree.
-fn default_bench_mesh() -> PathBuf {
-    let local = PathBuf::from("data/stanford-bunny.obj");
-    if local.exists() {
-        local
-    } else {
-        PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/stanford-bunny.obj"))
+/// The benchmark's mesh: `--mesh` (a file or a sample's name), else data/stanford-bunny.obj
+/// from the working directory, else the bundled bunny; and the name to show.
+fn bench_mesh(mesh: Option<&Path>) -> Result<(LoadedMesh, PathBuf)> {
+    let local = Path::new("data/stanford-bunny.obj");
+    match mesh {
+        Some(mesh) => samples::read_mesh_arg(mesh),
+        None if local.exists() => Ok((read_mesh(local)?, local.to_path_buf())),
+        None => samples::read_mesh_arg(Path::new(samples::DEFAULT)),
     }
 }
 
@@ -433,9 +561,8 @@ fn parse_factorization(s: &str) -> Result<Factorization, String> {
 
 fn bench(mesh: Option<PathBuf>, iterations: usize, names: &[String], factorization: Factorization) -> Result<()> {
     let scenarios = pick_scenarios(names, &Scenario::ALL, Scenario::name)?;
-    let path = mesh.unwrap_or_else(default_bench_mesh);
     let t = Instant::now();
-    let loaded = read_mesh(&path)?;
+    let (loaded, path) = bench_mesh(mesh.as_deref())?;
     let load_s = t.elapsed().as_secs_f64();
     let mut out = std::io::stdout().lock();
     writeln!(
@@ -462,11 +589,24 @@ fn bench(mesh: Option<PathBuf>, iterations: usize, names: &[String], factorizati
         scene.system.prepare().map_err(|e| anyhow::anyhow!("{}: {e}", s.name()))?;
         let setup_s = t.elapsed().as_secs_f64() + load_s;
         let mut q = scene.rest.positions.clone();
-        let report = scene.system.iterate(&mut q, iterations).map_err(|e| anyhow::anyhow!("{}: {e}", s.name()))?;
+        let progress = logging::bar(iterations as u64, &bar_template(s.name(), "iterations"));
+        // In one run unless a bar is drawn; then in about 50 runs of plain iterations (the same
+        // iterates: a run starts with the local step at the last one's result).
+        let chunk = if progress.is_drawn() { iterations.div_ceil(50) } else { iterations };
+        let (mut local_s, mut global_s, mut done) = (0.0, 0.0, 0);
+        while done < iterations {
+            let k = chunk.min(iterations - done);
+            let report = scene.system.iterate(&mut q, k).map_err(|e| anyhow::anyhow!("{}: {e}", s.name()))?;
+            local_s += report.local_seconds;
+            global_s += report.global_seconds;
+            done += k;
+            progress.bar.set_position(done as u64);
+        }
+        drop(progress);
         let energy = scene.system.energy(&q).map_err(|e| anyhow::anyhow!("{}: {e}", s.name()))?.total;
         let n = iterations.max(1) as f64;
-        let local_ms = 1e3 * report.local_seconds / n;
-        let global_ms = 1e3 * report.global_seconds / n;
+        let local_ms = 1e3 * local_s / n;
+        let global_ms = 1e3 * global_s / n;
         writeln!(
             out,
             "{:<16} {:>11} {:>9.3} {:>10.2} {:>11.2} {:>11.2} {:>9.3e}",
@@ -482,7 +622,11 @@ fn bench(mesh: Option<PathBuf>, iterations: usize, names: &[String], factorizati
     Ok(())
 }
 
-/// |E_k − E_{k−1}| / E_{k−1} after each iteration; `None` for the first.
+/// The progress bar of one benchmark scenario.
+fn bar_template(scenario: &str, unit: &str) -> String {
+    format!("{scenario:<16} {{bar:40}} {{pos}}/{{len}} {unit}  ETA {{eta}}")
+}
+
 /// "1 thread", "2 threads": the worker threads this run uses.
 fn threads_label() -> String {
     count(rayon::current_num_threads(), "thread")
@@ -502,6 +646,7 @@ fn convergence_run(
     scene: &mut shapeup_core::scene::LoadedScene,
     acceleration: Acceleration,
     iterations: usize,
+    progress: &logging::Progress,
 ) -> Result<Vec<(f64, f64)>> {
     let params = SolverParams { acceleration, ..*scene.system.params() };
     scene.system.set_params(params);
@@ -512,7 +657,8 @@ fn convergence_run(
         .system
         .solve_with(&mut q, iterations, 0.0, |_, e| {
             trace.push((e, start.elapsed().as_secs_f64()));
-            std::ops::ControlFlow::Continue(())
+            progress.bar.inc(1);
+            ControlFlow::Continue(())
         })
         .map_err(|e| anyhow::anyhow!("{e}"))?;
     Ok(trace)
@@ -520,8 +666,7 @@ fn convergence_run(
 
 fn bench_converge(mesh: Option<PathBuf>, iterations: usize, reference: usize, names: &[String]) -> Result<()> {
     let scenarios = pick_scenarios(names, &Scenario::ALL, Scenario::name)?;
-    let path = mesh.unwrap_or_else(default_bench_mesh);
-    let loaded = read_mesh(&path)?;
+    let (loaded, path) = bench_mesh(mesh.as_deref())?;
     let mut out = std::io::stdout().lock();
     writeln!(
         out,
@@ -541,13 +686,16 @@ fn bench_converge(mesh: Option<PathBuf>, iterations: usize, reference: usize, na
         "scenario", "iteration", "1 %", "0.1 %", "0.01 %", "E end"
     )?;
     for s in scenarios {
+        let total = reference.saturating_add(iterations.saturating_mul(3));
+        let progress = logging::bar(total as u64, &bar_template(s.name(), "iterations"));
         let mut scene = load_scenario(s, &loaded.mesh, path.clone())?;
-        let star = convergence_run(&mut scene, Acceleration::default(), reference)?;
+        let star = convergence_run(&mut scene, Acceleration::default(), reference, &progress)?;
         let mut runs = Vec::new();
         for acceleration in [Acceleration::None, Acceleration::Anderson, Acceleration::Lbfgs] {
             let mut scene = load_scenario(s, &loaded.mesh, path.clone())?;
-            runs.push((acceleration, convergence_run(&mut scene, acceleration, iterations)?));
+            runs.push((acceleration, convergence_run(&mut scene, acceleration, iterations, &progress)?));
         }
+        drop(progress);
         let e_star = star.iter().chain(runs.iter().flat_map(|(_, r)| r)).map(|(e, _)| *e).fold(f64::INFINITY, f64::min);
         for (acceleration, trace) in &runs {
             let cell = |gap: f64| {

@@ -2,11 +2,10 @@
 //! files (OBJ by default; PLY, OFF, STL, or VTU and MSH with the tetrahedra).
 
 use anyhow::{Context, Result, bail};
-use indicatif::{ProgressBar, ProgressStyle};
 use shapeup_core::io::write_atomic;
 use shapeup_core::scene::frames::{FrameFormat, FrameWriter};
 use shapeup_core::scene::{Scene, StepTotals};
-use std::io::{IsTerminal, Write};
+use std::io::Write;
 use std::path::Path;
 use std::time::Instant;
 
@@ -54,23 +53,17 @@ pub fn run(args: &SimulateArgs<'_>) -> Result<()> {
     if let Some(r) = report.as_deref() {
         crate::check_parent_dir(r)?;
     }
+    let spinner = crate::logging::spinner(format!("loading {}", args.scene.display()));
     let mut loaded = scene.load()?;
     let mut run = loaded.start_scene_simulation()?;
+    drop(spinner);
     std::fs::create_dir_all(output.as_path())
         .map_err(|e| anyhow::anyhow!("cannot create the output directory {}: {e}", output.as_path().display()))?;
     // Frames go in one by one: make sure the folder takes files before the first step.
     crate::check_parent_dir(&output.join("frame"))?;
 
     let mut frames = FrameWriter::new(&loaded, output.as_path(), args.frames, format);
-    let progress = if std::io::stderr().is_terminal() {
-        let bar = ProgressBar::new(args.frames as u64);
-        if let Ok(style) = ProgressStyle::with_template("{bar:40} {pos}/{len} frames  {per_sec}  ETA {eta}") {
-            bar.set_style(style);
-        }
-        bar
-    } else {
-        ProgressBar::hidden()
-    };
+    let progress = crate::logging::bar(args.frames as u64, "{bar:40} {pos}/{len} frames  {per_sec}  ETA {eta}");
     let mut totals = StepTotals { energies: Vec::with_capacity(args.frames.min(1 << 20)), ..StepTotals::default() };
     let mut steps = || -> Result<()> {
         frames.write(0, &run.simulation)?;
@@ -100,12 +93,12 @@ pub fn run(args: &SimulateArgs<'_>) -> Result<()> {
             if k % args.every == 0 || k == args.frames {
                 frames.write(k, simulation)?;
             }
-            progress.inc(1);
+            progress.bar.inc(1);
         }
         Ok(())
     };
     let result = steps();
-    progress.finish_and_clear();
+    drop(progress);
     if format == FrameFormat::Vtu && !frames.written.is_empty() {
         match &result {
             Ok(()) => frames.write_pvd()?,

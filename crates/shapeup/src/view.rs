@@ -2,7 +2,7 @@
 
 use anyhow::{Result, anyhow};
 use shapeup_app::document::{Document, ShapeModel};
-use shapeup_app::gui::app::{HANDLE_COLOR, WindowOptions, run_window, sample_path};
+use shapeup_app::gui::app::{HANDLE_COLOR, WindowOptions, run_window};
 use shapeup_app::gui::headless::{render_rgba, write_png};
 use shapeup_app::gui::renderer::BASE_COLOR;
 use shapeup_core::scene::Scene;
@@ -15,11 +15,22 @@ fn is_scene(path: &std::path::Path) -> bool {
         .is_some_and(|e| e.eq_ignore_ascii_case("toml") || e.eq_ignore_ascii_case("json"))
 }
 
-/// Opens `input` (default: the bundled bunny) as a document, and the path it came from (the
-/// scene's, for a scene).
+/// Opens `input` (default: data/stanford-bunny.obj from the working directory, else the bundled
+/// bunny) as a document, and the path it came from (the scene's, for a scene; `NAME.obj` for a
+/// bundled sample).
 fn open(input: Option<PathBuf>) -> Result<(Document, PathBuf)> {
-    let path = input.unwrap_or_else(|| sample_path("data/stanford-bunny.obj"));
-    if is_scene(&path) {
+    let local = PathBuf::from("data/stanford-bunny.obj");
+    let path = match input {
+        Some(path) => path,
+        None if local.exists() => local,
+        None => PathBuf::from(crate::samples::DEFAULT),
+    };
+    if let Some(sample) = crate::samples::resolve(&path) {
+        let name = PathBuf::from(sample.file_name());
+        let document = Document::new(sample.read()?.mesh, ShapeModel::EdgeSprings)
+            .map_err(|e| anyhow!("{}: {e}", name.display()))?;
+        Ok((document, name))
+    } else if is_scene(&path) {
         let scene = Scene::from_file(&path)?;
         let document = Document::from_scene(&scene).map_err(|e| anyhow!("{}: {e}", path.display()))?;
         Ok((document, path))
@@ -42,19 +53,23 @@ pub fn run(input: Option<PathBuf>, screenshot: Option<PathBuf>, size: (u32, u32)
         if document.state().has_handles() {
             // As the window shows it once settled: to the tolerance, which can take many plain
             // iterations on a large mesh, so say what runs.
-            let mut err = std::io::stderr().lock();
-            let _ = writeln!(
-                err,
-                "shapeup: converging {} to a relative energy change of {:e} (at most {} iterations)…",
+            // Notes, not log records; -q silences them.
+            let note = |text: String| {
+                if !crate::logging::quiet() {
+                    let _ = writeln!(std::io::stderr().lock(), "shapeup: {text}");
+                }
+            };
+            note(format!(
+                "converging {} to a relative energy change of {:e} (at most {} iterations)…",
                 path.display(),
                 document.tolerance(),
                 document.iterations()
-            );
+            ));
             let started = std::time::Instant::now();
             let report = document.converge().map_err(|e| anyhow!("{}: {e}", path.display()))?;
             let n = report.energies.len();
             let how = if n < document.iterations() { "converged" } else { "stopped at the cap" };
-            let _ = writeln!(err, "shapeup: {how} after {n} iterations ({:.1} s)", started.elapsed().as_secs_f64());
+            note(format!("{how} after {n} iterations ({:.1} s)", started.elapsed().as_secs_f64()));
         }
         let mesh = document.current_mesh();
         // Handles in green, as in the editor.
