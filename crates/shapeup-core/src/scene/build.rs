@@ -9,7 +9,7 @@ use crate::constraints::{
 use crate::dynamics::{DynamicsParams, Simulation};
 use crate::geometry::{RestGeometry, WorkingFrame, lumped_masses_surface, lumped_masses_volume};
 use crate::io::read_mesh;
-use crate::mesh::Mesh;
+use crate::mesh::{Mesh, TriangulationScratch, triangulate_polygon};
 use crate::solver::{ConstraintGroup, GroupId, SolveError, SolveReport, SolverParams, System};
 use crate::warnings::Warnings;
 use glam::DVec3;
@@ -56,10 +56,20 @@ impl Scene {
     /// The scene's mesh: read from its file, or generated.
     ///
     /// # Errors
-    /// [`SceneError::Mesh`] naming the scene and the mesh file's problem.
+    /// [`SceneError::Mesh`] naming the scene and the mesh file's problem;
+    /// [`SceneError::Invalid`] for a generated mesh past [`super::MAX_GENERATED_BYTES`].
     pub fn read_mesh(&self) -> Result<crate::io::LoadedMesh, SceneError> {
         match &self.mesh.generate {
-            Some(generated) => Ok(crate::io::LoadedMesh { mesh: generated.mesh(), warnings: Warnings::new() }),
+            Some(generated) => {
+                // Checked again here: a scene edited after parsing (the editor, overrides) may
+                // ask for more than the cap.
+                generated.validate().map_err(|message| SceneError::Invalid {
+                    path: self.file.clone(),
+                    entry: "[mesh]".into(),
+                    message,
+                })?;
+                Ok(crate::io::LoadedMesh { mesh: generated.mesh(), warnings: Warnings::new() })
+            }
             None => read_mesh(&self.mesh_path()).map_err(|source| SceneError::Mesh { path: self.file.clone(), source }),
         }
     }
@@ -82,7 +92,10 @@ impl Scene {
             mesh
         };
         if mesh.triangles.is_empty() && mesh.tetrahedra.is_empty() {
-            return Err(invalid("[mesh]", format!("{} has no faces", self.mesh_path().display())));
+            return Err(invalid(
+                "[mesh]",
+                format!("{} has no faces{}", self.mesh_path().display(), no_faces_why(&mesh)),
+            ));
         }
         let frame = if self.mesh.normalize { WorkingFrame::fit(&mesh.positions) } else { WorkingFrame::IDENTITY };
         let working: Vec<DVec3> = mesh.positions.iter().map(|&p| frame.to_working(p)).collect();
@@ -132,6 +145,24 @@ impl Scene {
             load_seconds,
             build_seconds: t.elapsed().as_secs_f64(),
         })
+    }
+}
+
+/// Why a mesh with faces has no triangles: the first face and its [`crate::mesh::PolygonProblem`]
+/// (`": its only face, face 0 (vertices 0 1 1), cannot be triangulated: fewer than 3 distinct
+/// corners"`), or nothing when it has no faces.
+fn no_faces_why(mesh: &Mesh) -> String {
+    let mut scratch = TriangulationScratch::default();
+    let first = mesh.polygons.iter().enumerate().find_map(|(index, poly)| {
+        triangulate_polygon(&mesh.positions, poly, &mut scratch, &mut Vec::new()).err().map(|e| (index, poly, e))
+    });
+    let Some((index, poly, problem)) = first else { return String::new() };
+    let shown: Vec<String> = poly.iter().take(8).map(u32::to_string).collect();
+    let more = if poly.len() > 8 { " …" } else { "" };
+    let face = format!("face {index} (vertices {}{more})", shown.join(" "));
+    match mesh.num_polygons() {
+        1 => format!(": its only face, {face}, cannot be triangulated: {problem}"),
+        n => format!(": none of its {n} faces can be triangulated (the first, {face}: {problem})"),
     }
 }
 
