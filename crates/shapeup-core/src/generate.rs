@@ -2,7 +2,6 @@
 
 use crate::geometry::tet_volume;
 use crate::mesh::Mesh;
-use crate::topology::tetrahedron_boundary;
 use glam::DVec3;
 
 /// A flat rectangular cloth of `nx` × `nz` vertices (each at least 2) spanning `width` along x
@@ -38,11 +37,14 @@ pub fn cloth_grid(nx: usize, nz: usize, width: f64, depth: f64) -> Mesh {
 /// A box of `cells[0]` × `cells[1]` × `cells[2]` cubes (each count at least 1) of total `size`,
 /// centred at the origin, each cube split into six tetrahedra around its main diagonal (the
 /// Kuhn split, conforming across cubes), all positively oriented. The triangles are the
-/// boundary faces, outward (see [`tetrahedron_boundary`]). Vertex (i, j, k) has index
-/// (i·(ny+1) + j)·(nz+1) + k with ny, nz the cell counts along y and z.
+/// boundary faces, outward, in the order [`crate::topology::tetrahedron_boundary`] gives them (found here from
+/// the cube indices, without its sort: a face is on the boundary exactly when its three
+/// corners lie on one side of the box). Vertex (i, j, k) has index (i·(ny+1) + j)·(nz+1) + k
+/// with ny, nz the cell counts along y and z. The vertex count must fit a `u32` index (scenes
+/// cap generated meshes far below; see `scene::GeneratedMesh::validate`).
 pub fn tet_box(cells: [usize; 3], size: DVec3) -> Mesh {
     let [nx, ny, nz] = cells.map(|c| c.max(1));
-    let index = |i: usize, j: usize, k: usize| ((i * (ny + 1) + j) * (nz + 1) + k) as u32;
+    let index = |[i, j, k]: [usize; 3]| ((i * (ny + 1) + j) * (nz + 1) + k) as u32;
     let mut positions = Vec::with_capacity((nx + 1) * (ny + 1) * (nz + 1));
     for i in 0..=nx {
         for j in 0..=ny {
@@ -52,35 +54,64 @@ pub fn tet_box(cells: [usize; 3], size: DVec3) -> Mesh {
             }
         }
     }
-    // The six monotone paths from corner 000 to 111, one per order of the axes.
+    // The six monotone paths from corner 000 to 111, one per order of the axes, each as its
+    // four corner offsets, positively oriented (one cube decides for all: they are translates).
     const ORDERS: [[usize; 3]; 6] = [[0, 1, 2], [0, 2, 1], [1, 0, 2], [1, 2, 0], [2, 0, 1], [2, 1, 0]];
+    let cell = size / DVec3::new(nx as f64, ny as f64, nz as f64);
+    let paths = ORDERS.map(|order| {
+        let mut path = [[0usize; 3]; 4];
+        for (step, &axis) in order.iter().enumerate() {
+            path[step + 1] = path[step];
+            path[step + 1][axis] += 1;
+        }
+        let p = path.map(|o| DVec3::new(o[0] as f64, o[1] as f64, o[2] as f64) * cell);
+        if tet_volume(p[0], p[1], p[2], p[3]) < 0.0 {
+            path.swap(2, 3);
+        }
+        path
+    });
+    let n = [nx, ny, nz];
+    let boundary_squares = 2 * (nx * ny + ny * nz + nz * nx);
     let mut tetrahedra = Vec::with_capacity(6 * nx * ny * nz);
+    let mut triangles = Vec::with_capacity(2 * boundary_squares);
     for i in 0..nx {
         for j in 0..ny {
             for k in 0..nz {
-                for order in ORDERS {
-                    let mut corner = [i, j, k];
-                    let mut tet = [index(i, j, k); 4];
-                    for (step, &axis) in order.iter().enumerate() {
-                        corner[axis] += 1;
-                        tet[step + 1] = index(corner[0], corner[1], corner[2]);
+                let inner = (0 < i && i + 1 < nx) && (0 < j && j + 1 < ny) && (0 < k && k + 1 < nz);
+                for path in &paths {
+                    let corners = path.map(|o| [i + o[0], j + o[1], k + o[2]]);
+                    let [a, b, c, d] = corners.map(index);
+                    tetrahedra.push([a, b, c, d]);
+                    if inner {
+                        continue;
                     }
-                    let p = tet.map(|v| positions[v as usize]);
-                    if tet_volume(p[0], p[1], p[2], p[3]) < 0.0 {
-                        tet.swap(2, 3);
+                    // The faces in `tetrahedron_boundary`'s order.
+                    let [ca, cb, cc, cd] = corners;
+                    for (face, at) in [
+                        ([b, c, d], [cb, cc, cd]),
+                        ([a, d, c], [ca, cd, cc]),
+                        ([a, b, d], [ca, cb, cd]),
+                        ([a, c, b], [ca, cc, cb]),
+                    ] {
+                        let on_side = (0..3).any(|axis| {
+                            let x = at[0][axis];
+                            (x == 0 || x == n[axis]) && at[1][axis] == x && at[2][axis] == x
+                        });
+                        if on_side {
+                            triangles.push(face);
+                        }
                     }
-                    tetrahedra.push(tet);
                 }
             }
         }
     }
-    let triangles = tetrahedron_boundary(&tetrahedra);
     Mesh::from_parts_unchecked(positions, triangles, tetrahedra)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::topology::tetrahedron_boundary;
 
     #[test]
     fn cloth_grid_is_flat_centred_and_faces_up() {
@@ -124,6 +155,14 @@ mod tests {
             })
             .sum();
         assert!((enclosed - size.x * size.y * size.z).abs() < 1e-12, "{enclosed}");
+    }
+
+    #[test]
+    fn tet_box_boundary_is_tetrahedron_boundary_in_the_same_order() {
+        for cells in [[1, 1, 1], [1, 2, 3], [3, 1, 1], [4, 3, 2], [2, 5, 1]] {
+            let m = tet_box(cells, DVec3::new(1.0, 0.7, 0.4));
+            assert_eq!(m.triangles, tetrahedron_boundary(&m.tetrahedra), "{cells:?}");
+        }
     }
 
     #[test]

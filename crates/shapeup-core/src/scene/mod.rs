@@ -142,31 +142,109 @@ pub enum GeneratedMesh {
     },
 }
 
-/// Most vertices a generated mesh may have (a typo must not ask for terabytes).
-const MAX_GENERATED_VERTICES: usize = 20_000_000;
+/// The most memory, in bytes, that loading a scene's generated mesh may take: 1 GB, a tet_box
+/// of about 138 × 138 × 138 cells (16 million tetrahedra) or a cloth of about 1,400 × 1,400
+/// vertices, each loaded in 1–3 s; a typo in `cells` or `vertices` must not ask for terabytes.
+/// Checked against [`GeneratedMesh::estimated_bytes`] when the scene is parsed and again when
+/// it loads. Constraint groups come on top (`tet_strain` about 120 bytes per tetrahedron).
+pub const MAX_GENERATED_BYTES: u64 = 1_000_000_000;
+
+// Peak bytes that loading a generated mesh takes per element (the mesh, its polygons and
+// boundary, the rest geometry with its topology, the solver's set-up; constraint groups come on
+// top), measured with a counting allocator (tests/hostile_scene.rs checks them) and rounded up.
+const BYTES_PER_VERTEX: f64 = 176.0;
+const BYTES_PER_TRIANGLE: f64 = 160.0;
+const BYTES_PER_TETRAHEDRON: f64 = 32.0;
+// The cap keeps vertex indices far inside u32.
+const _: () = assert!(MAX_GENERATED_BYTES as f64 / BYTES_PER_VERTEX < u32::MAX as f64);
 
 impl GeneratedMesh {
-    /// Checks the counts and sizes.
+    /// Checks the counts and sizes, and the memory the mesh needs against
+    /// [`MAX_GENERATED_BYTES`].
     ///
     /// # Errors
-    /// A one-line message naming the bad value.
+    /// A one-line message naming the bad value; for too large a mesh, the estimate, the cap and
+    /// the largest counts of the same proportions that fit.
     pub fn validate(&self) -> Result<(), String> {
-        let (counts, minimum, sizes, vertices): (&[usize], usize, &[f64], f64) = match self {
-            GeneratedMesh::Cloth { vertices, size } => {
-                (vertices, 2, size, vertices.iter().map(|&n| n as f64).product())
-            }
-            GeneratedMesh::TetBox { cells, size } => (cells, 1, size, cells.iter().map(|&n| n as f64 + 1.0).product()),
+        let (counts, minimum, sizes): (&[usize], usize, &[f64]) = match self {
+            GeneratedMesh::Cloth { vertices, size } => (vertices, 2, size),
+            GeneratedMesh::TetBox { cells, size } => (cells, 1, size),
         };
         if let Some(n) = counts.iter().find(|&&n| n < minimum) {
             return Err(format!("generate: every count must be at least {minimum}, found {n}"));
         }
-        if vertices > MAX_GENERATED_VERTICES as f64 {
-            return Err(format!("generate: {vertices} vertices is more than the {MAX_GENERATED_VERTICES} allowed"));
-        }
         if let Some(x) = sizes.iter().find(|x| !(x.is_finite() && **x > 0.0)) {
             return Err(format!("generate: every size must be a finite number > 0, found {x}"));
         }
-        Ok(())
+        let bytes = self.estimated_bytes();
+        if bytes <= MAX_GENERATED_BYTES as f64 {
+            return Ok(());
+        }
+        let (what, unit, elements) = match self {
+            GeneratedMesh::Cloth { .. } => {
+                ("cloth", "vertices", format!("{} triangles", count(self.element_counts()[1])))
+            }
+            GeneratedMesh::TetBox { .. } => {
+                ("tet_box", "cells", format!("{} tetrahedra", count(self.element_counts()[2])))
+            }
+        };
+        let shown = |c: &[usize]| c.iter().map(|&n| grouped(n as u64)).collect::<Vec<_>>().join(" × ");
+        let advice = match self.largest_that_fits() {
+            Some(fits) => format!(": use at most about {} {unit}", shown(&fits)),
+            None => String::new(),
+        };
+        Err(format!(
+            "generate: a {what} of {} {unit} ({elements}) needs about {} to load; the cap is {}{advice}",
+            shown(counts_of(self)),
+            gigabytes(bytes),
+            gigabytes(MAX_GENERATED_BYTES as f64),
+        ))
+    }
+
+    /// Its vertices, triangles and tetrahedra, as floating-point numbers (exact up to 2⁵³,
+    /// finite for any counts: no overflow).
+    pub fn element_counts(&self) -> [f64; 3] {
+        match *self {
+            GeneratedMesh::Cloth { vertices, .. } => {
+                let [x, z] = vertices.map(|n| n.max(2) as f64);
+                [x * z, 2.0 * (x - 1.0) * (z - 1.0), 0.0]
+            }
+            GeneratedMesh::TetBox { cells, .. } => {
+                let [x, y, z] = cells.map(|n| n.max(1) as f64);
+                [(x + 1.0) * (y + 1.0) * (z + 1.0), 4.0 * (x * y + y * z + z * x), 6.0 * x * y * z]
+            }
+        }
+    }
+
+    /// The bytes that loading a scene with this mesh takes at its peak, estimated from its
+    /// element counts (constraint groups come on top).
+    pub fn estimated_bytes(&self) -> f64 {
+        let [v, t, k] = self.element_counts();
+        BYTES_PER_VERTEX * v + BYTES_PER_TRIANGLE * t + BYTES_PER_TETRAHEDRON * k
+    }
+
+    /// The largest counts in the same proportions whose estimate fits the cap (bisection on
+    /// the scale), or `None` if not even the smallest does.
+    fn largest_that_fits(&self) -> Option<Vec<usize>> {
+        let scaled = |s: f64| -> GeneratedMesh {
+            let f = |n: usize, minimum: usize| ((n as f64 * s).floor() as usize).max(minimum);
+            match *self {
+                GeneratedMesh::Cloth { vertices, size } => {
+                    GeneratedMesh::Cloth { vertices: vertices.map(|n| f(n, 2)), size }
+                }
+                GeneratedMesh::TetBox { cells, size } => GeneratedMesh::TetBox { cells: cells.map(|n| f(n, 1)), size },
+            }
+        };
+        let fits = |s: f64| scaled(s).estimated_bytes() <= MAX_GENERATED_BYTES as f64;
+        if !fits(0.0) {
+            return None;
+        }
+        let (mut lo, mut hi) = (0.0, 1.0);
+        for _ in 0..80 {
+            let mid = 0.5 * (lo + hi);
+            if fits(mid) { lo = mid } else { hi = mid }
+        }
+        Some(counts_of(&scaled(lo)).to_vec())
     }
 
     /// The mesh.
@@ -175,6 +253,40 @@ impl GeneratedMesh {
             GeneratedMesh::Cloth { vertices: [nx, nz], size: [w, d] } => crate::generate::cloth_grid(nx, nz, w, d),
             GeneratedMesh::TetBox { cells, size } => crate::generate::tet_box(cells, DVec3::from_array(size)),
         }
+    }
+}
+
+fn counts_of(generated: &GeneratedMesh) -> &[usize] {
+    match generated {
+        GeneratedMesh::Cloth { vertices, .. } => vertices,
+        GeneratedMesh::TetBox { cells, .. } => cells,
+    }
+}
+
+/// A count with thousands separators (`14,762,250`), in scientific notation past 10¹⁵.
+fn count(n: f64) -> String {
+    if n >= 1e15 { format!("{n:.2e}") } else { grouped(n as u64) }
+}
+
+/// `n` with thousands separators.
+fn grouped(n: u64) -> String {
+    let digits = n.to_string();
+    let mut out = String::with_capacity(digits.len() + digits.len() / 3);
+    for (i, d) in digits.chars().enumerate() {
+        if i > 0 && (digits.len() - i).is_multiple_of(3) {
+            out.push(',');
+        }
+        out.push(d);
+    }
+    out
+}
+
+/// Bytes in GB (10⁹ bytes), or MB below 0.1 GB.
+fn gigabytes(bytes: f64) -> String {
+    match bytes {
+        b if b < 1e8 => format!("{:.0} MB", b / 1e6),
+        b if b < 1e15 => format!("{:.1} GB", b / 1e9),
+        b => format!("{:.1e} GB", b / 1e9),
     }
 }
 
@@ -424,9 +536,105 @@ struct RawScene {
     #[serde(default)]
     solver: SolverSettings,
     #[serde(default)]
-    constraints: Vec<Map<String, Value>>,
+    constraints: Vec<Entry>,
     #[serde(default)]
     output: OutputSettings,
+}
+
+/// How deep a constraint entry may nest (`box = { min = [..] }` is 3 levels).
+const MAX_ENTRY_DEPTH: usize = 32;
+
+/// A `[[constraints]]` entry as JSON values, read strictly: a key given twice is refused
+/// (serde_json's own map keeps the last one silently) and so is nesting deeper than
+/// [`MAX_ENTRY_DEPTH`] (building `serde_json::Value` recurses once per level, and TOML's dotted
+/// keys nest without its parser's limit).
+struct Entry(Map<String, Value>);
+
+impl<'de> Deserialize<'de> for Entry {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        match deserializer.deserialize_map(StrictValue { depth: 0 })? {
+            Value::Object(map) => Ok(Entry(map)),
+            _ => Err(serde::de::Error::custom("a constraint entry must be a table")),
+        }
+    }
+}
+
+/// Builds a `serde_json::Value` refusing repeated keys and deep nesting.
+#[derive(Clone, Copy)]
+struct StrictValue {
+    depth: usize,
+}
+
+impl StrictValue {
+    fn deeper<E: serde::de::Error>(self) -> Result<StrictValue, E> {
+        if self.depth >= MAX_ENTRY_DEPTH {
+            return Err(E::custom(format!("nested deeper than {MAX_ENTRY_DEPTH} levels")));
+        }
+        Ok(StrictValue { depth: self.depth + 1 })
+    }
+}
+
+impl<'de> serde::de::DeserializeSeed<'de> for StrictValue {
+    type Value = Value;
+    fn deserialize<D: serde::Deserializer<'de>>(self, deserializer: D) -> Result<Value, D::Error> {
+        deserializer.deserialize_any(self)
+    }
+}
+
+impl<'de> serde::de::Visitor<'de> for StrictValue {
+    type Value = Value;
+    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        f.write_str("a value")
+    }
+    fn visit_bool<E>(self, v: bool) -> Result<Value, E> {
+        Ok(Value::Bool(v))
+    }
+    fn visit_i64<E>(self, v: i64) -> Result<Value, E> {
+        Ok(Value::from(v))
+    }
+    fn visit_u64<E>(self, v: u64) -> Result<Value, E> {
+        Ok(Value::from(v))
+    }
+    fn visit_f64<E>(self, v: f64) -> Result<Value, E> {
+        // inf and nan become null, as serde_json has them (the builders name the key).
+        Ok(serde_json::Number::from_f64(v).map_or(Value::Null, Value::Number))
+    }
+    fn visit_str<E>(self, v: &str) -> Result<Value, E> {
+        Ok(Value::String(v.to_owned()))
+    }
+    fn visit_string<E>(self, v: String) -> Result<Value, E> {
+        Ok(Value::String(v))
+    }
+    fn visit_unit<E>(self) -> Result<Value, E> {
+        Ok(Value::Null)
+    }
+    fn visit_none<E>(self) -> Result<Value, E> {
+        Ok(Value::Null)
+    }
+    fn visit_some<D: serde::Deserializer<'de>>(self, deserializer: D) -> Result<Value, D::Error> {
+        deserializer.deserialize_any(self)
+    }
+    fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut seq: A) -> Result<Value, A::Error> {
+        let inner = self.deeper()?;
+        // Not sized by the hint: it may claim more than the input holds.
+        let mut list = Vec::new();
+        while let Some(v) = seq.next_element_seed(inner)? {
+            list.push(v);
+        }
+        Ok(Value::Array(list))
+    }
+    fn visit_map<A: serde::de::MapAccess<'de>>(self, mut map: A) -> Result<Value, A::Error> {
+        let inner = self.deeper()?;
+        let mut out = Map::new();
+        while let Some(key) = map.next_key::<String>()? {
+            if out.contains_key(&key) {
+                return Err(serde::de::Error::custom(format!("duplicate key `{key}`")));
+            }
+            let value = map.next_value_seed(inner)?;
+            out.insert(key, value);
+        }
+        Ok(Value::Object(out))
+    }
 }
 
 /// Scene file syntax.
@@ -487,7 +695,7 @@ impl Scene {
             .constraints
             .into_iter()
             .enumerate()
-            .map(|(i, entry)| {
+            .map(|(i, Entry(entry))| {
                 let name = entry.get("name").and_then(Value::as_str).map(|n| format!(" (\"{n}\")")).unwrap_or_default();
                 GroupSpec::from_entry(entry).map_err(|message| SceneError::Invalid {
                     path: path.into(),
@@ -520,7 +728,11 @@ fn toml_message(text: &str, e: &toml::de::Error) -> String {
     let message = e.message().trim().replace('\n', " ");
     match e.span() {
         Some(span) => {
-            let before = &text[..span.start.min(text.len())];
+            let mut start = span.start.min(text.len());
+            while !text.is_char_boundary(start) {
+                start -= 1;
+            }
+            let before = &text[..start];
             let line = before.matches('\n').count() + 1;
             let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
             // Quote the line: a type error's message names the value but not the key.
@@ -528,6 +740,16 @@ fn toml_message(text: &str, e: &toml::de::Error) -> String {
             match quoted {
                 Some(l) => format!("line {line}, column {column}: {message} (in `{l}`)"),
                 None => format!("line {line}, column {column}: {message}"),
+            }
+        }
+        // toml's deserializer stops past 128 levels without a span: point at the line whose
+        // keys and brackets nest deepest.
+        None if message.contains("recursion limit") => {
+            let depth =
+                |l: &str| l.split('=').next().map_or(0, |key| key.matches('.').count()) + l.matches(['[', '{']).count();
+            match text.lines().enumerate().max_by_key(|&(i, l)| (depth(l), std::cmp::Reverse(i))) {
+                Some((i, _)) => format!("line {}: nested too deep ({message})", i + 1),
+                None => message,
             }
         }
         None => message,
