@@ -385,7 +385,7 @@ fn flat_or_repeating_tetrahedron_names_the_element() {
 }
 
 #[test]
-fn binary_msh_is_refused() {
+fn binary_msh_with_garbage_after_the_byte_order_int_names_the_offset() {
     let mut bytes = b"$MeshFormat\n4.1 1 8\n".to_vec();
     bytes.extend_from_slice(&[1, 0, 0, 0, 0xff, 0xfe, b'\n']);
     bytes.extend_from_slice(b"$EndMeshFormat\n");
@@ -393,7 +393,7 @@ fn binary_msh_is_refused() {
     let path = dir.path().join("bin.msh");
     fs::write(&path, bytes).unwrap();
     let err = read_mesh(&path).unwrap_err().to_string();
-    assert!(err.contains("bin.msh: line 2") && err.contains("binary .msh is not supported; save as ASCII"), "{err}");
+    assert!(err.contains("bin.msh: byte offset 24") && err.contains("expected '$EndMeshFormat'"), "{err}");
 }
 
 #[test]

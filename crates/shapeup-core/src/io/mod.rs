@@ -21,8 +21,14 @@
 //! [`Mesh::attributes`](crate::attributes::Attributes). Every writer returns [`Warnings`] for
 //! what it recomputed (normals) or what its format cannot hold; readers return theirs in
 //! [`LoadedMesh::warnings`]. Only `.msh` and `.node`/`.ele` store tetrahedra; a mesh read from
-//! them has the boundary of its tetrahedra as triangles (see [`msh`], [`tetgen`]). A UTF-8
-//! byte-order mark at the start of a text file is skipped.
+//! them has the boundary of its tetrahedra as triangles (see [`msh`], [`tetgen`]).
+//!
+//! **Text encodings**: text files (OBJ, OFF, ascii STL, TetGen) are UTF-8 (ASCII), a UTF-8
+//! byte-order mark at the start skipped; a file that starts with a UTF-16 byte-order mark
+//! (`FF FE` little endian, `FE FF` big endian, as Windows editors save "Unicode" text) is
+//! transcoded and reads exactly as its UTF-8 copy, and malformed UTF-16 is refused with the
+//! encoding and byte offset. Binary STL is told from ascii by its size (`84 + 50·n` bytes), so
+//! a binary header that happens to start with `FF FE` stays binary.
 //!
 //! Every reader is hand-written (the crates available reorder or drop vertices, or do not report
 //! where a file is broken); no input makes them panic, and counts from a header never size an
@@ -36,10 +42,9 @@ pub mod stl;
 pub mod tetgen;
 pub mod vtu;
 
-use std::fs::{self, File, OpenOptions};
+use std::fs::{self, File};
 use std::io::{self, BufRead, BufReader, BufWriter, Write};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, Ordering};
 
 use crate::attributes::AttributeKind;
 use crate::mesh::{Mesh, MeshError, Polygons};
@@ -341,35 +346,31 @@ pub(crate) fn report_polygons_split(mesh: &Mesh, format: &str, warnings: &mut Wa
     }
 }
 
-/// Distinguishes temp files of concurrent writes from one process.
-static TEMP_COUNTER: AtomicU64 = AtomicU64::new(0);
-
-/// Writes a file atomically: `write` fills a temp file `.NAME.tmp-PID-N` in the target's
-/// directory (buffered), which is flushed, synced to disk and renamed over `path`. Readers see
-/// either the old file or the complete new one; on any error the temp file is removed and the
-/// target is untouched.
+/// Writes a file atomically: `write` fills a temporary file in the target's folder (buffered),
+/// which is flushed, synced to disk and renamed over `path`. Readers see either the old file or
+/// the complete new one; on any error the temporary file is removed and the target is untouched.
+///
+/// The temporary file (`.NAME.XXXXXX.tmp`, random letters) is created exclusively (`O_EXCL`)
+/// with an unpredictable name, so a symbolic link planted in a shared folder is never followed;
+/// the rename replaces a link at `path` itself by the new file, leaving the link's target
+/// untouched. On Unix the new file has the mode of the regular file it replaces, else the usual
+/// `0666` less the umask.
 ///
 /// # Errors
-/// [`IoError::Write`] naming `path`, from creating the temp file, from `write`, or from the
+/// [`IoError::Write`] naming `path`, from creating the temporary file, from `write`, or from the
 /// rename.
 pub fn write_atomic(path: &Path, write: impl FnOnce(&mut dyn Write) -> io::Result<()>) -> Result<(), IoError> {
     let write_error = |source| IoError::Write { path: path.to_path_buf(), source };
-    let (dir, temp) = temp_path(path).map_err(write_error)?;
-
-    let file = OpenOptions::new().write(true).create(true).truncate(true).open(&temp).map_err(write_error)?;
+    let (dir, mut temp) = create_temp(path).map_err(write_error)?;
     let result = (|| {
-        let mut buffered = BufWriter::new(file);
+        keep_mode_of(path, temp.as_file())?;
+        let mut buffered = BufWriter::new(temp.as_file_mut());
         write(&mut buffered)?;
-        let file = buffered.into_inner().map_err(io::IntoInnerError::into_error)?;
-        file.sync_all()?;
-        drop(file);
-        fs::rename(&temp, path)
+        buffered.into_inner().map_err(io::IntoInnerError::into_error)?.sync_all()?;
+        // On failure the temporary file comes back inside the error and is removed with it.
+        temp.persist(path).map(drop).map_err(|e| e.error)
     })();
-    if let Err(source) = result {
-        // Best effort: the temp file is ours and must not linger; the original error matters more.
-        let _ = fs::remove_file(&temp);
-        return Err(write_error(source));
-    }
+    result.map_err(write_error)?;
     // Make the rename itself durable where directories can be synced (not on Windows).
     if let Ok(d) = File::open(dir) {
         let _ = d.sync_all();
@@ -377,17 +378,45 @@ pub fn write_atomic(path: &Path, write: impl FnOnce(&mut dyn Write) -> io::Resul
     Ok(())
 }
 
-/// The folder of `path` (`.` for a bare name) and a fresh temp file name `.NAME.tmp-PID-N` in
-/// it, as [`write_atomic`] writes through.
-fn temp_path(path: &Path) -> io::Result<(&Path, PathBuf)> {
-    let file_name =
-        path.file_name().ok_or_else(|| io::Error::new(io::ErrorKind::InvalidInput, "the path names no file"))?;
+/// A new temporary file for `path` in its folder, as [`write_atomic`] (and
+/// [`check_output_folder`]) write through: hidden, `.NAME.` + random letters + `.tmp`, created
+/// exclusively by the `tempfile` crate (which retries on a name taken) and removed when dropped,
+/// with mode `0666` before the umask on Unix (tempfile's own default, `0600`, would make every
+/// written mesh private).
+fn create_temp(path: &Path) -> io::Result<(&Path, tempfile::NamedTempFile)> {
+    let name = path.file_name().ok_or_else(|| io::Error::new(io::ErrorKind::InvalidInput, "the path names no file"))?;
     let dir = match path.parent() {
         Some(dir) if !dir.as_os_str().is_empty() => dir,
         _ => Path::new("."),
     };
-    let n = TEMP_COUNTER.fetch_add(1, Ordering::Relaxed);
-    Ok((dir, dir.join(format!(".{}.tmp-{}-{n}", file_name.to_string_lossy(), std::process::id()))))
+    let mut prefix = std::ffi::OsString::from(".");
+    prefix.push(name);
+    prefix.push(".");
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(&prefix).suffix(".tmp").rand_bytes(12);
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        builder.permissions(fs::Permissions::from_mode(0o666));
+    }
+    Ok((dir, builder.tempfile_in(dir)?))
+}
+
+/// Gives `file` the permission bits of the regular file at `path`, if there is one (replacing a
+/// file keeps its mode); a symbolic link or nothing at `path` leaves `file` as created.
+fn keep_mode_of(path: &Path, file: &File) -> io::Result<()> {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        if let Ok(meta) = fs::symlink_metadata(path)
+            && meta.is_file()
+        {
+            file.set_permissions(fs::Permissions::from_mode(meta.permissions().mode() & 0o777))?;
+        }
+    }
+    #[cfg(not(unix))]
+    let _ = (path, file);
+    Ok(())
 }
 
 /// The mesh formats a result can be written in, by extension (`shapeup deform -o`,
@@ -442,7 +471,7 @@ pub fn check_output_extension(path: &Path, allowed: &'static [&'static str]) -> 
 }
 
 /// Fails unless the folder `path` goes in exists and takes a new file: it creates (and
-/// removes) the kind of temp file [`write_atomic`] writes through.
+/// removes) the kind of temporary file [`write_atomic`] writes through.
 ///
 /// # Errors
 /// [`OutputError::MissingFolder`] or [`OutputError::Unwritable`].
@@ -451,9 +480,227 @@ pub fn check_output_folder(path: &Path) -> Result<(), OutputError> {
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty() && !d.is_dir()) {
         return Err(OutputError::MissingFolder { path: path.to_path_buf(), dir: dir.into() });
     }
-    let (dir, temp) = temp_path(path).map_err(|e| unwritable(Path::new("."), e))?;
-    OpenOptions::new().write(true).create_new(true).open(&temp).map_err(|e| unwritable(dir, e))?;
-    fs::remove_file(&temp).map_err(|e| unwritable(dir, e))
+    let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let (_, temp) = create_temp(path).map_err(|e| unwritable(dir, e))?;
+    temp.close().map_err(|e| unwritable(dir, e))
+}
+
+/// The name of the UTF-16 encoding whose byte-order mark `prefix` starts with (`FF FE`:
+/// "UTF-16 little endian", `FE FF`: "UTF-16 big endian"), or `None`. Readers decode such text
+/// files ([`decode_text`]) or refuse them with one line naming the encoding, instead of
+/// misreading their bytes.
+pub(crate) fn utf16_encoding(prefix: &[u8]) -> Option<&'static str> {
+    utf16_of(prefix).map(|(name, _)| name)
+}
+
+fn utf16_of(prefix: &[u8]) -> Option<(&'static str, &'static encoding_rs::Encoding)> {
+    match prefix {
+        [0xFF, 0xFE, ..] => Some(("UTF-16 little endian", encoding_rs::UTF_16LE)),
+        [0xFE, 0xFF, ..] => Some(("UTF-16 big endian", encoding_rs::UTF_16BE)),
+        _ => None,
+    }
+}
+
+/// Text that is not valid in its encoding: the payload of the [`io::Error`] (kind
+/// `InvalidData`) that [`TextReader`] and [`read_text_file`] return; [`read_error`] turns it
+/// into an [`IoError::Binary`] naming the byte offset.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(crate) struct DecodeError {
+    /// "UTF-16 little endian", "UTF-16 big endian" or "UTF-8".
+    pub(crate) encoding: &'static str,
+    /// Offset in the file of the first byte that is not valid text.
+    pub(crate) offset: u64,
+}
+
+impl std::fmt::Display for DecodeError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let why = if self.encoding.starts_with("UTF-16") {
+            "an unpaired surrogate, or an odd number of bytes"
+        } else {
+            "a byte sequence that is no character"
+        };
+        write!(f, "not valid {} text at byte offset {} ({why})", self.encoding, self.offset)
+    }
+}
+
+impl std::error::Error for DecodeError {}
+
+impl DecodeError {
+    fn into_io(self) -> io::Error {
+        io::Error::new(io::ErrorKind::InvalidData, self)
+    }
+
+    /// The decoding error that `error` carries, if it is one.
+    pub(crate) fn of(error: &io::Error) -> Option<&DecodeError> {
+        error.get_ref().and_then(|e| e.downcast_ref::<DecodeError>())
+    }
+}
+
+/// The error for a failed read of `path`: [`IoError::Binary`] at the offset for text that is
+/// not valid in its encoding ([`DecodeError`]), else [`IoError::Read`].
+pub(crate) fn read_error(path: &Path, source: io::Error) -> IoError {
+    match DecodeError::of(&source) {
+        Some(e) => IoError::Binary {
+            path: path.to_path_buf(),
+            offset: e.offset,
+            message: format!("the file is not valid {} text (the byte-order mark at its start says it is)", e.encoding),
+        },
+        None => IoError::Read { path: path.to_path_buf(), source },
+    }
+}
+
+/// [`read_error`] for an error already made: an [`IoError::Read`] whose cause is a
+/// [`DecodeError`] (from a line reader that maps every error to `Read`) becomes
+/// [`IoError::Binary`]; any other error is returned as it is.
+pub(crate) fn with_decode_errors(error: IoError) -> IoError {
+    match error {
+        IoError::Read { path, source } => read_error(&path, source),
+        other => other,
+    }
+}
+
+/// A text file's bytes as UTF-8 for the line readers: the bytes themselves, or, after a UTF-16
+/// byte-order mark (`FF FE`, `FE FF`), their transcoding to UTF-8 (without the mark). Malformed
+/// UTF-16 (an unpaired surrogate, an odd number of bytes) is an `InvalidData` error carrying a
+/// [`DecodeError`] with its byte offset in the file, never a replacement character. Anything
+/// else passes through untouched (UTF-8, a UTF-8 byte-order mark, invalid UTF-8, binary data),
+/// so readers keep their own handling of those.
+///
+/// Every text reader (OBJ, OFF, ascii STL, TetGen) reads through one; PLY and MSH can do the
+/// same with [`decode_text`].
+pub(crate) struct TextReader<R> {
+    inner: TextInner<R>,
+}
+
+enum TextInner<R> {
+    /// The bytes sniffed for a byte-order mark, then the rest of the reader.
+    Plain(io::Chain<io::Cursor<Vec<u8>>, R>),
+    Utf16(Box<Utf16Decoder<R>>),
+}
+
+/// Wraps `reader` in a [`TextReader`], looking at its first two bytes for a UTF-16 byte-order
+/// mark.
+///
+/// # Errors
+/// Any error reading those bytes.
+pub(crate) fn decode_text<R: BufRead>(mut reader: R) -> io::Result<TextReader<R>> {
+    let mut prefix = Vec::with_capacity(2);
+    while prefix.len() < 2 {
+        let buf = match reader.fill_buf() {
+            Ok(buf) => buf,
+            Err(e) if e.kind() == io::ErrorKind::Interrupted => continue,
+            Err(e) => return Err(e),
+        };
+        if buf.is_empty() {
+            break;
+        }
+        let take = buf.len().min(2 - prefix.len());
+        prefix.extend_from_slice(&buf[..take]);
+        reader.consume(take);
+    }
+    let inner = match utf16_of(&prefix) {
+        Some((name, encoding)) => TextInner::Utf16(Box::new(Utf16Decoder {
+            reader,
+            decoder: encoding.new_decoder_without_bom_handling(),
+            name,
+            out: vec![0; 16 * 1024],
+            start: 0,
+            end: 0,
+            offset: prefix.len() as u64,
+            done: false,
+        })),
+        None => TextInner::Plain(io::Read::chain(io::Cursor::new(prefix), reader)),
+    };
+    Ok(TextReader { inner })
+}
+
+/// Streaming UTF-16 → UTF-8 through `encoding_rs` (a thin adapter: `encoding_rs_io` would
+/// replace malformed text by U+FFFD silently, where a reader must say where the file is broken).
+struct Utf16Decoder<R> {
+    reader: R,
+    decoder: encoding_rs::Decoder,
+    name: &'static str,
+    /// UTF-8 decoded and not yet consumed: `out[start..end]`.
+    out: Vec<u8>,
+    start: usize,
+    end: usize,
+    /// Bytes of the file taken by the decoder so far (the byte-order mark included).
+    offset: u64,
+    done: bool,
+}
+
+impl<R: BufRead> Utf16Decoder<R> {
+    fn fill_buf(&mut self) -> io::Result<&[u8]> {
+        while self.start == self.end && !self.done {
+            let src = match self.reader.fill_buf() {
+                Ok(src) => src,
+                Err(e) if e.kind() == io::ErrorKind::Interrupted => continue,
+                Err(e) => return Err(e),
+            };
+            let last = src.is_empty();
+            let (result, read, written) = self.decoder.decode_to_utf8_without_replacement(src, &mut self.out, last);
+            self.reader.consume(read);
+            self.offset += read as u64;
+            self.start = 0;
+            self.end = written;
+            match result {
+                encoding_rs::DecoderResult::InputEmpty => self.done = last,
+                encoding_rs::DecoderResult::OutputFull => {}
+                encoding_rs::DecoderResult::Malformed(bad, after) => {
+                    self.done = true;
+                    let offset = self.offset - u64::from(bad) - u64::from(after);
+                    return Err(DecodeError { encoding: self.name, offset }.into_io());
+                }
+            }
+        }
+        Ok(&self.out[self.start..self.end])
+    }
+}
+
+impl<R: BufRead> io::Read for TextReader<R> {
+    fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+        let available = self.fill_buf()?;
+        let n = available.len().min(buf.len());
+        buf[..n].copy_from_slice(&available[..n]);
+        self.consume(n);
+        Ok(n)
+    }
+}
+
+impl<R: BufRead> BufRead for TextReader<R> {
+    fn fill_buf(&mut self) -> io::Result<&[u8]> {
+        match &mut self.inner {
+            TextInner::Plain(r) => r.fill_buf(),
+            TextInner::Utf16(d) => d.fill_buf(),
+        }
+    }
+
+    fn consume(&mut self, amount: usize) {
+        match &mut self.inner {
+            TextInner::Plain(r) => r.consume(amount),
+            TextInner::Utf16(d) => d.start = (d.start + amount).min(d.end),
+        }
+    }
+}
+
+/// A whole text file (a scene) as a string: UTF-8, with or without a byte-order mark (removed),
+/// or UTF-16 after its byte-order mark, transcoded ([`decode_text`]).
+///
+/// # Errors
+/// The operating system's error, or an `InvalidData` error carrying a [`DecodeError`] (with the
+/// byte offset) for text that is not valid UTF-8 or UTF-16.
+pub(crate) fn read_text_file(path: &Path) -> io::Result<String> {
+    let bytes = fs::read(path)?;
+    if utf16_encoding(&bytes).is_some() {
+        let mut text = String::new();
+        io::Read::read_to_string(&mut decode_text(&bytes[..])?, &mut text)?;
+        return Ok(text);
+    }
+    let skip = if bytes.starts_with(UTF8_BOM) { UTF8_BOM.len() } else { 0 };
+    let mut bytes = bytes;
+    bytes.drain(..skip);
+    String::from_utf8(bytes)
+        .map_err(|e| DecodeError { encoding: "UTF-8", offset: (skip + e.utf8_error().valid_up_to()) as u64 }.into_io())
 }
 
 /// The UTF-8 byte-order mark, skipped at the start of every text file.
@@ -516,12 +763,27 @@ pub(crate) fn build_mesh(path: &Path, positions: Vec<glam::DVec3>, polygons: Pol
 
 /// Parses one coordinate, naming it in the error.
 pub(crate) fn parse_coordinate(token: &str, what: &str) -> Result<f64, String> {
-    token.parse::<f64>().map_err(|_| format!("{what} '{token}' is not a number"))
+    token.parse::<f64>().map_err(|_| format!("{what} '{}' is not a number", shown(token)))
 }
 
-/// `Vec::with_capacity` bounded by [`MAX_PREALLOCATION`], for counts read from a file.
+/// `text` as an error message quotes it: itself, or its first 40 characters and `…` (a
+/// megabyte-long token must not make a megabyte-long message).
+pub(crate) fn shown(text: &str) -> std::borrow::Cow<'_, str> {
+    match text.char_indices().nth(40) {
+        None => std::borrow::Cow::Borrowed(text),
+        Some((end, _)) => std::borrow::Cow::Owned(format!("{}…", &text[..end])),
+    }
+}
+
+/// Most bytes [`bounded_vec`] reserves up front: a few such vectors for a header's claim stay
+/// well under 100 MB whatever the element size.
+const PREALLOCATION_BYTES: usize = 16 << 20;
+
+/// `Vec::with_capacity` bounded by [`MAX_PREALLOCATION`] elements and 16 MiB, for counts read
+/// from a file.
 pub(crate) fn bounded_vec<T>(claimed: usize) -> Vec<T> {
-    Vec::with_capacity(claimed.min(MAX_PREALLOCATION))
+    let by_size = PREALLOCATION_BYTES / size_of::<T>().max(1);
+    Vec::with_capacity(claimed.min(MAX_PREALLOCATION).min(by_size))
 }
 
 /// Writes an `f64` with the shortest representation that parses back to the same value.
@@ -580,6 +842,79 @@ mod tests {
         let mut lines = Lines::new(&b"\xEF\xBB\xBFv 1 2 3\n\xEF\xBB\xBF"[..]);
         assert_eq!(lines.next_line().unwrap(), Some((1, "v 1 2 3")), "the mark is skipped at the start");
         assert_eq!(lines.next_line().unwrap(), Some((2, "\u{feff}")), "and only there");
+    }
+
+    fn utf16(text: &str, big_endian: bool) -> Vec<u8> {
+        let mut bytes = if big_endian { vec![0xFE, 0xFF] } else { vec![0xFF, 0xFE] };
+        for unit in text.encode_utf16() {
+            bytes.extend_from_slice(&if big_endian { unit.to_be_bytes() } else { unit.to_le_bytes() });
+        }
+        bytes
+    }
+
+    fn decode_all(reader: impl BufRead) -> io::Result<String> {
+        let mut text = String::new();
+        io::Read::read_to_string(&mut decode_text(reader)?, &mut text)?;
+        Ok(text)
+    }
+
+    #[test]
+    fn utf16_is_decoded_however_the_bytes_arrive() {
+        let text = "v 1 2 3\r\n# caf\u{e9} \u{1D11E}\n";
+        for big in [false, true] {
+            let bytes = utf16(text, big);
+            assert_eq!(decode_all(&bytes[..]).unwrap(), text);
+            // One byte at a time: the mark and surrogate pairs split across reads.
+            assert_eq!(decode_all(BufReader::with_capacity(1, &bytes[..])).unwrap(), text);
+        }
+        let crlf = utf16("a\r\nb", false);
+        let mut lines = Lines::new(decode_text(&crlf[..]).unwrap());
+        assert_eq!(lines.next_line().unwrap(), Some((1, "a")));
+        assert_eq!(lines.next_line().unwrap(), Some((2, "b")));
+        assert_eq!(lines.next_line().unwrap(), None);
+        assert_eq!(decode_all(&[0xFF, 0xFE][..]).unwrap(), "", "only the mark");
+    }
+
+    #[test]
+    fn other_bytes_pass_through_untouched() {
+        for bytes in [&b""[..], b"x", b"\xFF", b"\xFE", b"\xEF\xBB\xBFv 1\n", b"caf\xe9 \x00\xFF\xFE"] {
+            let mut out = Vec::new();
+            io::Read::read_to_end(&mut decode_text(BufReader::with_capacity(1, bytes)).unwrap(), &mut out).unwrap();
+            assert_eq!(out, bytes);
+        }
+    }
+
+    #[test]
+    fn malformed_utf16_says_encoding_and_offset() {
+        let error = |bytes: &[u8]| {
+            let e = decode_all(BufReader::with_capacity(3, bytes)).unwrap_err();
+            assert_eq!(e.kind(), io::ErrorKind::InvalidData);
+            DecodeError::of(&e).cloned().unwrap()
+        };
+        let mut odd = utf16("ab", false);
+        odd.push(b'c');
+        assert_eq!(error(&odd), DecodeError { encoding: "UTF-16 little endian", offset: 6 });
+        // A high surrogate followed by a letter, a low surrogate alone.
+        let lone_high = [0xFE, 0xFF, 0x00, b'a', 0xD8, 0x00, 0x00, b'b'];
+        assert_eq!(error(&lone_high), DecodeError { encoding: "UTF-16 big endian", offset: 4 });
+        let lone_low = [0xFF, 0xFE, b'a', 0x00, b'b', 0x00, 0x00, 0xDC];
+        assert_eq!(error(&lone_low), DecodeError { encoding: "UTF-16 little endian", offset: 6 });
+        let high_at_end = [0xFF, 0xFE, 0x00, 0xD8];
+        assert_eq!(error(&high_at_end).offset, 2);
+        let e = read_error(Path::new("x.obj"), DecodeError { encoding: "UTF-16 big endian", offset: 4 }.into_io());
+        assert_eq!(
+            e.to_string(),
+            "x.obj: byte offset 4: the file is not valid UTF-16 big endian text (the byte-order mark at its start says it is)"
+        );
+        let e = read_error(Path::new("x.obj"), io::Error::other("disk"));
+        assert!(matches!(e, IoError::Read { .. }));
+    }
+
+    #[test]
+    fn preallocation_is_bounded_in_bytes_too() {
+        assert_eq!(bounded_vec::<u8>(10).capacity(), 10);
+        assert_eq!(bounded_vec::<u8>(usize::MAX).capacity(), MAX_PREALLOCATION);
+        assert!(bounded_vec::<[f64; 8]>(usize::MAX).capacity() * 64 <= PREALLOCATION_BYTES);
     }
 
     #[test]

@@ -8,7 +8,8 @@
 //! or `i/t/n` corners (all corners of a face of one form), 1-based or negative (relative to the
 //! last `v`, `vt` or `vn` read so far), any number of corners (triangulated by
 //! [`Mesh::from_polygons`]); `#` comments, `\` line continuations, `\r\n` endings, a UTF-8
-//! byte-order mark. Values after a vertex's x y z are a colour when there are 3 or 4 of them,
+//! byte-order mark; UTF-16 files (byte-order mark) are decoded and read as their UTF-8 copy (and
+//! written back as UTF-8). Values after a vertex's x y z are a colour when there are 3 or 4 of them,
 //! all numbers (`r g b` or `r g b a`: colours come first, as MeshLab and tinyobjloader write and
 //! read them); 1 (`w`), 2 or 5 and more are not. The file has vertex colours when every `v`
 //! line has one.
@@ -39,7 +40,10 @@ use std::path::Path;
 
 use glam::DVec3;
 
-use super::{IoError, LoadedMesh, UTF8_BOM, build_mesh, parse_coordinate, report_dropped, write_f64, write_xyz};
+use super::{
+    IoError, LoadedMesh, UTF8_BOM, build_mesh, decode_text, parse_coordinate, read_error, report_dropped, shown,
+    write_f64, write_xyz,
+};
 use crate::attributes::{AttributeKind, Attributes, NO_INDEX, TexCoords};
 use crate::geometry::indexed_normals;
 use crate::mesh::{Mesh, Polygons};
@@ -53,10 +57,11 @@ use crate::warnings::Warnings;
 /// `v`, `vt` or `vn` index that is 0, not an integer or out of range (relative ones against what
 /// is defined before the face), a face whose corners mix forms (some with a `vt` or `vn` index,
 /// some without), or a face with fewer than three corners; [`IoError::Invalid`] when there are no
-/// vertices; [`IoError::Mesh`] for a non-finite coordinate; [`IoError::Read`] if reading fails.
+/// vertices; [`IoError::Mesh`] for a non-finite coordinate; [`IoError::Binary`] for malformed
+/// UTF-16; [`IoError::Read`] if reading fails.
 pub fn read_obj(reader: impl BufRead, path: &Path) -> Result<LoadedMesh, IoError> {
     let parse_error = |line: usize, message: String| IoError::Parse { path: path.to_path_buf(), line, message };
-    let mut lines = RawLines::new(reader);
+    let mut lines = RawLines::new(decode_text(reader).map_err(|e| read_error(path, e))?);
     let mut attributes = ObjAttributes::default();
     let mut positions: Vec<DVec3> = Vec::new();
     let mut colors: Vec<Option<[f64; 3]>> = Vec::new();
@@ -71,7 +76,7 @@ pub fn read_obj(reader: impl BufRead, path: &Path) -> Result<LoadedMesh, IoError
         let mut first_line = 0;
         let mut at_end = false;
         loop {
-            match lines.next_line().map_err(|source| IoError::Read { path: path.to_path_buf(), source })? {
+            match lines.next_line().map_err(|e| read_error(path, e))? {
                 None => {
                     at_end = true;
                     break;
@@ -149,8 +154,8 @@ pub fn read_obj(reader: impl BufRead, path: &Path) -> Result<LoadedMesh, IoError
                                 return Err(error(format!(
                                     "{what} count mismatch: corner {with} ('{}') has a {what} index but corner \
                                      {without} ('{}') has none (a face's corners must all have one, or none)",
-                                    token_of(with),
-                                    token_of(without)
+                                    shown(token_of(with)),
+                                    shown(token_of(without))
                                 )));
                             }
                         }
@@ -288,9 +293,14 @@ fn text_view<'a>(bytes: &'a [u8], replaced: &'a mut String) -> &'a str {
 fn token_spans(raw: &str) -> Vec<Range<usize>> {
     let mut spans = Vec::new();
     let mut start = None;
+    // Each physical line is looked at once for its continuation, so a line of many backslashes
+    // stays linear.
+    let mut continuation = continuation_at(raw, 0);
     for (i, c) in raw.char_indices() {
-        let continuation = c == '\\' && raw[i + 1..].split('\n').next().is_some_and(|after| after.trim().is_empty());
-        if c == '#' || c.is_whitespace() || continuation {
+        if c == '\n' {
+            continuation = continuation_at(raw, i + 1);
+        }
+        if c == '#' || c.is_whitespace() || (c == '\\' && continuation == Some(i)) {
             if let Some(s) = start.take() {
                 spans.push(s..i);
             }
@@ -305,6 +315,13 @@ fn token_spans(raw: &str) -> Vec<Range<usize>> {
         spans.push(s..raw.len());
     }
     spans
+}
+
+/// The byte offset of the continuation backslash of the physical line that starts at `from` in
+/// `raw` (its last character before trailing blanks), if it ends in one.
+fn continuation_at(raw: &str, from: usize) -> Option<usize> {
+    let line = raw.get(from..)?.split('\n').next()?.trim_end();
+    line.ends_with('\\').then(|| from + line.len() - 1)
 }
 
 /// Parses one number per name from `tokens` (extra tokens are ignored); `what` and `form` name
@@ -354,6 +371,8 @@ const INDEX_KINDS: [IndexKind; 3] = [
 /// read so far.
 fn parse_corner(token: &str, defined: [usize; 3]) -> Result<Corner, String> {
     let mut parts = token.split('/');
+    // Messages quote at most the start of a (hostile) long token.
+    let token = &*shown(token);
     let vertex = parts.next().unwrap_or("");
     if vertex.parse::<i64>().is_err() {
         return Err(format!("face corner '{token}' does not start with an integer vertex index"));
@@ -374,8 +393,9 @@ fn parse_corner(token: &str, defined: [usize; 3]) -> Result<Corner, String> {
 /// Parses one index of a corner into a 0-based index.
 fn parse_index(text: &str, token: &str, kind: &IndexKind, defined: usize) -> Result<u32, String> {
     let name = kind.name;
-    let i: i64 =
-        text.parse().map_err(|_| format!("{name} index '{text}' in face corner '{token}' is not an integer"))?;
+    let i: i64 = text
+        .parse()
+        .map_err(|_| format!("{name} index '{}' in face corner '{token}' is not an integer", shown(text)))?;
     let zero_based = match i {
         0 => return Err(format!("{name} index 0 in '{token}' is invalid (OBJ indices start at 1)")),
         i if i > 0 => i - 1,

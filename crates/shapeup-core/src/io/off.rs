@@ -1,9 +1,13 @@
 //! Object File Format (`.off`).
 //!
 //! Read: a header `OFF` (or `COFF`, `NOFF`, `CNOFF`, `STOFF`, …), counts `nv nf [ne]` (on the
-//! header line or the next), `nv` vertex lines `x y z …`, then `nf` face lines
-//! `k i₀ … i_{k−1} [colour…]` with 0-based indices. `#` starts a comment; blank lines are
-//! skipped. Binary OFF and the 4-D / n-D variants are refused.
+//! header line, glued to the keyword as in `OFF8 6 12`, or on the next line), then `nv` vertices
+//! `x y z …` and `nf` faces `k i₀ … i_{k−1} [colour…]` with 0-based indices. After the counts the
+//! file is whitespace-separated numbers, as Geomview reads it: a vertex's coordinates and a
+//! face's indices may continue over several lines; what follows the last of them on its line
+//! (a vertex's normal, colour or texture coordinates, a face's colour) belongs to that element.
+//! `#` starts a comment anywhere; blank lines are skipped. Binary OFF and the 4-D / n-D variants
+//! are refused. A UTF-16 file (byte-order mark) is decoded ([`super`]).
 //!
 //! Kept ([`OffAttributes`]): the keyword and, verbatim, the values after each vertex's x y z
 //! (normal, colour, texture coordinates, as the keyword's prefixes announce) and after each
@@ -15,8 +19,11 @@ use std::path::Path;
 
 use glam::DVec3;
 
-use super::{IoError, Lines, LoadedMesh, bounded_vec, build_mesh, parse_coordinate, write_xyz};
-use crate::mesh::Mesh;
+use super::{
+    IoError, Lines, LoadedMesh, TextReader, bounded_vec, build_mesh, decode_text, parse_coordinate, read_error, shown,
+    write_xyz,
+};
+use crate::mesh::{Mesh, Polygons};
 
 /// Reads an OFF file from `reader`; `path` only names it in errors.
 ///
@@ -24,49 +31,47 @@ use crate::mesh::Mesh;
 /// [`IoError::Parse`] with the line for a bad header or counts, a non-numeric coordinate, a bad
 /// or out-of-range index, a face with fewer than three corners, or a file that ends before the
 /// counts say; [`IoError::Invalid`] for zero vertices; [`IoError::Mesh`] for a non-finite
-/// coordinate; [`IoError::Read`] if reading fails.
+/// coordinate; [`IoError::Binary`] for malformed UTF-16; [`IoError::Read`] if reading fails.
 pub fn read_off(reader: impl BufRead, path: &Path) -> Result<LoadedMesh, IoError> {
-    let mut lines = Lines::new(reader);
+    let reader = decode_text(reader).map_err(|e| read_error(path, e))?;
+    let mut tokens = Tokens::new(reader, path);
     let parse_error = |line: usize, message: String| IoError::Parse { path: path.to_path_buf(), line, message };
-    let mut comments = 0;
-    // The next non-blank line without its comment, split into tokens, or `None` at the end.
-    let mut next_tokens = |lines: &mut Lines<_>| -> Result<Option<(usize, Vec<String>)>, IoError> {
-        loop {
-            let Some((number, text)) =
-                lines.next_line().map_err(|source| IoError::Read { path: path.to_path_buf(), source })?
-            else {
-                return Ok(None);
-            };
-            if text.contains('#') {
-                comments += 1;
-            }
-            let content = text.split('#').next().unwrap_or("");
-            let tokens: Vec<String> = content.split_whitespace().map(str::to_owned).collect();
-            if !tokens.is_empty() {
-                return Ok(Some((number, tokens)));
-            }
-        }
-    };
 
-    let (header_line, mut header) =
-        next_tokens(&mut lines)?.ok_or_else(|| parse_error(1, "empty file (expected an 'OFF' header)".to_owned()))?;
-    let keyword = header.remove(0);
-    if !is_off_keyword(&keyword) {
-        return Err(parse_error(header_line, format!("expected an 'OFF' header, found '{keyword}'")));
+    let Some((header_line, first)) = tokens.next_token()? else {
+        return Err(parse_error(1, "empty file (expected an 'OFF' header)".to_owned()));
+    };
+    // `OFF`, or the keyword glued to the vertex count (`OFF8 6 12`, as some exporters write).
+    let (keyword, glued) = split_keyword(first)
+        .ok_or_else(|| parse_error(header_line, format!("expected an 'OFF' header, found '{}'", shown(first))))?;
+    let (keyword, glued) = (keyword.to_owned(), glued.to_owned());
+    let mut counts: Vec<String> = Vec::new();
+    if !glued.is_empty() {
+        counts.push(glued);
     }
-    if header.first().is_some_and(|t| t.eq_ignore_ascii_case("BINARY")) {
+    let rest = tokens.rest_of_line();
+    if rest.split_whitespace().next().is_some_and(|t| t.eq_ignore_ascii_case("BINARY")) {
         return Err(parse_error(header_line, "binary OFF is not supported (only ASCII OFF)".to_owned()));
     }
-    // Counts may follow the keyword on the same line.
-    let (counts_line, counts) = if header.is_empty() {
-        next_tokens(&mut lines)?.ok_or_else(|| {
-            parse_error(lines.number + 1, "file ends before the counts line 'vertices faces edges'".to_owned())
-        })?
+    counts.extend(rest.split_whitespace().map(str::to_owned));
+    // Counts may follow the keyword on the same line, else they are the next line.
+    let counts_line = if counts.is_empty() {
+        let Some((line, first)) = tokens.next_token()? else {
+            return Err(parse_error(
+                tokens.end_line(),
+                "file ends before the counts line 'vertices faces edges'".to_owned(),
+            ));
+        };
+        counts.push(first.to_owned());
+        counts.extend(tokens.rest_of_line().split_whitespace().map(str::to_owned));
+        line
     } else {
-        (header_line, header)
+        header_line
     };
     let bad_counts = || {
-        parse_error(counts_line, format!("bad counts line '{}' (expected 'vertices faces edges')", counts.join(" ")))
+        parse_error(
+            counts_line,
+            format!("bad counts line '{}' (expected 'vertices faces edges')", shown(&counts.join(" "))),
+        )
     };
     if counts.len() < 2 || counts.len() > 3 {
         return Err(bad_counts());
@@ -84,85 +89,192 @@ pub fn read_off(reader: impl BufRead, path: &Path) -> Result<LoadedMesh, IoError
             message: "the counts line says 0 vertices".to_owned(),
         });
     }
-    let truncated = |lines: &Lines<_>, what: String| {
+    let truncated = |line: usize, what: String| {
         parse_error(
-            lines.number + 1,
+            line,
             format!("file ends early: {what} (counts line {counts_line} says {nv} vertices and {nf} faces)"),
         )
     };
 
     let layout = VertexLayout::of(&keyword);
+    // Grown as vertices and faces arrive: the counts are a claim (see MAX_PREALLOCATION).
     let mut positions = bounded_vec(nv);
-    let mut vertex_extra: Vec<String> = bounded_vec(nv);
+    let mut vertex_extra: Vec<String> = Vec::new();
     for i in 0..nv {
-        let (line, tokens) =
-            next_tokens(&mut lines)?.ok_or_else(|| truncated(&lines, format!("found {i} of {nv} vertices")))?;
-        if tokens.len() < 3 {
-            return Err(parse_error(line, format!("vertex {i} has {} coordinates, expected 3", tokens.len())));
-        }
         let mut xyz = [0.0; 3];
-        for ((axis, token), slot) in ["x", "y", "z"].iter().zip(&tokens).zip(&mut xyz) {
+        for (axis, slot) in ["x", "y", "z"].iter().zip(&mut xyz) {
+            let Some((line, token)) = tokens.next_token()? else {
+                let found = if *axis == "x" {
+                    format!("found {i} of {nv} vertices")
+                } else {
+                    format!("vertex {i} has no {axis} coordinate")
+                };
+                return Err(truncated(tokens.end_line(), found));
+            };
             *slot =
                 parse_coordinate(token, &format!("vertex {i} {axis} coordinate")).map_err(|m| parse_error(line, m))?;
         }
         positions.push(DVec3::from_array(xyz));
-        let extra = &tokens[3..];
-        if let Some(bad) = extra.iter().find(|t| t.parse::<f64>().is_err()) {
-            return Err(parse_error(line, format!("vertex {i}: '{bad}' after the coordinates is not a number")));
-        }
-        if layout.normal && extra.len() < 3 {
+        let line = tokens.line();
+        let extra = tokens.rest_of_line();
+        if let Some(bad) = extra.split_whitespace().find(|t| t.parse::<f64>().is_err()) {
             return Err(parse_error(
                 line,
-                format!("vertex {i} has {} values after x y z, but {keyword} needs a normal (3)", extra.len()),
+                format!("vertex {i}: '{}' after the coordinates is not a number", shown(bad)),
             ));
         }
-        vertex_extra.push(extra.join(" "));
+        let values = extra.split_whitespace().count();
+        if layout.normal && values < 3 {
+            return Err(parse_error(
+                line,
+                format!("vertex {i} has {values} values after x y z, but {keyword} needs a normal (3)"),
+            ));
+        }
+        vertex_extra.push(extra);
     }
 
-    let mut faces: Vec<Vec<u32>> = bounded_vec(nf);
-    let mut face_extra: Vec<String> = bounded_vec(nf);
+    let mut polygons = Polygons::new();
+    let mut corners: Vec<u32> = Vec::new();
+    let mut face_extra: Vec<String> = Vec::new();
     for f in 0..nf {
-        let (line, tokens) =
-            next_tokens(&mut lines)?.ok_or_else(|| truncated(&lines, format!("found {f} of {nf} faces")))?;
-        let mut tokens = tokens.iter();
-        let k_token = tokens.next().map_or("", String::as_str);
-        let k: usize =
-            k_token.parse().map_err(|_| parse_error(line, format!("face {f}: '{k_token}' is not a vertex count")))?;
+        let Some((face_line, k_token)) = tokens.next_token()? else {
+            return Err(truncated(tokens.end_line(), format!("found {f} of {nf} faces")));
+        };
+        let k: usize = k_token
+            .parse()
+            .map_err(|_| parse_error(face_line, format!("face {f}: '{}' is not a vertex count", shown(k_token))))?;
         if k < 3 {
-            return Err(parse_error(line, format!("face {f} has {k} vertices, expected at least 3")));
+            return Err(parse_error(face_line, format!("face {f} has {k} vertices, expected at least 3")));
         }
-        let mut face = Vec::with_capacity(k.min(64));
+        corners.clear();
         for corner in 0..k {
-            let token = tokens
-                .next()
-                .ok_or_else(|| parse_error(line, format!("face {f} lists {corner} of its {k} vertex indices")))?;
-            let index = token
-                .parse::<u32>()
-                .ok()
-                .filter(|&v| (v as usize) < nv)
-                .ok_or_else(|| parse_error(line, format!("face {f}: vertex index '{token}' is not in 0..{nv}")))?;
-            face.push(index);
+            let Some((line, token)) = tokens.next_token()? else {
+                return Err(parse_error(
+                    face_line,
+                    format!("face {f} lists {corner} of its {k} vertex indices before the file ends"),
+                ));
+            };
+            let index = token.parse::<u32>().ok().filter(|&v| (v as usize) < nv).ok_or_else(|| {
+                parse_error(line, format!("face {f}: vertex index '{}' is not in 0..{nv}", shown(token)))
+            })?;
+            corners.push(index);
         }
-        // Whatever follows the indices (a colour) is kept as it is.
-        let extra: Vec<&str> = tokens.map(String::as_str).collect();
-        if let Some(bad) = extra.iter().find(|t| t.parse::<f64>().is_err()) {
-            return Err(parse_error(line, format!("face {f}: '{bad}' after the vertex indices is not a colour value")));
+        // Whatever follows the indices on their line (a colour) is kept as it is.
+        let line = tokens.line();
+        let extra = tokens.rest_of_line();
+        if let Some(bad) = extra.split_whitespace().find(|t| t.parse::<f64>().is_err()) {
+            return Err(parse_error(
+                line,
+                format!("face {f}: '{}' after the vertex indices is not a colour value", shown(bad)),
+            ));
         }
-        face_extra.push(extra.join(" "));
-        faces.push(face);
+        face_extra.push(extra);
+        polygons.push(&corners);
     }
-    if let Some((line, _)) = next_tokens(&mut lines)? {
+    if let Some((line, _)) = tokens.next_token()? {
         return Err(parse_error(
             line,
             format!("content after the last face (the counts line {counts_line} says {nv} vertices and {nf} faces)"),
         ));
     }
-    let mut loaded = build_mesh(path, positions, faces.iter().map(Vec::as_slice).collect())?;
+    let comments = tokens.comments;
+    let mut loaded = build_mesh(path, positions, polygons)?;
     let attributes = OffAttributes { keyword, layout, vertex_extra, face_extra, comments };
     if !attributes.is_plain() {
         loaded.mesh.attributes = crate::attributes::Attributes::Off(Box::new(attributes));
     }
     Ok(loaded)
+}
+
+/// The header keyword and the digits glued to it (`OFF8` → `OFF`, `8`), or `None` when the token
+/// is not an OFF keyword (see [`is_off_keyword`]).
+fn split_keyword(token: &str) -> Option<(&str, &str)> {
+    let end = token.find("OFF")? + "OFF".len();
+    let (keyword, glued) = token.split_at(end);
+    (is_off_keyword(keyword) && glued.bytes().all(|b| b.is_ascii_digit())).then_some((keyword, glued))
+}
+
+/// The whitespace-separated tokens of an OFF file, each with its line; `#` comments and blank
+/// lines skipped.
+struct Tokens<'p, R> {
+    lines: Lines<TextReader<R>>,
+    path: &'p Path,
+    /// The current line up to any comment, and its tokens' byte ranges.
+    text: String,
+    spans: Vec<(usize, usize)>,
+    /// Tokens of the current line already taken.
+    taken: usize,
+    /// Number of the current line.
+    line: usize,
+    /// Lines with a `#` comment so far.
+    comments: usize,
+}
+
+impl<'p, R: BufRead> Tokens<'p, R> {
+    fn new(reader: TextReader<R>, path: &'p Path) -> Self {
+        Self { lines: Lines::new(reader), path, text: String::new(), spans: Vec::new(), taken: 0, line: 0, comments: 0 }
+    }
+
+    /// Moves to the next line with a token; `false` at the end of the file.
+    fn load(&mut self) -> Result<bool, IoError> {
+        loop {
+            let Some((number, text)) = self.lines.next_line().map_err(|e| read_error(self.path, e))? else {
+                return Ok(false);
+            };
+            if text.contains('#') {
+                self.comments += 1;
+            }
+            let content = text.split('#').next().unwrap_or("");
+            self.text.clear();
+            self.text.push_str(content);
+            self.spans.clear();
+            let base = self.text.as_ptr() as usize;
+            self.spans.extend(self.text.split_whitespace().map(|t| {
+                let start = t.as_ptr() as usize - base;
+                (start, start + t.len())
+            }));
+            self.taken = 0;
+            if !self.spans.is_empty() {
+                self.line = number;
+                return Ok(true);
+            }
+        }
+    }
+
+    /// The next token and its line (continuing on the next lines when this one is used up), or
+    /// `None` at the end of the file.
+    fn next_token(&mut self) -> Result<Option<(usize, &str)>, IoError> {
+        if self.taken == self.spans.len() && !self.load()? {
+            return Ok(None);
+        }
+        let (start, end) = self.spans[self.taken];
+        self.taken += 1;
+        Ok(Some((self.line, &self.text[start..end])))
+    }
+
+    /// The tokens of the current line not taken yet, joined by single spaces; the next token
+    /// comes from a later line.
+    fn rest_of_line(&mut self) -> String {
+        let mut rest = String::new();
+        for &(start, end) in &self.spans[self.taken..] {
+            if !rest.is_empty() {
+                rest.push(' ');
+            }
+            rest.push_str(&self.text[start..end]);
+        }
+        self.taken = self.spans.len();
+        rest
+    }
+
+    /// The line of the last token taken.
+    fn line(&self) -> usize {
+        self.line
+    }
+
+    /// The line after the last one: where an element that is missing would have been.
+    fn end_line(&self) -> usize {
+        self.lines.number + 1
+    }
 }
 
 /// What each vertex line holds after x y z, from the header keyword's prefixes (Geomview's
@@ -369,6 +481,52 @@ mod tests {
         let text = "COFF 3 1 0\n0 0 0 255 0 0 255\n1 0 0 255 0 0 255\n0 1 0 255 0 0 255\n3 0 1 2 0.5 0.5 0.5\n";
         let loaded = read_off(text.as_bytes(), Path::new("m.off")).unwrap();
         assert_eq!(loaded.mesh.triangles, vec![[0, 1, 2]]);
+    }
+
+    #[test]
+    fn keyword_glued_to_the_counts() {
+        assert_eq!(split_keyword("OFF8"), Some(("OFF", "8")));
+        assert_eq!(split_keyword("COFF12"), Some(("COFF", "12")));
+        assert_eq!(split_keyword("OFF"), Some(("OFF", "")));
+        assert_eq!(split_keyword("OFFx"), None);
+        assert_eq!(split_keyword("4OFF8"), None);
+        let plain = "OFF\n4 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 3\n";
+        let expected = read_off(plain.as_bytes(), Path::new("m.off")).unwrap().mesh;
+        for glued in ["OFF4 2 0\n", "OFF4 2\n", "OFF4\n2 0\n"] {
+            let text = plain.replacen("OFF\n4 2 0\n", glued, 1);
+            let result = read_off(text.as_bytes(), Path::new("m.off"));
+            if glued == "OFF4\n2 0\n" {
+                // The counts are one line: a count alone on the header line is not all of them.
+                let err = result.unwrap_err().to_string();
+                assert!(err.contains("line 1") && err.contains("bad counts"), "{err}");
+            } else {
+                assert_eq!(result.unwrap().mesh, expected, "{glued:?}");
+            }
+        }
+        let coff = "COFF4 2 0\n0 0 0 1 0 0\n1 0 0 1 0 0\n1 1 0 1 0 0\n0 1 0 1 0 0\n3 0 1 2\n3 0 2 3\n";
+        let loaded = read_off(coff.as_bytes(), Path::new("m.off")).unwrap();
+        assert_eq!(loaded.mesh.triangles, expected.triangles);
+        assert_eq!(loaded.mesh.attributes.vertex_colors().unwrap()[2], [1.0, 0.0, 0.0]);
+    }
+
+    #[test]
+    fn indices_continue_over_lines_and_comments_go_anywhere() {
+        let text = "OFF # header\n# counts next\n5 1 0\n0 0 0\n1 0 # half a vertex\n 0\n1 1 0\n0 1\n0\n0.5 1.5 0\n\
+                    5 0 1\n# between corners\n2 3\n\n 4 0.2 0.3 0.4 # a colour after the last index\n";
+        let loaded = read_off(text.as_bytes(), Path::new("m.off")).unwrap();
+        assert_eq!(loaded.mesh.polygons.get(0), Some(&[0, 1, 2, 3, 4][..]));
+        assert_eq!(loaded.mesh.positions[1], DVec3::X);
+        assert_eq!(loaded.mesh.positions[3], DVec3::Y);
+        let crate::attributes::Attributes::Off(a) = &loaded.mesh.attributes else { panic!("no OFF attributes") };
+        assert_eq!(a.face_extra, ["0.2 0.3 0.4"]);
+        assert_eq!(a.comments, 5);
+        // Errors name the line of the token at fault.
+        let bad = text.replace("2 3\n", "2 x\n");
+        let err = read_off(bad.as_bytes(), Path::new("m.off")).unwrap_err().to_string();
+        assert!(err.contains("line 13") && err.contains("'x'"), "{err}");
+        let short = &text[..text.find("\n 4").unwrap()];
+        let err = read_off(short.as_bytes(), Path::new("m.off")).unwrap_err().to_string();
+        assert!(err.contains("line 11") && err.contains("lists 4 of its 5"), "{err}");
     }
 
     #[test]

@@ -11,9 +11,11 @@
 //!
 //! Hand-written rather than `stl_io`: that crate detects ascii by trying to parse it (a binary
 //! file whose header starts with `solid` trips it), and its errors do not say which facet or
-//! byte is wrong. Here a file is binary when `84 + 50·count` equals its length, otherwise ascii
-//! when it starts with `solid` and holds no NUL byte, otherwise binary (and then truncated or
-//! with trailing bytes, which are ignored). Facet normals are ignored on reading.
+//! byte is wrong. Here a file is binary when `84 + 50·count` equals its length (whatever its
+//! header says, even `solid` or a UTF-16 byte-order mark), otherwise ascii when it starts with
+//! `solid` and holds no NUL byte, or when it is UTF-16 text (byte-order mark `FF FE` or `FE FF`)
+//! that does, otherwise binary (and then truncated or with trailing bytes, which are ignored).
+//! Facet normals are ignored on reading.
 
 use std::collections::HashMap;
 use std::io::{self, Read, Write};
@@ -21,7 +23,7 @@ use std::path::Path;
 
 use glam::{DVec3, Vec3};
 
-use super::{IoError, Lines, LoadedMesh, bounded_vec, build_mesh, parse_coordinate};
+use super::{IoError, Lines, LoadedMesh, bounded_vec, build_mesh, decode_text, parse_coordinate, read_error, shown};
 use crate::mesh::Mesh;
 
 const HEADER_LEN: usize = 80;
@@ -35,7 +37,8 @@ const HEADER_TEXT: &[u8] = b"binary STL written by shapeup";
 /// # Errors
 /// [`IoError::Binary`] for a truncated binary file (naming the triangle), [`IoError::Parse`] with
 /// the line for malformed ascii, [`IoError::Invalid`] when there are no triangles,
-/// [`IoError::Mesh`] for a non-finite coordinate, [`IoError::Read`] if reading fails.
+/// [`IoError::Mesh`] for a non-finite coordinate, [`IoError::Binary`] for malformed UTF-16 text,
+/// [`IoError::Read`] if reading fails.
 pub fn read_stl(mut reader: impl Read, path: &Path) -> Result<LoadedMesh, IoError> {
     let mut bytes = Vec::new();
     reader.read_to_end(&mut bytes).map_err(|source| IoError::Read { path: path.to_path_buf(), source })?;
@@ -53,12 +56,11 @@ pub fn parse_stl(bytes: &[u8], path: &Path) -> Result<LoadedMesh, IoError> {
     {
         return parse_binary(bytes, count, path);
     }
-    if looks_ascii(bytes) {
-        return parse_ascii(bytes, path);
-    }
-    // An ascii file that starts with a UTF-8 byte-order mark (the line reader skips the mark).
-    if bytes.strip_prefix(super::UTF8_BOM).is_some_and(looks_ascii) {
-        return parse_ascii(bytes, path);
+    // An ascii file, also after a UTF-8 byte-order mark (the line reader skips the mark) or
+    // encoded as UTF-16 (decoded on the way, malformed UTF-16 refused with its offset).
+    if looks_ascii(bytes) || bytes.strip_prefix(super::UTF8_BOM).is_some_and(looks_ascii) || utf16_ascii(bytes) {
+        let text = decode_text(bytes).map_err(|e| read_error(path, e))?;
+        return parse_ascii(text, path);
     }
     match count {
         Some(count) => parse_binary(bytes, count, path),
@@ -81,6 +83,17 @@ fn looks_ascii(bytes: &[u8]) -> bool {
     let start = bytes.iter().position(|b| !b.is_ascii_whitespace()).unwrap_or(bytes.len());
     let head = bytes.get(start..start + 5).unwrap_or(&[]);
     head.eq_ignore_ascii_case(b"solid") && !bytes.contains(&0)
+}
+
+/// Whether `bytes` are UTF-16 text (a byte-order mark) that reads as ascii STL: `solid` at the
+/// start, no NUL character (malformed units count as characters here; the reader refuses them).
+fn utf16_ascii(bytes: &[u8]) -> bool {
+    let Some(encoding) = encoding_rs::Encoding::for_bom(bytes).map(|(e, _)| e).filter(|e| *e != encoding_rs::UTF_8)
+    else {
+        return false;
+    };
+    let (text, _) = encoding.decode_without_bom_handling(bytes.get(2..).unwrap_or(&[]));
+    looks_ascii(text.as_bytes())
 }
 
 /// Gives each distinct position one index, in order of first occurrence.
@@ -165,16 +178,14 @@ enum State {
     EndLoop,
 }
 
-fn parse_ascii(bytes: &[u8], path: &Path) -> Result<LoadedMesh, IoError> {
+fn parse_ascii(text: impl io::BufRead, path: &Path) -> Result<LoadedMesh, IoError> {
     let parse_error = |line: usize, message: String| IoError::Parse { path: path.to_path_buf(), line, message };
-    let mut lines = Lines::new(bytes);
+    let mut lines = Lines::new(text);
     let mut state = State::Outside;
     let mut merger = Merger::default();
     let mut faces: Vec<Vec<u32>> = Vec::new();
     let mut corners: Vec<u32> = Vec::with_capacity(3);
-    while let Some((line, text)) =
-        lines.next_line().map_err(|source| IoError::Read { path: path.to_path_buf(), source })?
-    {
+    while let Some((line, text)) = lines.next_line().map_err(|e| read_error(path, e))? {
         let mut tokens = text.split_whitespace();
         let Some(keyword) = tokens.next() else { continue };
         let facet = faces.len();
@@ -182,19 +193,22 @@ fn parse_ascii(bytes: &[u8], path: &Path) -> Result<LoadedMesh, IoError> {
         state = match (state, keyword.as_str()) {
             (State::Outside, "solid") => State::Solid,
             (State::Outside, _) => {
-                return Err(parse_error(line, format!("expected 'solid', found '{keyword}'")));
+                return Err(parse_error(line, format!("expected 'solid', found '{}'", shown(&keyword))));
             }
             (State::Solid, "facet") => State::Facet,
             (State::Solid, "endsolid") => State::Outside,
             (State::Solid, _) => {
-                return Err(parse_error(line, format!("expected 'facet' or 'endsolid', found '{keyword}'")));
+                return Err(parse_error(line, format!("expected 'facet' or 'endsolid', found '{}'", shown(&keyword))));
             }
             (State::Facet, "outer") if tokens.next().is_some_and(|t| t.eq_ignore_ascii_case("loop")) => {
                 corners.clear();
                 State::Loop
             }
             (State::Facet, _) => {
-                return Err(parse_error(line, format!("facet {facet}: expected 'outer loop', found '{text}'")));
+                return Err(parse_error(
+                    line,
+                    format!("facet {facet}: expected 'outer loop', found '{}'", shown(text)),
+                ));
             }
             (State::Loop, "vertex") => {
                 let mut xyz = [0.0; 3];
@@ -218,7 +232,7 @@ fn parse_ascii(bytes: &[u8], path: &Path) -> Result<LoadedMesh, IoError> {
             (State::Loop, _) => {
                 return Err(parse_error(
                     line,
-                    format!("facet {facet}: expected 'vertex x y z' or 'endloop', found '{keyword}'"),
+                    format!("facet {facet}: expected 'vertex x y z' or 'endloop', found '{}'", shown(&keyword)),
                 ));
             }
             (State::EndLoop, "endfacet") => {
@@ -226,7 +240,10 @@ fn parse_ascii(bytes: &[u8], path: &Path) -> Result<LoadedMesh, IoError> {
                 State::Solid
             }
             (State::EndLoop, _) => {
-                return Err(parse_error(line, format!("facet {facet}: expected 'endfacet', found '{keyword}'")));
+                return Err(parse_error(
+                    line,
+                    format!("facet {facet}: expected 'endfacet', found '{}'", shown(&keyword)),
+                ));
             }
         };
     }

@@ -7,7 +7,8 @@
 //! index says, and points must be numbered consecutively; attributes and boundary markers are
 //! ignored; `#` starts a comment. Either path names the pair, the partner is found by swapping
 //! the extension. Vertex *i* of the mesh is point *i* of the file; the mesh's triangles are the
-//! boundary of the tetrahedra, which are reoriented as in [`msh`](super::msh).
+//! boundary of the tetrahedra, which are reoriented as in [`msh`](super::msh). UTF-16 files
+//! (byte-order mark) are decoded ([`super`]).
 //!
 //! Write: both files, 1-based (TetGen's default), without attributes or markers; each is written
 //! atomically, the pair is not (a failure writing `X.ele` leaves the new `X.node`).
@@ -17,7 +18,9 @@ use std::io::{self, BufRead, BufReader, Write};
 use std::path::{Path, PathBuf};
 
 use super::msh::{Records, parse_point, tetrahedral_mesh};
-use super::{IoError, LoadedMesh, bounded_vec, write_atomic, write_point};
+use super::{
+    IoError, LoadedMesh, bounded_vec, decode_text, read_error, shown, with_decode_errors, write_atomic, write_point,
+};
 use crate::mesh::{Mesh, MeshError};
 
 /// The `.node` and `.ele` paths of the pair that `path` (with any extension) names; an
@@ -54,15 +57,22 @@ pub fn read_tetgen_files(path: &Path) -> Result<LoadedMesh, IoError> {
 /// point index that is not 0 or 1 first or not consecutive after, a non-numeric coordinate, a
 /// node index out of range, a flat tetrahedron or one that repeats a vertex, content past the
 /// announced counts, or a file that ends early; [`IoError::Invalid`] for no points or no
-/// tetrahedra; [`IoError::Mesh`] for a non-finite coordinate; [`IoError::Read`] if reading
-/// fails.
+/// tetrahedra; [`IoError::Mesh`] for a non-finite coordinate; [`IoError::Binary`] for malformed
+/// UTF-16; [`IoError::Read`] if reading fails.
 pub fn read_tetgen(
     node: impl BufRead,
     node_path: &Path,
     ele: impl BufRead,
     ele_path: &Path,
 ) -> Result<LoadedMesh, IoError> {
+    // The line reader reports every failed read as `Read`; malformed UTF-16 is a format error.
+    read_pair(node, node_path, ele, ele_path).map_err(with_decode_errors)
+}
+
+fn read_pair(node: impl BufRead, node_path: &Path, ele: impl BufRead, ele_path: &Path) -> Result<LoadedMesh, IoError> {
+    let node = decode_text(node).map_err(|e| read_error(node_path, e))?;
     let (positions, base) = read_node(node, node_path)?;
+    let ele = decode_text(ele).map_err(|e| read_error(ele_path, e))?;
     let n = positions.len() as u64;
 
     let mut r = Records::new(ele, ele_path, Some('#'));
@@ -71,8 +81,12 @@ pub fn read_tetgen(
     }
     let header = r.line;
     let fields: Vec<&str> = r.tokens().collect();
-    let bad_header =
-        || r.error(format!("bad header '{}' (expected '<tetrahedra> <nodes per tetrahedron> <attributes>')", r.text()));
+    let bad_header = || {
+        r.error(format!(
+            "bad header '{}' (expected '<tetrahedra> <nodes per tetrahedron> <attributes>')",
+            shown(r.text())
+        ))
+    };
     if fields.len() > 3 {
         return Err(bad_header());
     }
@@ -89,13 +103,13 @@ pub fn read_tetgen(
         });
     }
     let mut tets = bounded_vec(count);
-    let mut origins = bounded_vec(count);
+    let mut origins = Vec::new();
     for k in 0..count {
         r.expect(|| format!("tetrahedron {} of {count} (header line {header})", k + 1))?;
         let fields: Vec<&str> = r.tokens().collect();
         let id = fields[0]
             .parse::<u64>()
-            .map_err(|_| r.error(format!("tetrahedron index '{}' is not an integer", fields[0])))?;
+            .map_err(|_| r.error(format!("tetrahedron index '{}' is not an integer", shown(fields[0]))))?;
         if fields.len() < 1 + corners {
             return Err(r.error(format!("tetrahedron {id} lists {} nodes, expected {corners}", fields.len() - 1)));
         }
@@ -105,7 +119,8 @@ pub fn read_tetgen(
             let v = token.parse::<u64>().ok().and_then(|v| v.checked_sub(base)).filter(|&v| v < n);
             *slot = v.map(|v| v as u32).ok_or_else(|| {
                 r.error(format!(
-                    "tetrahedron {id}: node '{token}' is out of range: {} numbers its {n} points {base}..={}",
+                    "tetrahedron {id}: node '{}' is out of range: {} numbers its {n} points {base}..={}",
+                    shown(token),
                     node_path.display(),
                     base + n - 1
                 ))
@@ -115,7 +130,9 @@ pub fn read_tetgen(
         origins.push((r.line, id));
     }
     if r.advance()? {
-        return Err(r.error(format!("unexpected '{}' after the {count} tetrahedra of header line {header}", r.text())));
+        return Err(
+            r.error(format!("unexpected '{}' after the {count} tetrahedra of header line {header}", shown(r.text())))
+        );
     }
     tetrahedral_mesh(ele_path, positions, tets, &origins, "tetrahedron")
 }
@@ -129,7 +146,7 @@ fn read_node(reader: impl BufRead, path: &Path) -> Result<(Vec<glam::DVec3>, u64
     }
     let header = r.line;
     let fields: Vec<&str> = r.tokens().collect();
-    let bad_header = || r.error(format!("bad header '{}' (expected {expected})", r.text()));
+    let bad_header = || r.error(format!("bad header '{}' (expected {expected})", shown(r.text())));
     if fields.len() > 4 {
         return Err(bad_header());
     }
@@ -151,16 +168,18 @@ fn read_node(reader: impl BufRead, path: &Path) -> Result<(Vec<glam::DVec3>, u64
         let fields: Vec<&str> = r.tokens().collect();
         let index = fields[0].parse::<u64>().ok();
         if i == 0 {
-            base = index
-                .filter(|&b| b <= 1)
-                .ok_or_else(|| r.error(format!("the first point is numbered '{}', expected 0 or 1", fields[0])))?;
+            base = index.filter(|&b| b <= 1).ok_or_else(|| {
+                r.error(format!("the first point is numbered '{}', expected 0 or 1", shown(fields[0])))
+            })?;
         } else if index != Some(base + i) {
-            return Err(r.error(format!("point '{}' is out of sequence: expected {}", fields[0], base + i)));
+            return Err(r.error(format!("point '{}' is out of sequence: expected {}", shown(fields[0]), base + i)));
         }
         positions.push(parse_point(&fields[1..]).map_err(|m| r.error(format!("point {}: {m}", base + i)))?);
     }
     if r.advance()? {
-        return Err(r.error(format!("unexpected '{}' after the {count} points of header line {header}", r.text())));
+        return Err(
+            r.error(format!("unexpected '{}' after the {count} points of header line {header}", shown(r.text())))
+        );
     }
     // A NaN would otherwise be reported against the .ele file, where the mesh is assembled.
     if let Some((vertex, p)) = positions.iter().enumerate().find(|(_, p)| !p.is_finite()) {

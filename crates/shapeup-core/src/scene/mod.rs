@@ -662,9 +662,13 @@ impl Scene {
                 });
             }
         };
-        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Read { path: path.into(), source })?;
-        // A UTF-8 byte-order mark is not TOML or JSON (editors on Windows add it).
-        let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
+        // UTF-8 (a byte-order mark, which is not TOML or JSON, removed) or UTF-16 (Windows
+        // editors' "Unicode"), decoded; text that is neither is a format error with its offset.
+        let text = crate::io::read_text_file(path).map_err(|source| match crate::io::DecodeError::of(&source) {
+            Some(e) => SceneError::Parse { path: path.into(), message: e.to_string() },
+            None => SceneError::Read { path: path.into(), source },
+        })?;
+        let text = text.as_str();
         let base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
         Scene::parse(text, format, path, base_dir)
     }
