@@ -380,10 +380,10 @@ fn indefinite_article(word: &str) -> &'static str {
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ConstraintError {
     /// No constraint type has this name.
-    #[error("unknown constraint type \"{0}\" (known: {known})", known = type_names().join(", "))]
+    #[error("unknown constraint type \"{}\" (known: {known})", crate::io::one_line(.0), known = type_names().join(", "))]
     UnknownType(String),
     /// An option that this constraint type does not take.
-    #[error("unknown key \"{key}\" for {article} {kind} constraint{hint}", article = indefinite_article(kind), hint = hint_for(&allowed_hint(allowed)))]
+    #[error("unknown key \"{}\" for {article} {kind} constraint{hint}", crate::io::one_line(key), article = indefinite_article(kind), hint = hint_for(&allowed_hint(allowed)))]
     UnknownOption {
         /// Constraint type.
         kind: &'static str,
@@ -393,7 +393,7 @@ pub enum ConstraintError {
         allowed: &'static [OptionSpec],
     },
     /// An option with a value of the wrong type or out of range.
-    #[error("{kind} option \"{key}\": {problem}")]
+    #[error("{kind} option \"{}\": {}", crate::io::one_line(key), crate::io::one_line(problem))]
     BadOption {
         /// Constraint type.
         kind: &'static str,

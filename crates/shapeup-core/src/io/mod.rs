@@ -6,7 +6,7 @@
 //! | Stanford `.ply` | ascii, binary little and big endian, any numeric types; every element and property kept; faces and `tristrips` | every element and property with its type, in the file's (or a chosen) encoding ([`ply`]); other meshes: `double` x y z, normals, colours, polygons |
 //! | `.stl` | ascii and binary | binary (triangles only: vertex indices are not kept, a warning says so) |
 //! | `.off` | `OFF`, `COFF`, `NOFF`, `STOFF`…; per-vertex and per-face values kept | the keyword and values as read, `N` normals recomputed ([`off`]) |
-//! | Gmsh `.msh` | ASCII 4.1 and 2.2: 4-node tetrahedra, 3-node triangles (other elements skipped) | ASCII 4.1 |
+//! | Gmsh `.msh` | 4.1 and 2.2, ASCII and binary (little or big endian; 4.1 with a `size_t` of 8 or 4 bytes): 4-node tetrahedra, 3-node triangles (other elements skipped) | ASCII 4.1 |
 //! | TetGen `.node` + `.ele` | either path names the pair; 0- or 1-based, attributes and markers ignored | both files, 1-based |
 //! | VTK `.vtu` | — | polygons or tetrahedra, point data ([`vtu`]); `.pvd` time series |
 //!
@@ -61,7 +61,7 @@ pub const MAX_PREALLOCATION: usize = 1 << 20;
 #[derive(Debug, thiserror::Error)]
 pub enum IoError {
     /// The file could not be opened.
-    #[error("cannot open {}: {source}", path.display())]
+    #[error("cannot open {}: {source}", one_line(path.display()))]
     Open {
         /// The file.
         path: PathBuf,
@@ -69,7 +69,7 @@ pub enum IoError {
         source: io::Error,
     },
     /// Reading failed part-way (not a format problem).
-    #[error("error reading {}: {source}", path.display())]
+    #[error("error reading {}: {source}", one_line(path.display()))]
     Read {
         /// The file.
         path: PathBuf,
@@ -77,7 +77,7 @@ pub enum IoError {
         source: io::Error,
     },
     /// A text file (or the text header of a binary one) is malformed at a line.
-    #[error("{}: line {line}: {message}", path.display())]
+    #[error("{}: line {line}: {}", one_line(path.display()), one_line(message))]
     Parse {
         /// The file.
         path: PathBuf,
@@ -87,7 +87,7 @@ pub enum IoError {
         message: String,
     },
     /// A binary file is malformed (usually truncated) at a byte offset.
-    #[error("{}: byte offset {offset}: {message}", path.display())]
+    #[error("{}: byte offset {offset}: {}", one_line(path.display()), one_line(message))]
     Binary {
         /// The file.
         path: PathBuf,
@@ -97,7 +97,7 @@ pub enum IoError {
         message: String,
     },
     /// A well-formed file that holds no usable mesh (no vertices, no triangles).
-    #[error("{}: {message}", path.display())]
+    #[error("{}: {}", one_line(path.display()), one_line(message))]
     Invalid {
         /// The file.
         path: PathBuf,
@@ -105,7 +105,7 @@ pub enum IoError {
         message: String,
     },
     /// The file extension is not one of the supported formats.
-    #[error("{}: unsupported mesh format {} (supported: {})", path.display(), describe_extension(extension), SUPPORTED)]
+    #[error("{}: unsupported mesh format {} (supported: {})", one_line(path.display()), describe_extension(extension), SUPPORTED)]
     UnsupportedFormat {
         /// The file.
         path: PathBuf,
@@ -113,7 +113,7 @@ pub enum IoError {
         extension: String,
     },
     /// The elements read do not form a valid mesh (index out of range, non-finite coordinate).
-    #[error("{}: invalid mesh: {source}", path.display())]
+    #[error("{}: invalid mesh: {source}", one_line(path.display()))]
     Mesh {
         /// The file.
         path: PathBuf,
@@ -121,7 +121,7 @@ pub enum IoError {
         source: MeshError,
     },
     /// Writing (or replacing) the file failed; the previous file, if any, is untouched.
-    #[error("cannot write {}: {source}", path.display())]
+    #[error("cannot write {}: {source}", one_line(path.display()))]
     Write {
         /// The target file.
         path: PathBuf,
@@ -133,7 +133,7 @@ pub enum IoError {
 const SUPPORTED: &str = ".obj, .ply, .stl, .off, .msh, .node/.ele";
 
 fn describe_extension(extension: &str) -> String {
-    if extension.is_empty() { "(no extension)".to_owned() } else { format!("'.{extension}'") }
+    if extension.is_empty() { "(no extension)".to_owned() } else { format!("'.{}'", one_line(extension)) }
 }
 
 /// A mesh read from a file, with what reading changed.
@@ -157,7 +157,7 @@ pub enum MeshFormat {
     Stl,
     /// Object File Format.
     Off,
-    /// Gmsh MSH, ASCII 4.1 or 2.2.
+    /// Gmsh MSH, 4.1 or 2.2, ASCII or binary.
     Msh,
     /// TetGen `.node` + `.ele` pair (either extension).
     TetGen,
@@ -428,7 +428,7 @@ pub const MESH_OUTPUT_EXTENSIONS: &[&str] = &["obj", "ply", "off", "stl", "vtu",
 #[derive(Debug, thiserror::Error)]
 pub enum OutputError {
     /// An extension that is not one of `allowed`.
-    #[error("{}: unsupported output format \"{ext}\" (use one of: {})", path.display(), allowed.join(", "))]
+    #[error("{}: unsupported output format \"{}\" (use one of: {})", one_line(path.display()), one_line(ext), allowed.join(", "))]
     Extension {
         /// The output.
         path: PathBuf,
@@ -438,7 +438,7 @@ pub enum OutputError {
         allowed: &'static [&'static str],
     },
     /// The folder it goes in does not exist.
-    #[error("{}: the folder {} does not exist", path.display(), dir.display())]
+    #[error("{}: the folder {} does not exist", one_line(path.display()), one_line(dir.display()))]
     MissingFolder {
         /// The output.
         path: PathBuf,
@@ -446,7 +446,7 @@ pub enum OutputError {
         dir: PathBuf,
     },
     /// The folder cannot take a new file (read-only, no permission, not a file system).
-    #[error("{}: cannot write in {}: {source}", path.display(), dir.display())]
+    #[error("{}: cannot write in {}: {source}", one_line(path.display()), one_line(dir.display()))]
     Unwritable {
         /// The output.
         path: PathBuf,
@@ -766,12 +766,48 @@ pub(crate) fn parse_coordinate(token: &str, what: &str) -> Result<f64, String> {
     token.parse::<f64>().map_err(|_| format!("{what} '{}' is not a number", shown(token)))
 }
 
-/// `text` as an error message quotes it: itself, or its first 40 characters and `…` (a
-/// megabyte-long token must not make a megabyte-long message).
+/// `text` as an error message quotes it: its first 40 characters and `…` when longer (a
+/// megabyte-long token must not make a megabyte-long message), control characters escaped as
+/// Rust writes them (`\r`, `\u{1b}`) so that the message stays on one line and a terminal
+/// shows what the file holds instead of obeying it.
 pub(crate) fn shown(text: &str) -> std::borrow::Cow<'_, str> {
-    match text.char_indices().nth(40) {
-        None => std::borrow::Cow::Borrowed(text),
-        Some((end, _)) => std::borrow::Cow::Owned(format!("{}…", &text[..end])),
+    let cut = text.char_indices().nth(SHOWN_CHARS).map(|(end, _)| end);
+    let head = &text[..cut.unwrap_or(text.len())];
+    if cut.is_none() && !head.contains(char::is_control) {
+        return std::borrow::Cow::Borrowed(text);
+    }
+    let mut out = String::with_capacity(head.len() + 4);
+    push_escaped(&mut out, head);
+    if cut.is_some() {
+        out.push('…');
+    }
+    std::borrow::Cow::Owned(out)
+}
+
+/// Characters of a file's text that [`shown`] quotes.
+const SHOWN_CHARS: usize = 40;
+
+/// `text` (a message, a path) with control characters escaped as [`shown`] does: what an error
+/// variant's message goes through, so that every error stays one line whatever a file, a scene
+/// key or a file name holds.
+pub(crate) fn one_line(text: impl std::fmt::Display) -> String {
+    let text = text.to_string();
+    if !text.contains(char::is_control) {
+        return text;
+    }
+    let mut out = String::with_capacity(text.len() + 8);
+    push_escaped(&mut out, &text);
+    out
+}
+
+/// Appends `text` to `out`, each control character as its Rust escape (`\n`, `\u{1b}`).
+fn push_escaped(out: &mut String, text: &str) {
+    for c in text.chars() {
+        if c.is_control() {
+            out.extend(c.escape_default());
+        } else {
+            out.push(c);
+        }
     }
 }
 

@@ -38,8 +38,8 @@ use std::str::SplitWhitespace;
 use glam::DVec3;
 
 use super::{
-    IoError, Lines, LoadedMesh, bounded_vec, build_mesh, decode_text, parse_coordinate, read_error, utf16_encoding,
-    write_point,
+    IoError, Lines, LoadedMesh, bounded_vec, build_mesh, decode_text, parse_coordinate, read_error, shown,
+    utf16_encoding, write_point,
 };
 use crate::mesh::{Mesh, MeshError};
 use crate::topology::tetrahedron_boundary;
@@ -51,8 +51,6 @@ const TETRAHEDRON: usize = 4;
 /// A tetrahedron is flat when |(b−a)·((c−a)×(d−a))| ≤ this × |b−a| |c−a| |d−a| (the sine-like
 /// ratio is 1 for a right corner; only numerically flat ones fall below).
 const FLAT_TOLERANCE: f64 = 1e-12;
-/// Characters of a file's text quoted in an error, at most (a line may be megabytes long).
-const SHOWN: usize = 60;
 
 /// Reads a Gmsh `.msh` file (4.1 or 2.2, ASCII or binary) from `reader`; `path` only names it in
 /// errors.
@@ -141,14 +139,6 @@ pub fn read_msh(mut reader: impl BufRead, path: &Path) -> Result<LoadedMesh, IoE
 /// Whether `text` opens a section (`$Name`, one word, not `$End…`).
 fn is_section(text: &str) -> bool {
     text.starts_with('$') && !text.starts_with("$End") && text.len() > 1 && !text.contains(char::is_whitespace)
-}
-
-/// At most [`SHOWN`] characters of `text`, with `…` when cut: a file's text quoted in an error.
-pub(super) fn shown(text: &str) -> String {
-    match text.char_indices().nth(SHOWN) {
-        Some((cut, _)) => format!("{}…", &text[..cut]),
-        None => text.to_owned(),
-    }
 }
 
 /// The mesh from the nodes and elements read.

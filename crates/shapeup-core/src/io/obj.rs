@@ -259,7 +259,10 @@ impl<R: BufRead> RawLines<R> {
         if self.final_newline {
             self.bytes.pop();
             let cr = self.bytes.last() == Some(&b'\r');
-            if cr {
+            // Every `\r` before the `\n` is part of the line ending (files that went through
+            // two CRLF conversions end lines in `\r\r\n`): the line is written back with the
+            // file's one ending, so a kept `\r` would not read back the same.
+            while self.bytes.last() == Some(&b'\r') {
                 self.bytes.pop();
             }
             self.crlf.get_or_insert(cr);

@@ -124,10 +124,10 @@ pub fn read_off(reader: impl BufRead, path: &Path) -> Result<LoadedMesh, IoError
             ));
         }
         let values = extra.split_whitespace().count();
-        if layout.normal && values < 3 {
+        if values < layout.min_values() {
             return Err(parse_error(
                 line,
-                format!("vertex {i} has {values} values after x y z, but {keyword} needs a normal (3)"),
+                format!("vertex {i} has {values} values after x y z, but {keyword} needs {}", layout.describe()),
             ));
         }
         vertex_extra.push(extra);
@@ -293,6 +293,22 @@ impl VertexLayout {
     fn of(keyword: &str) -> Self {
         let prefix = keyword.strip_suffix("OFF").unwrap_or("");
         VertexLayout { texture: prefix.starts_with("ST"), color: prefix.contains('C'), normal: prefix.ends_with('N') }
+    }
+
+    /// Fewest values a vertex line holds after x y z: a normal (3), a colour (3, or 4 with
+    /// alpha), texture coordinates (2). Fewer would put `s t` or the colour on the wrong values.
+    fn min_values(self) -> usize {
+        3 * usize::from(self.normal) + 3 * usize::from(self.color) + 2 * usize::from(self.texture)
+    }
+
+    /// What [`VertexLayout::min_values`] counts, for messages.
+    fn describe(self) -> String {
+        let parts: Vec<&str> =
+            [(self.normal, "a normal (3)"), (self.color, "a colour (3 or 4)"), (self.texture, "s t (2)")]
+                .into_iter()
+                .filter_map(|(has, what)| has.then_some(what))
+                .collect();
+        parts.join(", ")
     }
 }
 

@@ -39,10 +39,9 @@ use std::path::Path;
 
 use glam::DVec3;
 
-use super::msh::shown;
 use super::{
-    IoError, Lines, LoadedMesh, MAX_PREALLOCATION, build_mesh, decode_text, read_error, report_dropped, utf16_encoding,
-    write_f64,
+    IoError, Lines, LoadedMesh, MAX_PREALLOCATION, build_mesh, decode_text, read_error, report_dropped, shown,
+    utf16_encoding, write_f64,
 };
 use crate::attributes::{AttributeKind, Attributes, NO_INDEX, TexCoords, VertexScalar};
 use crate::mesh::{Mesh, Polygons};
@@ -553,7 +552,7 @@ impl PlyAttributes {
                         kinds.push(AttributeKind::Other(format!("PLY {what} properties")));
                     }
                 }
-                _ => kinds.push(AttributeKind::Other(format!("PLY element '{}'", element.name))),
+                _ => kinds.push(AttributeKind::Other(format!("PLY element '{}'", shown(&element.name)))),
             }
         }
         if self.header.iter().any(|l| matches!(l.split_whitespace().next(), Some("comment" | "obj_info"))) {
@@ -571,7 +570,11 @@ impl PlyAttributes {
         }
         for element in &self.elements {
             if let Some(p) = element.properties.iter().find(|p| p.len() != element.count) {
-                return Some(format!("property '{}' of element '{}' is incomplete", p.name, element.name));
+                return Some(format!(
+                    "property '{}' of element '{}' is incomplete",
+                    shown(&p.name),
+                    shown(&element.name)
+                ));
             }
         }
         let mut polygons = mesh.polygons.iter().enumerate();

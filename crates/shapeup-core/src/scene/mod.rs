@@ -18,6 +18,8 @@ use crate::solver::{Acceleration, Factorization, MAX_ANDERSON_WINDOW, MAX_LBFGS_
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 use serde_json::{Map, Value};
+
+use crate::io::one_line;
 use std::path::{Path, PathBuf};
 
 /// Static (ShapeUp) or dynamic (Projective Dynamics) solving.
@@ -486,7 +488,7 @@ pub struct Scene {
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
     /// The scene file cannot be read.
-    #[error("cannot read scene {}: {source}", path.display())]
+    #[error("cannot read scene {}: {source}", one_line(path.display()))]
     Read {
         /// The file.
         path: PathBuf,
@@ -494,7 +496,7 @@ pub enum SceneError {
         source: std::io::Error,
     },
     /// Syntax or schema error (unknown key, wrong type…).
-    #[error("{}: {message}", path.display())]
+    #[error("{}: {}", one_line(path.display()), one_line(message))]
     Parse {
         /// The file.
         path: PathBuf,
@@ -502,7 +504,7 @@ pub enum SceneError {
         message: String,
     },
     /// A semantically invalid entry.
-    #[error("{}: {entry}: {message}", path.display())]
+    #[error("{}: {}: {}", one_line(path.display()), one_line(entry), one_line(message))]
     Invalid {
         /// The file.
         path: PathBuf,
@@ -512,7 +514,7 @@ pub enum SceneError {
         message: String,
     },
     /// The mesh cannot be loaded.
-    #[error("{}: {source}", path.display())]
+    #[error("{}: {source}", one_line(path.display()))]
     Mesh {
         /// The scene file.
         path: PathBuf,
@@ -520,7 +522,7 @@ pub enum SceneError {
         source: crate::io::IoError,
     },
     /// The constraints make an unsolvable system.
-    #[error("{}: {source}", path.display())]
+    #[error("{}: {source}", one_line(path.display()))]
     Solve {
         /// The scene file.
         path: PathBuf,
