@@ -1,0 +1,11 @@
+//! `io::stl::read_stl` (ascii or binary, told apart by the reader) on arbitrary bytes: no panic,
+//! and either one error line naming the file or a valid mesh.
+#![no_main]
+
+use libfuzzer_sys::fuzz_target;
+use shapeup_fuzz::{check_read, path};
+
+fuzz_target!(|data: &[u8]| {
+    let result = shapeup_core::io::stl::read_stl(data, path("fuzz.stl"));
+    check_read(&result, &["fuzz.stl"]);
+});
