@@ -40,6 +40,9 @@ def test_bad_faces():
         shapeup.Solver(V, np.array([[0.0, 1.0, 2.0]]))
     with pytest.raises(ValueError, match="at least 3"):
         shapeup.Solver(V, [[0, 1]])
+    # A face that cannot be triangulated is named with the reason.
+    with pytest.raises(ValueError, match=r"face 0 \(vertices 0 1 1\).*fewer than 3 distinct corners"):
+        shapeup.Solver(np.eye(3), [[0, 1, 1]])
 
 
 def test_bad_groups():

@@ -182,6 +182,25 @@ impl Default for Mesh {
 }
 
 impl Mesh {
+    /// Why a mesh with faces has no triangles, to follow "has no faces" in an error message: the
+    /// first face that cannot be triangulated and its [`PolygonProblem`] (`": its only face,
+    /// face 0 (vertices 0 1 1), cannot be triangulated: fewer than 3 distinct corners"`), or an
+    /// empty string when every face can be (or there is none).
+    pub fn why_no_triangles(&self) -> String {
+        let mut scratch = TriangulationScratch::default();
+        let first = self.polygons.iter().enumerate().find_map(|(index, poly)| {
+            triangulate_polygon(&self.positions, poly, &mut scratch, &mut Vec::new()).err().map(|e| (index, poly, e))
+        });
+        let Some((index, poly, problem)) = first else { return String::new() };
+        let shown: Vec<String> = poly.iter().take(8).map(u32::to_string).collect();
+        let more = if poly.len() > 8 { " …" } else { "" };
+        let face = format!("face {index} (vertices {}{more})", shown.join(" "));
+        match self.num_polygons() {
+            1 => format!(": its only face, {face}, cannot be triangulated: {problem}"),
+            n => format!(": none of its {n} faces can be triangulated (the first, {face}: {problem})"),
+        }
+    }
+
     /// A triangle mesh from positions and triangles (each triangle is also a polygon).
     ///
     /// # Errors

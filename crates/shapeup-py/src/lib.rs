@@ -253,7 +253,12 @@ fn mesh_from_arrays(
         mesh.validate().map_err(value_error)?;
     }
     if mesh.triangles.is_empty() && mesh.tetrahedra.is_empty() {
-        return Err(value_error("the mesh has no faces and no tetrahedra: give F or T"));
+        let why = mesh.why_no_triangles();
+        return Err(value_error(if why.is_empty() {
+            "the mesh has no faces and no tetrahedra: give F or T".to_owned()
+        } else {
+            format!("F has no face that can be triangulated{why}")
+        }));
     }
     warnings = warnings.for_file(Path::new("<arrays>"));
     Ok(PyMesh { mesh, warnings })

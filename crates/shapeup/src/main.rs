@@ -20,7 +20,7 @@ use shapeup_core::io::{
     LoadedMesh, MESH_OUTPUT_EXTENSIONS, PlyEncoding, check_output_extension, check_output_folder, read_mesh,
     write_atomic,
 };
-use shapeup_core::scene::{LoadedScene, Scene, SceneError, SolverSettings};
+use shapeup_core::scene::{LoadedScene, Scene, SolverSettings};
 use shapeup_core::solver::{
     Acceleration, Factorization, MAX_ANDERSON_WINDOW, MAX_LBFGS_MEMORY, SolveReport, SolverParams,
 };
@@ -387,23 +387,17 @@ fn deform(
     Ok(())
 }
 
-/// [`LoadedScene::solve_static`] (the same solve: from the rest shape, the scene's tolerance),
-/// with a progress bar of the iterations and the current energy on a terminal.
+/// [`LoadedScene::solve_static`] with a progress bar of the iterations and the current energy
+/// on a terminal.
 fn solve_static(loaded: &mut LoadedScene, iterations: Option<usize>) -> Result<(Vec<DVec3>, SolveReport)> {
-    let iterations = loaded.static_iterations(iterations);
-    let progress = logging::bar(iterations as u64, "{bar:40} {pos}/{len} iterations  E {msg}  {per_sec}  ETA {eta}");
+    let total = loaded.static_iterations(iterations);
+    let progress = logging::bar(total as u64, "{bar:40} {pos}/{len} iterations  E {msg}  {per_sec}  ETA {eta}");
     progress.bar.set_message("…");
-    let mut q = loaded.rest.positions.clone();
-    let tolerance = loaded.scene.solver.tolerance;
-    let report = loaded
-        .system
-        .solve_with(&mut q, iterations, tolerance, |k, energy| {
-            progress.bar.set_position(k as u64);
-            progress.bar.set_message(format!("{energy:.6e}"));
-            ControlFlow::Continue(())
-        })
-        .map_err(|source| SceneError::Solve { path: loaded.scene.file.clone(), source })?;
-    Ok((q, report))
+    Ok(loaded.solve_static_with(iterations, |k, energy| {
+        progress.bar.set_position(k as u64);
+        progress.bar.set_message(format!("{energy:.6e}"));
+        ControlFlow::Continue(())
+    })?)
 }
 
 /// Each warning once, as one line on stderr (`shapeup: warning: FILE: COUNT MESSAGE (first:

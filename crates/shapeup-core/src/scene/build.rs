@@ -9,7 +9,7 @@ use crate::constraints::{
 use crate::dynamics::{DynamicsParams, Simulation};
 use crate::geometry::{RestGeometry, WorkingFrame, lumped_masses_surface, lumped_masses_volume};
 use crate::io::read_mesh;
-use crate::mesh::{Mesh, TriangulationScratch, triangulate_polygon};
+use crate::mesh::Mesh;
 use crate::solver::{ConstraintGroup, GroupId, SolveError, SolveReport, SolverParams, System};
 use crate::warnings::Warnings;
 use glam::DVec3;
@@ -94,7 +94,7 @@ impl Scene {
         if mesh.triangles.is_empty() && mesh.tetrahedra.is_empty() {
             return Err(invalid(
                 "[mesh]",
-                format!("{} has no faces{}", self.mesh_path().display(), no_faces_why(&mesh)),
+                format!("{} has no faces{}", self.mesh_path().display(), mesh.why_no_triangles()),
             ));
         }
         let frame = if self.mesh.normalize { WorkingFrame::fit(&mesh.positions) } else { WorkingFrame::IDENTITY };
@@ -145,24 +145,6 @@ impl Scene {
             load_seconds,
             build_seconds: t.elapsed().as_secs_f64(),
         })
-    }
-}
-
-/// Why a mesh with faces has no triangles: the first face and its [`crate::mesh::PolygonProblem`]
-/// (`": its only face, face 0 (vertices 0 1 1), cannot be triangulated: fewer than 3 distinct
-/// corners"`), or nothing when it has no faces.
-fn no_faces_why(mesh: &Mesh) -> String {
-    let mut scratch = TriangulationScratch::default();
-    let first = mesh.polygons.iter().enumerate().find_map(|(index, poly)| {
-        triangulate_polygon(&mesh.positions, poly, &mut scratch, &mut Vec::new()).err().map(|e| (index, poly, e))
-    });
-    let Some((index, poly, problem)) = first else { return String::new() };
-    let shown: Vec<String> = poly.iter().take(8).map(u32::to_string).collect();
-    let more = if poly.len() > 8 { " …" } else { "" };
-    let face = format!("face {index} (vertices {}{more})", shown.join(" "));
-    match mesh.num_polygons() {
-        1 => format!(": its only face, {face}, cannot be triangulated: {problem}"),
-        n => format!(": none of its {n} faces can be triangulated (the first, {face}: {problem})"),
     }
 }
 
@@ -299,11 +281,24 @@ impl LoadedScene {
     /// # Errors
     /// [`SceneError::Solve`] for a singular system.
     pub fn solve_static(&mut self, iterations: Option<usize>) -> Result<(Vec<DVec3>, SolveReport), SceneError> {
+        self.solve_static_with(iterations, |_, _| std::ops::ControlFlow::Continue(()))
+    }
+
+    /// [`LoadedScene::solve_static`], calling `after_iteration(k, E_k)` after iteration k (from
+    /// 1), as [`System::solve_with`] does: for a progress bar, or to stop early.
+    ///
+    /// # Errors
+    /// As [`LoadedScene::solve_static`].
+    pub fn solve_static_with(
+        &mut self,
+        iterations: Option<usize>,
+        after_iteration: impl FnMut(usize, f64) -> std::ops::ControlFlow<()>,
+    ) -> Result<(Vec<DVec3>, SolveReport), SceneError> {
         let iterations = self.static_iterations(iterations);
         let mut q = self.rest.positions.clone();
         let report = self
             .system
-            .solve(&mut q, iterations, self.scene.solver.tolerance)
+            .solve_with(&mut q, iterations, self.scene.solver.tolerance, after_iteration)
             .map_err(|source| SceneError::Solve { path: self.scene.file.clone(), source })?;
         Ok((q, report))
     }
