@@ -10,7 +10,7 @@
 #   --no-build     use the binaries already built
 #   JOBS           targets run at the same time (default 1); TARGET... default every target
 #
-# Exit status 1 when a target crashed, hung (-timeout), ran out of memory (-rss_limit_mb) or a
+# Exit status 1 when a target crashed, hung (-timeout, or the watchdog past the run), ran out of memory (-rss_limit_mb) or a
 # seed check failed. Environment: FUZZ_RSS_MB (2048), FUZZ_TIMEOUT (10 s per input),
 # FUZZ_SANITIZER (none; or address), FUZZ_ARGS (more libFuzzer flags).
 set -euo pipefail
@@ -80,8 +80,11 @@ fi
 run() {
   local t=$1
   mkdir -p "work/corpus/$t" "work/artifacts/$t"
+  # A watchdog past the run's end: libFuzzer's timeout handler allocates inside a signal
+  # handler and can deadlock when the slow input was itself in malloc; then this ends the run
+  # (status HUNG) instead of waiting forever.
   # shellcheck disable=SC2086  # FUZZ_ARGS is a list of flags
-  "$bin/$t" "work/corpus/$t" "corpus/$t" -dict="$(dict "$t")" -max_total_time="$seconds" \
+  timeout --kill-after=10 $((seconds + 4 * timeout + 60)) "$bin/$t" "work/corpus/$t" "corpus/$t" -dict="$(dict "$t")" -max_total_time="$seconds" \
     -rss_limit_mb="$rss" -timeout="$timeout" -artifact_prefix="work/artifacts/$t/" \
     -print_final_stats=1 ${FUZZ_ARGS:-} >"work/logs/$t.log" 2>&1
 }
@@ -114,6 +117,7 @@ for i in "${!targets[@]}"; do
     grep -a -q 'ERROR: libFuzzer: timeout' "$log" && status=TIMEOUT
     grep -a -q 'ERROR: libFuzzer: out-of-memory' "$log" && status=OOM
     grep -a -q 'LeakSanitizer' "$log" && status=LEAK
+    if ((statuses[i] == 124 || statuses[i] == 137)); then status=HUNG; fi
   fi
   printf '%-20s %-8s %12s %9s %7s %7s %7s\n' "$t" "$status" "$(stat number_of_executed_units)" \
     "$(stat average_exec_per_sec)" "${cov:-?}" "${ft:-?}" "${corp:-?}"
@@ -121,7 +125,7 @@ for i in "${!targets[@]}"; do
     artifact=$(sed -n 's/.*Test unit written to \(.*\)$/\1/p' "$log" | tail -1)
     echo "   reproducer: fuzz/${artifact:-work/artifacts/$t/ (none written)}"
     echo "   log: fuzz/$log; rerun: cd fuzz && cargo +nightly fuzz run -s $sanitizer $t ${artifact:-}"
-    grep -a -m1 -A2 'panicked at\|ERROR: libFuzzer' "$log" | sed 's/^/   | /' | cut -c1-300
+    grep -a -m1 -A2 'panicked at\|ERROR: libFuzzer\|ALARM' "$log" | sed 's/^/   | /' | cut -c1-300 || true
   fi
 done
 echo "== fuzzed ${#targets[@]} targets in $((SECONDS - start)) s ($jobs at a time)"
