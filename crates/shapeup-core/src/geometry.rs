@@ -67,9 +67,19 @@ pub fn cotan_weights(positions: &[DVec3], triangles: &[[u32; 3]], topology: &Top
 /// terms and no strain constraint (math reference, "Edge cases").
 pub const MIN_TRIANGLE_AREA: f64 = 1e-12;
 
-/// Whether a triangle has zero area for the solver: A ≤ 1e-12.
+/// Smallest rest triangle area that counts relative to its longest edge ℓ, A/ℓ² (the sine of
+/// its smallest angle is about 2A/ℓ²): below it the triangle is flat to round-off at any scale.
+pub const MIN_RELATIVE_AREA: f64 = 1e-12;
+
+/// Whether a triangle has zero area for the solver: A ≤ 1e-12, or A ≤ 1e-12 ℓ² with ℓ its
+/// longest edge (flat to round-off: its rest frame, cotangents and inverse shape matrix would be
+/// round-off too). In the working frame (radius 0.5, so ℓ ≤ 1) the second bound adds nothing; it
+/// keeps meshes that are not normalized, 1e6 across, from slivers with infinite coefficients.
+/// A NaN corner counts as degenerate.
 pub fn is_degenerate_triangle(a: DVec3, b: DVec3, c: DVec3) -> bool {
-    triangle_area(a, b, c) <= MIN_TRIANGLE_AREA
+    let area = triangle_area(a, b, c);
+    let longest2 = (b - a).length_squared().max((c - b).length_squared()).max((a - c).length_squared());
+    !(area > MIN_TRIANGLE_AREA && area > MIN_RELATIVE_AREA * longest2)
 }
 
 /// Signed volume of tetrahedron (a, b, c, d): V = (b − a) · ((c − a) × (d − a)) / 6

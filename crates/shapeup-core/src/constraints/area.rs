@@ -130,8 +130,27 @@ impl Constraint for Area {
         let p = svd.u * DMat2::from_diagonal(DVec2::new(x, y)) * svd.v.transpose();
         TriangleGradient::out_of_frame(frame, p, out);
     }
+    /// The area ratio's distance from [min, max] over its gradient's length ‖p‖_F (the
+    /// first-order distance from the set, in the rows' units: the ratio is quadratic in the
+    /// rows, and at a stretch of 1e12 its rounding alone is 1e8); from 0, the exact distance
+    /// √(2 min).
     fn set_residual(&self, p: &[DVec3]) -> f64 {
-        interval_distance(p[0].cross(p[1]).length(), self.min, self.max)
+        if !p.iter().all(|x| x.is_finite()) {
+            return f64::INFINITY;
+        }
+        let off = interval_distance(p[0].cross(p[1]).length(), self.min, self.max);
+        let gradient = (p[0].length_squared() + p[1].length_squared()).sqrt();
+        if off == 0.0 {
+            0.0
+        } else if gradient > 0.0 {
+            off / gradient
+        } else {
+            (2.0 * off).sqrt()
+        }
+    }
+    /// The area ratio's distance from [min, max] (what a report means by an area's error).
+    fn violation(&self, cq: &[DVec3]) -> f64 {
+        interval_distance(cq[0].cross(cq[1]).length(), self.min, self.max)
     }
 }
 

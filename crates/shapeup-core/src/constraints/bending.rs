@@ -2,9 +2,12 @@
 //!
 //! Term: ω ‖H(q) − p‖² with H(q) = Σ_j (c_ij / A_i)(q_i − q_j) the cotan Laplacian of interior
 //! vertex i (rest cotan weights c_ij and vertex area A_i), ω = 0.01 A_i, and
-//! p = ‖H⁰‖ H/‖H‖ (H⁰ = H(x⁰)); if ‖H‖ < 1e-10, p = ‖H⁰‖ n̄ with n̄ the normalized sum of the
-//! unit normals of i's triangles; p = 0 if ‖H⁰‖ < 1e-12. With flip prevention, p is negated
-//! when sign(n̄·H) ≠ sign(n̄⁰·H⁰) and ‖H‖ > 1e-5.
+//! p = ‖H⁰‖ H/‖H‖ (H⁰ = H(x⁰)); if ‖H‖ ≤ 1e-12 ‖H⁰‖ (no reliable direction), p = ‖H⁰‖ n̄ with
+//! n̄ the normalized sum of the unit normals of i's triangles (H⁰'s direction where n̄ = 0 and
+//! H = 0: a collapsed one-ring); p = 0 if ‖H⁰‖ ≤ 1e-14 Σ_j |c_ij/A_i| ‖x⁰_i − x⁰_j‖ (a flat rest
+//! vertex: H⁰ is round-off of its terms). With flip prevention, p is negated when
+//! sign(n̄·H) ≠ sign(n̄⁰·H⁰) and ‖H‖ > 1e-5 ‖H⁰‖. The thresholds are relative, so that the
+//! constraint means the same at every scale (H is an inverse length).
 
 use super::{
     BuildContext, Constraint, ConstraintError, ConstraintType, Element, OptionSpec, Params, RowSink,
@@ -50,13 +53,26 @@ impl LaplacianRow {
     }
 }
 
+/// A rest vertex is flat when ‖H⁰‖ is at most this times the size of its terms,
+/// Σ_j |c_ij/A_i| ‖x⁰_i − x⁰_j‖ (50 times their round-off).
+const FLAT: f64 = 1e-14;
+/// Below this times ‖H⁰‖, H has no reliable direction and p follows the normal instead (the
+/// nearest point is then off by at most 4e-12 ‖H⁰‖² in squared distance: every direction is
+/// nearly as near).
+const NO_DIRECTION: f64 = 1e-12;
+/// Flip prevention acts only on an H longer than this times ‖H⁰‖.
+const FLIP_MIN: f64 = 1e-5;
+
 /// Bending of one interior vertex.
 #[derive(Debug, Clone)]
 pub struct Bending {
     row: LaplacianRow,
     /// i's triangles, for the normal n̄.
     triangles: Vec<[u32; 3]>,
+    /// ‖H⁰‖, 0 for a flat rest vertex.
     rest_norm: f64,
+    /// H⁰/‖H⁰‖: the direction p takes when neither H nor n̄ has one.
+    rest_direction: DVec3,
     /// sign(n̄⁰ · H⁰), for flip prevention.
     rest_sign: f64,
     prevent_flips: bool,
@@ -71,10 +87,15 @@ impl Bending {
             rest.topology.vertex_triangles[i].iter().map(|&t| rest.triangles[t as usize]).collect();
         let h0 = row.apply(&rest.positions);
         let n0 = mean_normal(&triangles, &rest.positions);
+        let x = &rest.positions;
+        let terms: f64 =
+            row.vertices.iter().zip(&row.coeffs).skip(1).map(|(&j, c)| c.abs() * (x[i] - x[j as usize]).length()).sum();
+        let rest_norm = if h0.length() > FLAT * terms { h0.length() } else { 0.0 };
         Bending {
             row,
             triangles,
-            rest_norm: h0.length(),
+            rest_norm,
+            rest_direction: h0.normalize_or(DVec3::Z),
             rest_sign: n0.dot(h0).signum(),
             prevent_flips,
             weight: 0.01 * rest.vertex_areas[i],
@@ -108,24 +129,37 @@ impl Constraint for Bending {
         self.row.rows(sink);
     }
     fn project(&self, q: &[DVec3], out: &mut [DVec3]) {
-        if self.rest_norm < 1e-12 {
+        if self.rest_norm == 0.0 {
             out[0] = DVec3::ZERO;
             return;
         }
         let h = self.row.apply(q);
         let length = h.length();
-        let mut p = if length < 1e-10 {
-            self.rest_norm * mean_normal(&self.triangles, q)
+        let direction = if length <= NO_DIRECTION * self.rest_norm {
+            // Every direction is (nearly) as near: the normal's is stable from one iteration to
+            // the next; H's own, or the rest one, where the one-ring has no normal.
+            let n = mean_normal(&self.triangles, q);
+            if n != DVec3::ZERO {
+                n
+            } else if length > 0.0 {
+                h / length
+            } else {
+                self.rest_direction
+            }
         } else {
-            h * (self.rest_norm / length)
+            h / length
         };
-        if self.prevent_flips && length > 1e-5 && mean_normal(&self.triangles, q).dot(h).signum() != self.rest_sign {
+        let mut p = self.rest_norm * direction;
+        if self.prevent_flips
+            && length > FLIP_MIN * self.rest_norm
+            && mean_normal(&self.triangles, q).dot(h).signum() != self.rest_sign
+        {
             p = -p;
         }
         out[0] = p;
     }
     fn set_residual(&self, p: &[DVec3]) -> f64 {
-        (p[0].length() - if self.rest_norm < 1e-12 { 0.0 } else { self.rest_norm }).abs()
+        (p[0].length() - self.rest_norm).abs()
     }
 }
 

@@ -1,7 +1,8 @@
 //! Edge spring: keeps an edge at its rest length.
 //!
 //! Term: ω ‖(q_j − q_i) − p‖² with p = L⁰ (q_j − q_i) / ‖q_j − q_i‖ (the rest edge vector
-//! x⁰_j − x⁰_i when the current edge is shorter than 1e-12), ω = L⁰ the rest length.
+//! x⁰_j − x⁰_i when the current edge is at most 1e-12 L⁰ long: it has no reliable direction,
+//! and every point of the sphere is nearly as near), ω = L⁰ the rest length.
 
 use super::{
     BuildContext, Constraint, ConstraintError, ConstraintType, Element, OptionSpec, Params, RowSink, non_empty,
@@ -10,6 +11,10 @@ use glam::DVec3;
 
 /// Shortest rest edge that gets a spring (shorter ones are skipped).
 const MIN_REST_LENGTH: f64 = 1e-12;
+/// A current edge at most this times L⁰ long has no reliable direction: p is the rest edge. A
+/// relative bound, so that the projection is the nearest point at every scale (an absolute one
+/// took the rest edge for every edge of a mesh 1e-12 across).
+const NO_DIRECTION: f64 = 1e-12;
 
 /// A spring on edge (i, j).
 #[derive(Debug, Clone)]
@@ -48,7 +53,8 @@ impl Constraint for EdgeSpring {
     fn project(&self, q: &[DVec3], out: &mut [DVec3]) {
         let e = q[self.vertices[1] as usize] - q[self.vertices[0] as usize];
         let length = e.length();
-        out[0] = if length < MIN_REST_LENGTH { self.rest_edge } else { e * (self.rest_length / length) };
+        out[0] =
+            if length <= NO_DIRECTION * self.rest_length { self.rest_edge } else { e * (self.rest_length / length) };
     }
     fn set_residual(&self, p: &[DVec3]) -> f64 {
         (p[0].length() - self.rest_length).abs()

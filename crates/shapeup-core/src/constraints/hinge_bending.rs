@@ -14,10 +14,13 @@
 //! n⁰ = ‖K x⁰‖ and the band [lo, hi] = [min·n⁰, max·n⁰] (options `min`, `max`, default 1, 1),
 //! the set is {v : lo ≤ ‖v‖ ≤ hi} and the projection its nearest point:
 //!
-//!   p = clamp(‖K q‖, lo, hi) · K q / ‖K q‖;
-//!   if ‖K q‖ < 1e-12: p = lo · σ⁰ n̄ with n̄ the normalized sum of the two triangles' current
-//!   unit normals and σ⁰ = sign(n̄⁰ · K x⁰) the rest side (any vector of length lo is nearest
-//!   then; this one is rigidly invariant); p = 0 if n⁰ < 1e-12 (a flat rest hinge: the set is {0}).
+//!   p = clamp(‖K q‖, lo, hi) · K q / ‖K q‖ (K q itself inside the band);
+//!   if ‖K q‖ < lo and ‖K q‖ ≤ 1e-12 hi (no reliable direction): p = lo · σ⁰ n̄ with n̄ the
+//!   normalized sum of the two triangles' current unit normals and σ⁰ = sign(n̄⁰ · K x⁰) the rest
+//!   side (any vector of length lo is nearly as near then; this one is rigidly invariant; where
+//!   n̄ = 0, K q's own direction, or K x⁰'s if K q = 0); p = 0 if
+//!   n⁰ ≤ 1e-14 Σ_v |c_v| ‖x⁰_v − x⁰_i‖ (a flat rest hinge, K x⁰ round-off of its terms: the
+//!   set is {0}). Both thresholds are relative, so the constraint means the same at every scale.
 //!
 //!   ω = 3 / (A₀ + A₁), the rest areas of the two triangles.
 //!
@@ -48,8 +51,11 @@ use glam::DVec3;
 /// Name in scene files.
 const KIND: &str = "hinge_bending";
 
-/// Below this, ‖K q‖ has no direction and a rest ‖K x⁰‖ counts as flat.
-const TINY: f64 = 1e-12;
+/// A rest hinge is flat when ‖K x⁰‖ is at most this times the size of its terms,
+/// Σ_v |c_v| ‖x⁰_v − x⁰_i‖ (50 times their round-off).
+const FLAT: f64 = 1e-14;
+/// Below this times the band's top, ‖K q‖ has no reliable direction (p follows the normal).
+const NO_DIRECTION: f64 = 1e-12;
 
 /// `min`: the band's lower end, a multiple of the rest norm.
 const MIN: OptionSpec = OptionSpec {
@@ -76,6 +82,8 @@ pub struct HingeBending {
     band: [f64; 2],
     /// σ⁰ = sign(n̄⁰ · K x⁰): which side of the hinge K x⁰ points to.
     rest_side: f64,
+    /// K x⁰/‖K x⁰‖, for a K q of length 0 whose hinge has no normal either.
+    rest_direction: DVec3,
     weight: f64,
 }
 
@@ -98,12 +106,15 @@ impl HingeBending {
             coeffs,
             band: [0.0; 2],
             rest_side: 1.0,
+            rest_direction: DVec3::Z,
             weight: 3.0 / (triangle_area(xi, xj, xk) + triangle_area(xj, xi, xl)),
         };
         let k0 = c.apply_row(x);
         let n0 = k0.length();
-        if n0 >= TINY {
+        let terms: f64 = [xi, xj, xk, xl].iter().zip(&coeffs).map(|(v, c)| c.abs() * (*v - xi).length()).sum();
+        if n0 > FLAT * terms {
             c.band = [min * n0, max * n0];
+            c.rest_direction = k0 / n0;
             c.rest_side = if c.normal(x).dot(k0) < 0.0 { -1.0 } else { 1.0 };
         }
         Some(c)
@@ -146,9 +157,19 @@ impl Constraint for HingeBending {
         let length = e.length();
         out[0] = if hi == 0.0 {
             DVec3::ZERO
-        } else if length < TINY {
+        } else if length >= lo && length <= hi {
+            e
+        } else if length <= NO_DIRECTION * hi {
+            // Below the band without a reliable direction: every point of the sphere of radius
+            // lo is nearly as near. The normal's side, else K q's own, else the rest one.
             let n = self.normal(q);
-            lo * self.rest_side * if n == DVec3::ZERO { DVec3::X } else { n }
+            lo * if n != DVec3::ZERO {
+                self.rest_side * n
+            } else if length > 0.0 {
+                e / length
+            } else {
+                self.rest_direction
+            }
         } else {
             e * (length.clamp(lo, hi) / length)
         };

@@ -80,7 +80,7 @@ impl Constraint for IsoOneRing {
         }
     }
     fn set_residual(&self, p: &[DVec3]) -> f64 {
-        super::sets::gram_residual(p, &self.rest_edges)
+        super::sets::isometry_residual(p, &self.rest_edges)
     }
 }
 

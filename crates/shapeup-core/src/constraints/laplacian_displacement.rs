@@ -168,24 +168,32 @@ impl Constraint for LaplacianDisplacement {
     }
     fn set_residual(&self, p: &[DVec3]) -> f64 {
         // p = s R r exactly when its Gram matrix is s² that of r (an orthogonal map times s) and,
-        // for a spanning r, the orientation is kept (a rotation, not a reflection).
+        // for a spanning r, the orientation is kept (a rotation, not a reflection). Gram entries
+        // are squared lengths and determinants cubed: divided by the rows' size L (and L²) the
+        // residual is a length at every scale.
+        if !p.iter().all(|x| x.is_finite()) {
+            return f64::INFINITY;
+        }
         let s2 = if self.similarity && self.rest_norm2 > 0.0 {
             p.iter().map(|x| x.length_squared()).sum::<f64>() / self.rest_norm2
         } else {
             1.0
         };
+        let longest = |rows: &[DVec3]| rows.iter().map(|x| x.length()).fold(0.0, f64::max);
+        let size = longest(p).max(s2.sqrt() * longest(&self.rest));
+        if size == 0.0 {
+            return 0.0;
+        }
         let mut worst: f64 = 0.0;
         for a in 0..p.len() {
             for b in a..p.len() {
                 worst = worst.max((p[a].dot(p[b]) - s2 * self.rest[a].dot(self.rest[b])).abs());
             }
         }
+        worst /= size;
         if let Some(([a, b, c], sign)) = self.orientation {
             let det = p[a].cross(p[b]).dot(p[c]);
-            let area = p[a].length() * p[b].length();
-            if area > 0.0 {
-                worst = worst.max((-sign * det).max(0.0) / area.sqrt());
-            }
+            worst = worst.max((-sign * det).max(0.0) / (size * size));
         }
         worst
     }

@@ -27,16 +27,41 @@ pub(crate) fn strain_band_residual(m: DMat3, lo: f64, hi: f64) -> f64 {
     band.max((-m.determinant()).max(0.0))
 }
 
-/// max_ij |pᵢ·pⱼ − rᵢ·rⱼ|: zero exactly when the vectors `p` are an orthogonal transform of
-/// `r` (same lengths and angles), i.e. an isometric copy.
-pub(crate) fn gram_residual(p: &[DVec3], r: &[DVec3]) -> f64 {
-    let mut worst: f64 = 0.0;
+/// How far the vectors `p` are from the rotations {R rᵢ : R ∈ SO(3)} of the vectors `r`, in
+/// length units: (max_ij |pᵢ·pⱼ − rᵢ·rⱼ|) / L + |det[p_a, p_b, p_c] − det[r_a, r_b, r_c]| / L²,
+/// L = max(max_i ‖pᵢ‖, max_i ‖rᵢ‖) (0 when L = 0; ∞ for a non-finite p), with (a, b, c) three
+/// vectors spanning `r` as well as a greedy search finds (the longest r_a, the r_b farthest
+/// from its line, the r_c farthest from their plane). The first term is zero exactly for an
+/// orthogonal transform of `r` (same lengths and angles); the second then tells a rotation
+/// from a reflection (they differ only when `r` spans space). The powers of L make it a
+/// length at every scale (the Gram entries are squared lengths, the determinants cubed).
+pub(crate) fn isometry_residual(p: &[DVec3], r: &[DVec3]) -> f64 {
+    if !p.iter().all(|x| x.is_finite()) {
+        return f64::INFINITY;
+    }
+    let longest = |rows: &[DVec3]| rows.iter().map(|x| x.length()).fold(0.0, f64::max);
+    let scale = longest(p).max(longest(r));
+    if scale == 0.0 || p.is_empty() {
+        return 0.0;
+    }
+    let mut gram: f64 = 0.0;
     for i in 0..p.len() {
         for j in i..p.len() {
-            worst = worst.max((p[i].dot(p[j]) - r[i].dot(r[j])).abs());
+            gram = gram.max((p[i].dot(p[j]) - r[i].dot(r[j])).abs());
         }
     }
-    worst
+    let argmax = |f: &dyn Fn(DVec3) -> f64| {
+        r.iter().enumerate().fold((0, f64::NEG_INFINITY), |best, (i, d)| {
+            let x = f(*d);
+            if x > best.1 { (i, x) } else { best }
+        })
+    };
+    let a = argmax(&|d| d.length_squared()).0;
+    let b = argmax(&|d| r[a].cross(d).length_squared()).0;
+    let normal = r[a].cross(r[b]);
+    let c = argmax(&|d| normal.dot(d).abs()).0;
+    let det = p[a].cross(p[b]).dot(p[c]);
+    gram / scale + (det - normal.dot(r[c])).abs() / (scale * scale)
 }
 
 /// The largest row of `a − b`.

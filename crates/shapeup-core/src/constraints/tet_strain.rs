@@ -3,9 +3,11 @@
 //!
 //! Term: ω ‖T − p‖²_F with T = [q_b − q_a, q_c − q_a, q_d − q_a] D⁻¹ (its three columns are the
 //! three rows of C q), D = [x⁰_b − x⁰_a, x⁰_c − x⁰_a, x⁰_d − x⁰_a]. Projection (math reference):
-//! SVD T = UΣVᵀ, clamp σ to [1 − f, 1 + f], if det U · det V < 0 negate the smallest clamped σ,
-//! p = UΣ'Vᵀ (f = `strain_freedom`, default 0: the nearest rotation, det +1 even for an inverted
-//! tetrahedron). ω = |V_T|, the rest volume; tetrahedra of volume ≤ 1e-12 get no constraint.
+//! SVD T = UΣVᵀ, clamp σ to [1 − f, 1 + f], if det U · det V < 0 the smallest σ becomes
+//! −max(1 − f, 0) (the band's lower end, with det p ≥ 0), p = UΣ'Vᵀ: the nearest point of
+//! {P : σ(P) in the band, det P ≥ 0} (f = `strain_freedom`, default 0: the nearest rotation,
+//! det +1 even for an inverted tetrahedron). ω = |V_T|, the rest volume; tetrahedra of volume
+//! ≤ 1e-12 get no constraint.
 
 use super::triangle_strain::take_strain_freedom;
 use super::{
@@ -84,14 +86,20 @@ impl TetStrain {
     }
 }
 
-/// The reference projection with strain freedom `f > 0`, `U Σ' Vᵀ`.
+/// The projection with strain freedom `f > 0`: the nearest point of the set
+/// {P : every σ(P) ∈ [1 − f, 1 + f], det P ≥ 0}.
 ///
-/// With the rotation-variant SVD T = U diag(σ₁, σ₂, σ̃₃) Vᵀ (U, V rotations, σ̃₃ signed) the
-/// standard SVD has σ₃ = |σ̃₃| and det U · det V = sign σ̃₃; "clamp, then negate the smallest
-/// clamped σ when det U · det V < 0" is then `p = U diag(c(σ₁), c(σ₂), c(|σ̃₃|)) Vᵀ` with
-/// `c(σ) = min(max(σ, 1 − f), 1 + f)`. Shortcut: when det T > 0 and every σ already lies in
-/// (1 − f, 1 + f) (tested without an SVD: `TᵀT − (1−f)²I` and `(1+f)²I − TᵀT` positive
-/// definite), p = T.
+/// The set is invariant under P ↦ Q P R (Q, R rotations), so with the rotation-variant SVD
+/// T = U diag(σ₁, σ₂, σ̃₃) Vᵀ (U, V rotations, σ̃₃ signed, |σ̃₃| ≤ σ₂ ≤ σ₁) its nearest point is
+/// U diag(d) Vᵀ for the nearest d to (σ₁, σ₂, σ̃₃) among vectors with every |dᵢ| in the band and
+/// an even number of negative entries: `p = U diag(c(σ₁), c(σ₂), c⁺(σ̃₃)) Vᵀ`, with
+/// c(σ) = min(max(σ, 1 − f), 1 + f) and c⁺ the same with the lower end at least 0. For an
+/// inverted T (σ̃₃ < 0) that is the band's lower end, not c(|σ̃₃|) (reflecting σ̃₃, the "negate
+/// the smallest singular value" of strain limiting, is farther once |σ̃₃| > 1 − f: |σ̃₃| +
+/// c(|σ̃₃|) against |σ̃₃| + 1 − f), and negating two entries instead costs at least as much
+/// since σ₂ ≥ |σ̃₃|. Shortcut: when
+/// det T > 0 and every σ already lies in (1 − f, 1 + f) (tested without an SVD: `TᵀT − (1−f)²I`
+/// and `(1+f)²I − TᵀT` positive definite), p = T.
 #[inline]
 fn clamp_strain(t: DMat3, f: f64) -> DMat3 {
     let (lo, hi) = (1.0 - f, 1.0 + f);
@@ -105,7 +113,7 @@ fn clamp_strain(t: DMat3, f: f64) -> DMat3 {
     }
     let svd = svd3_rotations(t);
     let clamp = |s: f64| s.max(lo).min(hi);
-    let sigma = DVec3::new(clamp(svd.sigma.x), clamp(svd.sigma.y), clamp(svd.sigma.z.abs()));
+    let sigma = DVec3::new(clamp(svd.sigma.x), clamp(svd.sigma.y), svd.sigma.z.max(lo.max(0.0)).min(hi));
     svd.u * DMat3::from_diagonal(sigma) * svd.v.transpose()
 }
 
@@ -293,11 +301,9 @@ mod tests {
             let (lo, hi) = (1.0 - f, 1.0 + f);
             let c = TetStrain::new([0, 1, 2, 3], &rest, f).unwrap();
             for _ in 0..100 {
+                // Inverted T included: the projection is the exact nearest point for both signs.
                 let t =
                     rotation(&mut rng) * (DMat3::IDENTITY + 0.6 * DMat3::from_cols(rng.vec3(), rng.vec3(), rng.vec3()));
-                if t.determinant() <= 0.0 {
-                    continue; // the reference formula is the exact projection for det T > 0
-                }
                 let q = positions_for(&rest, t);
                 let p = project(&c, &q);
                 assert_on_set(p, f);
@@ -323,12 +329,15 @@ mod tests {
     }
 
     #[test]
-    fn inverted_with_freedom_follows_the_reference_formula() {
-        // det T < 0, f > 0: clamp, then negate the smallest clamped σ (det U · det V < 0).
+    fn inverted_with_freedom_takes_the_band_s_lower_end() {
+        // det T < 0, f > 0: clamp σ₁, σ₂; the smallest goes to the band's lower end with the
+        // other sign (det U · det V < 0), the nearest point with det ≥ 0 (strain limiting's
+        // "negate the smallest clamped σ" reflects it: farther by |σ₃| − (1 − f)).
         let mut rng = Rng(29);
         let rest = rest_tet();
         let f = 0.2;
         let c = TetStrain::new([0, 1, 2, 3], &rest, f).unwrap();
+        let mut strictly_nearer = 0;
         for _ in 0..100 {
             let mut t =
                 rotation(&mut rng) * (DMat3::IDENTITY + 0.6 * DMat3::from_cols(rng.vec3(), rng.vec3(), rng.vec3()));
@@ -340,10 +349,22 @@ mod tests {
             assert_on_set(p, f);
             let svd = svd3(t); // standard: σ ≥ 0, det U = −1 here
             assert!(svd.u.determinant() * svd.v.determinant() < 0.0);
-            let clamped = svd.sigma.clamp(DVec3::splat(1.0 - f), DVec3::splat(1.0 + f)) * DVec3::new(1.0, 1.0, -1.0);
+            let mut clamped = svd.sigma.clamp(DVec3::splat(1.0 - f), DVec3::splat(1.0 + f));
+            clamped.z = -(1.0 - f);
             let reference = svd.u * DMat3::from_diagonal(clamped) * svd.v.transpose();
             assert!(dist2(&cols(p), &cols(reference)) < 1e-24);
+            let reflected = svd.sigma.clamp(DVec3::splat(1.0 - f), DVec3::splat(1.0 + f)) * DVec3::new(1.0, 1.0, -1.0);
+            let reflected = svd.u * DMat3::from_diagonal(reflected) * svd.v.transpose();
+            // Equal when σ₃ ≤ 1 − f (both at the lower end, up to the distances' round-off),
+            // else nearer by (σ₃ + c(σ₃))² − (σ₃ + 1 − f)² > 0, c the clamp.
+            let (d, d_reflected) = (dist2(&cols(t), &cols(p)), dist2(&cols(t), &cols(reflected)));
+            assert!(d <= d_reflected + 1e-12, "{d} > {d_reflected}");
+            if svd.sigma.z > 1.0 - f + 1e-3 {
+                assert!(d < d_reflected - 1e-3, "{d} vs {d_reflected}: not strictly nearer");
+                strictly_nearer += 1;
+            }
         }
+        assert!(strictly_nearer > 10, "{strictly_nearer} cases with σ₃ above the band's lower end");
     }
 
     #[test]
@@ -364,7 +385,9 @@ mod tests {
                 let (u, vt) = (svd.u.unwrap(), svd.v_t.unwrap());
                 let mut s = svd.singular_values.map(|x| x.clamp(1.0 - f, 1.0 + f));
                 if u.determinant() * vt.determinant() < 0.0 {
-                    s[2] = -s[2]; // nalgebra sorts σ descending: the smallest is last
+                    // nalgebra sorts σ descending: the smallest is last; it goes to the band's
+                    // lower end with the other sign (the nearest point with det ≥ 0).
+                    s[2] = -(1.0 - f);
                 }
                 let want = u * nalgebra::Matrix3::from_diagonal(&s) * vt;
                 let got = nalgebra::Matrix3::from_column_slice(&project(&c, &q).to_cols_array());

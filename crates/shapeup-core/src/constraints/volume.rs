@@ -180,8 +180,29 @@ impl Constraint for Volume {
         out[1] = p.y_axis;
         out[2] = p.z_axis;
     }
+    /// How far σ₃ must move to bring the volume ratio σ₁σ₂σ₃ into [min, max] (signed σ of the
+    /// rotation-variant SVD), |σ₁σ₂σ₃ − clamp|/(σ₁σ₂): a distance from the set in the rows'
+    /// units (det is cubic in them), and computed from the SVD, accurate to ε σ₁ even for a very
+    /// flat P where det P itself is round-off (ε σ₁³); where σ₁σ₂ = 0, √3 times the cube root
+    /// of the ratio's distance (exact from 0).
     fn set_residual(&self, p: &[DVec3]) -> f64 {
-        interval_distance(DMat3::from_cols(p[0], p[1], p[2]).determinant(), self.min, self.max)
+        if !p.iter().all(|x| x.is_finite()) {
+            return f64::INFINITY;
+        }
+        let sigma = svd3_rotations(DMat3::from_cols(p[0], p[1], p[2])).sigma;
+        let off = interval_distance(sigma.x * sigma.y * sigma.z, self.min, self.max);
+        let area = sigma.x * sigma.y;
+        if off == 0.0 {
+            0.0
+        } else if area > 0.0 {
+            off / area
+        } else {
+            3f64.sqrt() * off.cbrt()
+        }
+    }
+    /// The volume ratio's distance from [min, max] (what a report means by a volume's error).
+    fn violation(&self, cq: &[DVec3]) -> f64 {
+        interval_distance(DMat3::from_cols(cq[0], cq[1], cq[2]).determinant(), self.min, self.max)
     }
 }
 

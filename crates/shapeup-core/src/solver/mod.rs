@@ -276,11 +276,13 @@ pub struct Energy {
     pub per_group: Vec<(GroupId, f64)>,
 }
 
-/// E at or below this counts as converged whatever its relative change: round-off, e.g. a rest
-/// shape moved rigidly, whose E is about 1e-28 and changes by its own size every iteration.
-/// In the working frame (the mesh about one unit across when normalized), E ≤ 1e-20 means the
-/// constraints are met to about 1e-10 of the mesh's size. A solve raises it to
-/// [`ROUND_OFF_FLOOR`] times the size of its terms ([`SolveReport::energy_floor`]).
+/// E at or below this counts as converged for [`is_converged`] whatever its relative change:
+/// round-off, e.g. a rest shape moved rigidly, whose E is about 1e-28 and changes by its own
+/// size every iteration. In the working frame (the mesh about one unit across when
+/// normalized), E ≤ 1e-20 means the constraints are met to about 1e-10 of the mesh's size.
+/// A solve's own test does not use it: an absolute bound would stop every tolerance run after
+/// one iteration on a mesh 1e-12 across or with weights of 1e-12; it uses the system's
+/// relative floor ([`SolveReport::energy_floor`]).
 pub const ENERGY_FLOOR: f64 = 1e-20;
 
 /// Relative round-off floor: E ≤ this × Σ_i w_i ‖p_i‖² (the weighted size of the projections,
@@ -291,12 +293,23 @@ pub const ENERGY_FLOOR: f64 = 1e-20;
 /// 300 iterations, by about 0.5 % per iteration, and would never meet a 1e-6 relative change.
 pub const ROUND_OFF_FLOOR: f64 = 1e-18;
 
+/// Round-off floor of rows whose projection is 0 or small (smoothing, a Laplacian at rest):
+/// E ≤ this × Σ_r w_r m_r², with m_r = Σ_v |c_rv| ‖q_v‖ the size of the terms that cancel in
+/// (C q)_r (its rounding is ε m_r), is C q met to about 100 ε of its terms ((100 ε)² ≈ 5e-28,
+/// with room for the solve's κ ε).
+pub const ROW_ROUND_OFF_FLOOR: f64 = 1e-26;
+
 /// The stopping test of a tolerance run: after an iteration that took E from `previous` to
 /// `energy`, the relative change |E_k − E_{k−1}| / E_{k−1} is at most `tolerance`, or E is at
 /// most `floor` (E = 0 included; see [`SolveReport::energy_floor`], at least [`ENERGY_FLOOR`]).
 pub fn is_converged(previous: f64, energy: f64, tolerance: f64, floor: f64) -> bool {
+    meets_tolerance(previous, energy, tolerance, floor.max(ENERGY_FLOOR))
+}
+
+/// [`is_converged`] without [`ENERGY_FLOOR`]: what a solve tests, with its own relative floor.
+fn meets_tolerance(previous: f64, energy: f64, tolerance: f64, floor: f64) -> bool {
     // A load makes E negative: the round-off floor is for E ≥ 0 (constraints met).
-    (0.0..=floor.max(ENERGY_FLOOR)).contains(&energy) || (previous - energy).abs() <= tolerance * previous.abs()
+    (0.0..=floor).contains(&energy) || (previous - energy).abs() <= tolerance * previous.abs()
 }
 
 /// What a [`System::solve`] did.
@@ -316,8 +329,10 @@ pub struct SolveReport {
     /// Accelerated iterations whose iterate did not lower the energy (Anderson) or not enough
     /// (L-BFGS's Armijo condition) and were replaced by the plain one.
     pub rejected: usize,
-    /// E at or below this is round-off for this system and counts as converged: the larger of
-    /// [`ENERGY_FLOOR`] and [`ROUND_OFF_FLOOR`] × Σ_i w_i ‖p_i‖² at the start of the solve.
+    /// E at or below this is round-off for this system and counts as converged:
+    /// [`ROUND_OFF_FLOOR`] × Σ_i w_i ‖p_i‖² + [`ROW_ROUND_OFF_FLOOR`] × Σ_r w_r m_r² at the
+    /// start of the solve (m_r = Σ_v |c_rv| ‖q_v‖; hard groups left out): relative to the
+    /// terms' size, so that a solve stops alike at every scale of coordinates and weights.
     pub energy_floor: f64,
 }
 
@@ -933,7 +948,7 @@ impl System {
             return Err(SolveError::NonFiniteEnergy);
         }
         report.initial_energy = energy;
-        report.energy_floor = self.energy_floor();
+        report.energy_floor = self.energy_floor(q);
         let run = Run { iterations, tolerance, initial_energy: energy };
         // Taken out while a loop borrows the system, and put back whatever the outcome.
         let mut scratch = std::mem::take(&mut self.scratch);
@@ -1285,18 +1300,25 @@ impl System {
         projective + self.load_energy(q, self.order.clone())
     }
 
-    /// [`SolveReport::energy_floor`] from the current projections.
-    fn energy_floor(&self) -> f64 {
+    /// [`SolveReport::energy_floor`] at q from the current projections.
+    fn energy_floor(&self, q: &[DVec3]) -> f64 {
         let g = self.multipliers();
-        let size: f64 = (self.assembly.groups.iter().zip(&g))
-            .map(|(rows, gk)| {
-                let range = rows.range();
-                gk * (self.assembly.row_weight[range.clone()].iter().zip(&self.projections[range]))
-                    .map(|(w, p)| w * p.length_squared())
-                    .sum::<f64>()
-            })
-            .sum();
-        ENERGY_FLOOR.max(ROUND_OFF_FLOOR * size)
+        let a = &self.assembly;
+        let mut projections = 0.0;
+        let mut terms = 0.0;
+        for ((rows, gk), &slot) in a.groups.iter().zip(&g).zip(&self.order) {
+            if self.slots[slot].as_ref().is_none_or(|group| group.hard) {
+                continue;
+            }
+            for r in rows.range() {
+                let w = gk * a.row_weight[r];
+                projections += w * self.projections[r].length_squared();
+                let m: f64 =
+                    (a.c_ptr[r]..a.c_ptr[r + 1]).map(|k| a.c_val[k].abs() * q[a.c_col[k] as usize].length()).sum();
+                terms += w * m * m;
+            }
+        }
+        ROUND_OFF_FLOOR * projections + ROW_ROUND_OFF_FLOOR * terms
     }
 
     /// Σ_r ω_r ‖(Cq)_r − P_r‖² over a range of rows (no multiplier).
@@ -1388,7 +1410,7 @@ fn record_iteration(
         return Err(SolveError::NonFiniteEnergy);
     }
     report.energies.push(energy);
-    let converged = tolerance > 0.0 && is_converged(*previous, objective, tolerance, report.energy_floor);
+    let converged = tolerance > 0.0 && meets_tolerance(*previous, objective, tolerance, report.energy_floor);
     *previous = objective;
     let stop = after_iteration(report.energies.len(), energy).is_break();
     Ok((converged, stop))
