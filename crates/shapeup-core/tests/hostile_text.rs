@@ -199,9 +199,9 @@ fn obj_continuation_lines_join_in_linear_time() {
     for i in 0..3000 {
         writeln!(text, "v {i} {} 0", i % 7).unwrap();
     }
-    text.push_str("f");
+    text.push('f');
     for i in 1..=3000 {
-        write!(text, " {i} \\\n").unwrap();
+        writeln!(text, " {i} \\").unwrap();
     }
     text.push('\n');
     let loaded = run(read_obj, "joined.obj", text.into_bytes(), SMALL_INPUT_LIMIT).unwrap();
