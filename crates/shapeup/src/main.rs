@@ -237,7 +237,10 @@ fn parse_acceleration(s: &str) -> Result<Acceleration, String> {
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => return usage_error(&e),
+    };
     logging::init(cli.quiet, cli.verbose);
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
@@ -252,6 +255,32 @@ fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+/// A command-line usage error as one line (`shapeup: error: invalid value '0' for '--frames <N>':
+/// … (shapeup deform --help)`), exit status 2. Help and version requests, and a bare `shapeup`
+/// (which shows the help), print as clap has them.
+fn usage_error(e: &clap::Error) -> ExitCode {
+    use clap::error::ErrorKind;
+    if matches!(
+        e.kind(),
+        ErrorKind::DisplayHelp | ErrorKind::DisplayVersion | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
+    ) {
+        e.exit();
+    }
+    // clap's first paragraph (the error, and what it lists: missing arguments, possible
+    // values, a tip), joined; the usage block after it is what --help shows.
+    let rendered = e.render().to_string();
+    let paragraph: Vec<&str> = rendered
+        .lines()
+        .map(str::trim)
+        .skip_while(|l| l.is_empty())
+        .take_while(|l| !l.is_empty() && !l.starts_with("Usage:"))
+        .collect();
+    let joined = paragraph.join(" ");
+    let message = joined.strip_prefix("error: ").unwrap_or(&joined);
+    let _ = writeln!(std::io::stderr(), "shapeup: error: {} (see shapeup --help)", shapeup_core::io::one_line(message));
+    ExitCode::from(2)
 }
 
 /// Whether `e` is a write to a closed pipe (stdout read by a program that stopped reading).
@@ -382,7 +411,7 @@ fn deform(
         loaded.mesh.num_vertices(),
         loaded.system.num_constraints(),
         count(solve.energies.len(), "iteration"),
-        output.display()
+        shapeup_core::io::one_line(output.display())
     )?;
     Ok(())
 }
@@ -404,7 +433,7 @@ fn solve_static(loaded: &mut LoadedScene, iterations: Option<usize>) -> Result<(
 /// …)`): a warn record of shapeup's own target, so `-q` silences it.
 pub(crate) fn print_warnings(warnings: &shapeup_core::warnings::Warnings) {
     for w in warnings.iter() {
-        log::warn!(target: logging::TARGET, "{w}");
+        log::warn!(target: logging::TARGET, "{}", shapeup_core::io::one_line(w));
     }
 }
 

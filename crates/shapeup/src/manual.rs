@@ -57,7 +57,7 @@ pub fn man(output: Option<&Path>) -> Result<()> {
     for (name, text) in &pages {
         let path = dir.join(name);
         write_atomic(&path, |w| w.write_all(text))?;
-        writeln!(out, "wrote {}", path.display())?;
+        writeln!(out, "wrote {}", shapeup_core::io::one_line(path.display()))?;
     }
     Ok(())
 }

@@ -121,7 +121,7 @@ pub fn run(write: Option<&Path>) -> Result<()> {
         for sample in SAMPLES {
             let path = dir.join(sample.file_name());
             write_atomic(&path, |w| w.write_all(sample.bytes))?;
-            writeln!(out, "wrote {}", path.display())?;
+            writeln!(out, "wrote {}", shapeup_core::io::one_line(path.display()))?;
         }
         return Ok(());
     }

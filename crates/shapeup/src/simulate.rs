@@ -130,7 +130,7 @@ pub fn run(args: &SimulateArgs<'_>) -> Result<()> {
         simulation.time(),
         loaded.mesh.num_vertices(),
         system.num_constraints(),
-        output.as_path().display()
+        shapeup_core::io::one_line(output.as_path().display())
     )?;
     Ok(())
 }

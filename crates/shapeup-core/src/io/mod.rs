@@ -790,7 +790,7 @@ const SHOWN_CHARS: usize = 40;
 /// `text` (a message, a path) with control characters escaped as [`shown`] does: what an error
 /// variant's message goes through, so that every error stays one line whatever a file, a scene
 /// key or a file name holds.
-pub(crate) fn one_line(text: impl std::fmt::Display) -> String {
+pub fn one_line(text: impl std::fmt::Display) -> String {
     let text = text.to_string();
     if !text.contains(char::is_control) {
         return text;

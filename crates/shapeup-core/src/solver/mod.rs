@@ -211,6 +211,13 @@ pub enum SolveError {
          group, or a shape constraint over all vertices)"
     )]
     Singular(FactorError),
+    /// The factorization could not be built: its factor overflows 32-bit indices or memory (a
+    /// mesh of millions of vertices, or constraints that couple wide neighbourhoods).
+    #[error(
+        "the system is too large to factor ({0}): use fewer vertices, or constraints that couple fewer \
+         of them (springs or strain instead of bending)"
+    )]
+    TooLarge(FactorError),
     /// The solve produced NaN or infinity.
     #[error("the solve produced non-finite positions (the system is numerically singular); check the weights")]
     NonFinite,
@@ -254,6 +261,17 @@ pub enum SolveError {
         /// Length given.
         found: usize,
     },
+}
+
+impl SolveError {
+    /// A failed factorization: a non-positive pivot is a singular system; anything else (faer's
+    /// index overflow, an allocation) is a system too large, not a missing handle.
+    fn from_factor(e: FactorError) -> Self {
+        match e {
+            FactorError::NotPositiveDefinite(_) => SolveError::Singular(e),
+            FactorError::Other(_) => SolveError::TooLarge(e),
+        }
+    }
 }
 
 /// What must be redone before the next iteration.
@@ -838,7 +856,7 @@ impl System {
                     a.lhs_row_idx.clone(),
                     self.params.factorization,
                 )
-                .map_err(SolveError::Singular)?,
+                .map_err(SolveError::from_factor)?,
             );
             self.update_rhs_slots();
         }
@@ -855,7 +873,7 @@ impl System {
             }
         }
         if let Some(factor) = self.factor.as_mut() {
-            factor.factorize(&values).map_err(SolveError::Singular)?;
+            factor.factorize(&values).map_err(SolveError::from_factor)?;
             self.factorizations += 1;
         }
         self.stale = Stale::Fresh;
@@ -1423,6 +1441,14 @@ fn check_weight(name: &str, value: f64) -> Result<(), SolveError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_factorization_that_cannot_be_built_is_not_called_singular() {
+        let too_large = SolveError::from_factor(FactorError::Other("IndexOverflow".into())).to_string();
+        assert!(too_large.starts_with("the system is too large to factor") && too_large.contains("IndexOverflow"));
+        let singular = SolveError::from_factor(FactorError::NotPositiveDefinite(3)).to_string();
+        assert!(singular.starts_with("singular system"), "{singular}");
+    }
     use crate::constraints::{BuildContext, Params, Position, Selection, build_constraints};
     use crate::geometry::{RestGeometry, WorkingFrame};
 
