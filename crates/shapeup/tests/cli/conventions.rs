@@ -1,15 +1,14 @@
 //! The command line's conventions: log levels (-q, -v, RUST_LOG), TetGen's output kept off
 //! stdout, progress bars only on a terminal, shell completions and manual pages, the bundled
 //! samples (from a folder that is not the repository) and `shapeup info`.
-#![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use shapeup_core::io::read_mesh;
 use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-mod common;
-use common::Output;
+
+use crate::common::Output;
 
 const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data");
 

@@ -1,7 +1,6 @@
 //! End-to-end tests of `shapeup simulate --format`: every frame keeps the input's vertices, VTU
 //! frames carry velocities and a ParaView time series, MSH frames keep the tetrahedra, and a bad
 //! format is refused before anything is written.
-#![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use glam::DVec3;
 use shapeup_core::Mesh;
@@ -9,8 +8,8 @@ use shapeup_core::io::read_mesh;
 use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
 
-mod common;
-use common::{Output, shapeup_in};
+
+use crate::common::{Output, shapeup_in};
 
 const EXAMPLES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples");
 

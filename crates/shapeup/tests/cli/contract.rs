@@ -1,6 +1,5 @@
 //! End-to-end tests of the `shapeup` binary against the CLI and scene contract
 //! (`docs/scenes-and-cli.md`): real processes, real files, outcomes read back with `shapeup_core`.
-#![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use glam::DVec3;
 use shapeup_core::Mesh;
@@ -9,8 +8,8 @@ use shapeup_core::scene::{Scene, SelectionSpec};
 use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
 
-mod common;
-use common::{Output, shapeup_in};
+
+use crate::common::{Output, shapeup_in};
 
 const SPOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/spot.obj");
 const COW: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/cow.obj");

@@ -1,7 +1,6 @@
 //! Real OBJ assets through `shapeup deform`: the output is the input file line for line, with
 //! only vertex coordinates (and recomputed normals) changed — texture coordinates, faces
 //! (quads stay quads), objects, smoothing groups, materials and comments come out unchanged.
-#![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use std::path::PathBuf;
 use std::process::Command;

@@ -1,7 +1,6 @@
 //! Real PLY assets through `shapeup deform`: a coloured binary file with custom properties
 //! comes out with every element, property, type, header line and its encoding; only the
 //! coordinates of what moved change.
-#![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

@@ -1,5 +1,5 @@
 //! What every end-to-end test of the `shapeup` binary needs: run it, keep what it printed.
-#![allow(dead_code)]
+
 
 use std::ffi::OsStr;
 use std::path::Path;

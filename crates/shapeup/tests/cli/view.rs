@@ -1,7 +1,5 @@
 //! `shapeup view --screenshot`: one headless frame of the real renderer (needs a GPU adapter;
 //! Mesa's software rasterizers count, as in CI).
-#![cfg(feature = "gui")]
-#![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use std::process::Command;
 
