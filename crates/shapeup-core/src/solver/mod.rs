@@ -22,6 +22,7 @@ mod local;
 mod ordering;
 mod triangular;
 
+pub use crate::constraints::{ConstraintGroup, GroupId};
 pub use cholesky::{FactorError, Factorization};
 
 use crate::constraints::Constraint;
@@ -134,57 +135,6 @@ impl Acceleration {
         Acceleration::ALL.into_iter().find(|a| a.name() == name)
     }
 }
-
-/// A named set of constraints of one type sharing a multiplier g (w_i = ω_i · g).
-#[derive(Debug)]
-pub struct ConstraintGroup {
-    /// Display name, unique by convention (`"shape"`, `"handle 1"`).
-    pub name: String,
-    /// Constraint type name (`"edge_spring"`, …).
-    pub kind: String,
-    /// The multiplier g ≥ 0.
-    pub multiplier: f64,
-    /// The constraints.
-    pub constraints: Vec<Box<dyn Constraint>>,
-    /// Hold the group's vertices exactly at their points instead of pulling them there
-    /// (default `false`): they leave the linear system, which then covers the other vertices
-    /// only, and moving the points changes only the right-hand side (libigl's
-    /// `min_quad_with_fixed`). Only for constraints with [`Constraint::held_points`] (position
-    /// groups); the multiplier then plays no part and the group adds nothing to E.
-    pub hard: bool,
-}
-
-impl ConstraintGroup {
-    /// A group of `constraints` named `name` with multiplier `multiplier`; its kind is that of
-    /// its first constraint.
-    pub fn new(name: impl Into<String>, multiplier: f64, constraints: Vec<Box<dyn Constraint>>) -> Self {
-        let kind = constraints.first().map(|c| c.kind()).unwrap_or("empty").to_string();
-        ConstraintGroup { name: name.into(), kind, multiplier, constraints, hard: false }
-    }
-
-    /// The group made hard (or soft again): see [`ConstraintGroup::hard`].
-    pub fn with_hard(mut self, hard: bool) -> Self {
-        self.hard = hard;
-        self
-    }
-
-    /// Total number of rows of its constraints.
-    pub fn num_rows(&self) -> usize {
-        self.constraints.iter().map(|c| c.num_rows()).sum()
-    }
-
-    /// How far q is from meeting the group: the largest [`Constraint::violation`] of
-    /// `C_i q` over its constraints (0 when every term is on its set; in the rows' units, a
-    /// length for the point-set types: plane, circle, sphere, line, rigid, …). 0 for a group
-    /// with no rows (a load).
-    pub fn max_violation(&self, q: &[DVec3]) -> f64 {
-        self.constraints.iter().filter(|c| c.num_rows() > 0).map(|c| c.violation(&c.apply(q))).fold(0.0, f64::max)
-    }
-}
-
-/// A handle to a group of a [`System`]; stays valid until that group is removed.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub struct GroupId(pub u32);
 
 /// An error from the solver. Messages are one line and say what to do.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -460,7 +410,7 @@ impl System {
     pub fn set_inertia(&mut self, inertia: Option<Vec<f64>>) -> Result<(), SolveError> {
         if let Some(mu) = &inertia {
             self.check_length(mu)?;
-            if let Some(&bad) = mu.iter().find(|m| !(m.is_finite() && **m >= 0.0)) {
+            if let Some(&bad) = mu.iter().find(|m| crate::constraints::check_weight(**m).is_err()) {
                 return Err(SolveError::BadWeight { name: "inertia".into(), value: bad });
             }
         }
@@ -1434,8 +1384,9 @@ fn record_iteration(
     Ok((converged, stop))
 }
 
+/// [`crate::constraints::check_weight`], naming the group (or `"inertia"`, `"load scale"`) in the error.
 fn check_weight(name: &str, value: f64) -> Result<(), SolveError> {
-    if value.is_finite() && value >= 0.0 { Ok(()) } else { Err(SolveError::BadWeight { name: name.into(), value }) }
+    crate::constraints::check_weight(value).map(|_| ()).map_err(|_| SolveError::BadWeight { name: name.into(), value })
 }
 
 #[cfg(test)]
