@@ -46,13 +46,16 @@ use iterate::Scratch;
 use lbfgs::Lbfgs;
 use std::ops::ControlFlow;
 
-/// What must be redone before the next iteration.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// What must be redone before the next iteration, from least to most.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
 enum Stale {
     /// Factorization up to date.
     Fresh,
     /// Only multipliers changed: numeric refactorization on the same pattern.
     Values,
+    /// Assembled since the constraint set changed (an energy, or a failed prepare), not yet
+    /// factored: re-analyze, refactor.
+    Analysis,
     /// Groups were added or removed: re-assemble, re-analyze, refactor.
     Pattern,
 }
@@ -103,7 +106,6 @@ pub struct System {
     rhs: Vec<[f64; 4]>,
     /// Per extra thread, its share of the right-hand side (kept between iterations).
     rhs_partials: Vec<Vec<[f64; 4]>>,
-    assembled: bool,
     /// Inertia weight μ_i of every vertex (dynamic mode), or `None` (static mode).
     inertia: Option<Vec<f64>>,
     /// The inertial target s (all vertices), kept to rebuild `constant_rhs` after re-assembly.
@@ -150,7 +152,6 @@ impl System {
             cq: Vec::new(),
             rhs: Vec::new(),
             rhs_partials: Vec::new(),
-            assembled: false,
             inertia: None,
             inertial_target: Vec::new(),
             held_rhs: Vec::new(),
@@ -274,7 +275,7 @@ impl System {
         }
         if group.hard {
             // Held points: only the right-hand side changes.
-            if self.assembled {
+            if self.is_assembled() {
                 self.held = self.collect_held()?;
                 self.update_held_rhs();
             }
@@ -287,22 +288,27 @@ impl System {
 
     fn mark(&mut self, stale: Stale) {
         self.map_changed = true;
-        self.stale = match (self.stale, stale) {
-            (Stale::Pattern, _) | (_, Stale::Pattern) => Stale::Pattern,
-            _ => Stale::Values,
-        };
-        if stale == Stale::Pattern {
-            self.assembled = false;
-        }
+        self.stale = self.stale.max(stale);
     }
 
+    /// Whether the rows are stacked for the current constraint set (not necessarily factored).
+    fn is_assembled(&self) -> bool {
+        self.stale != Stale::Pattern
+    }
+
+    /// The multiplier of the group in `slot` (0 for a removed one).
+    fn multiplier(&self, slot: usize) -> f64 {
+        self.slots[slot].as_ref().map_or(0.0, |g| g.multiplier)
+    }
+
+    /// Every group's multiplier, in assembly order.
     fn multipliers(&self) -> Vec<f64> {
-        self.order.iter().map(|&s| self.slots[s].as_ref().map_or(0.0, |g| g.multiplier)).collect()
+        self.order.iter().map(|&s| self.multiplier(s)).collect()
     }
 
     /// Stacks the rows of every group (once per change of the constraint set).
     fn ensure_assembled(&mut self) -> Result<(), SolveError> {
-        if self.assembled {
+        if self.is_assembled() {
             return Ok(());
         }
         self.order = (0..self.slots.len()).filter(|&s| self.slots[s].is_some()).collect();
@@ -329,7 +335,7 @@ impl System {
         self.cq = vec![DVec3::ZERO; rows];
         self.rhs = vec![[0.0; 4]; self.assembly.num_solved()];
         self.factor = None;
-        self.assembled = true;
+        self.stale = Stale::Analysis;
         self.update_weights();
         self.update_load_rhs();
         self.update_held_rhs();
@@ -406,6 +412,33 @@ impl System {
     /// As [`System::step`].
     pub fn solve(&mut self, q: &mut [DVec3], iterations: usize, tolerance: f64) -> Result<SolveReport, SolveError> {
         self.solve_with(q, iterations, tolerance, |_, _| ControlFlow::Continue(()))
+    }
+
+    /// The solve the settings ask for: [`SolverParams::iterations`] iterations from q, stopping
+    /// early at [`SolverParams::tolerance`]. With energies ([`System::solve`]) when the tolerance
+    /// or the acceleration needs them ([`SolverParams::needs_energy`]); otherwise the plain
+    /// [`System::iterate`], whose report has no energies (all the iterations ran). What a time
+    /// step runs.
+    ///
+    /// # Errors
+    /// As [`System::step`].
+    pub fn run(&mut self, q: &mut [DVec3]) -> Result<SolveReport, SolveError> {
+        let SolverParams { iterations, tolerance, .. } = self.params;
+        if self.params.needs_energy() { self.solve(q, iterations, tolerance) } else { self.iterate(q, iterations) }
+    }
+
+    /// [`System::solve_with`] for the settings' [`SolverParams::iterations`] and
+    /// [`SolverParams::tolerance`]: always with energies, calling `after_iteration`.
+    ///
+    /// # Errors
+    /// As [`System::step`].
+    pub fn run_with(
+        &mut self,
+        q: &mut [DVec3],
+        after_iteration: impl FnMut(usize, f64) -> ControlFlow<()>,
+    ) -> Result<SolveReport, SolveError> {
+        let SolverParams { iterations, tolerance, .. } = self.params;
+        self.solve_with(q, iterations, tolerance, after_iteration)
     }
 
     /// `iterations` plain local-global iterations from q without evaluating E: each a local
@@ -599,14 +632,19 @@ impl System {
     /// E(q) from the current projections (which must be p(q)).
     fn energy_of_projections(&mut self, q: &[DVec3]) -> f64 {
         global::apply_c(&self.assembly, q, &mut self.cq);
-        let g = self.multipliers();
-        let projective: f64 =
-            self.assembly.groups.iter().zip(&g).map(|(rows, gk)| gk * self.weighted_residual(rows.range())).sum();
+        // Per iteration: the multipliers read in place, not collected.
+        let projective: f64 = self
+            .assembly
+            .groups
+            .iter()
+            .zip(&self.order)
+            .map(|(rows, &slot)| self.multiplier(slot) * self.weighted_residual(rows.range()))
+            .sum();
         // `load_rhs` is non-empty exactly when some group carries a load (set on assembly).
         if self.load_rhs.is_empty() {
             return projective;
         }
-        projective + self.load_energy(q, self.order.clone())
+        projective + self.load_energy(q, self.order.iter().copied())
     }
 
     /// Σ_r ω_r ‖(Cq)_r − P_r‖² over a range of rows (no multiplier).
@@ -626,7 +664,7 @@ impl System {
     /// it) or held by a hard group; `false` before the first solve or energy evaluation (the
     /// others keep their positions).
     pub fn is_solved(&self, v: usize) -> bool {
-        self.assembled
+        self.is_assembled()
             && (self.assembly.solved_index.get(v).is_some_and(|&s| s != u32::MAX) || self.assembly.is_fixed(v))
     }
 

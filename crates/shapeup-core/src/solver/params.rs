@@ -2,11 +2,14 @@
 
 use super::Factorization;
 
-/// Solver settings. Each default is written once, here and in the scene contract.
+/// Solver settings, the one home of the iteration count and the tolerance: [`System::run`]
+/// reads them. Each default is written once, here and in the scene contract.
+///
+/// [`System::run`]: super::System::run
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct SolverParams {
-    /// Local-global iterations per solve (default 10).
+    /// Local-global iterations per solve, or per time step in dynamic mode (default 10).
     pub iterations: usize,
     /// Stop early when the relative energy change of an iteration is below this (default 0: off).
     pub tolerance: f64,
@@ -30,6 +33,14 @@ impl SolverParams {
             Acceleration::Anderson => self.anderson_window > 0,
             Acceleration::Lbfgs => self.lbfgs_memory > 0,
         }
+    }
+
+    /// Whether a solve must evaluate E after each iteration: for the tolerance's test (when it is
+    /// above 0) or the acceleration's safeguard. Otherwise the plain [`System::iterate`] does.
+    ///
+    /// [`System::iterate`]: super::System::iterate
+    pub fn needs_energy(&self) -> bool {
+        self.tolerance > 0.0 || self.is_accelerated()
     }
 }
 

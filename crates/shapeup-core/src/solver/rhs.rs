@@ -57,7 +57,7 @@ impl System {
     pub(super) fn update_constant_rhs(&mut self) {
         self.constant_rhs.clear();
         let a = &self.assembly;
-        if self.assembled && !self.load_rhs.is_empty() {
+        if self.is_assembled() && !self.load_rhs.is_empty() {
             // Loads are rare and static: the general form, without the fast paths below.
             self.constant_rhs.extend(a.solved.iter().enumerate().map(|(s, &v)| {
                 let v = v as usize;
@@ -70,7 +70,7 @@ impl System {
             return;
         }
         match (&self.inertia, self.held_rhs.is_empty()) {
-            _ if !self.assembled => {}
+            _ if !self.is_assembled() => {}
             (None, true) => {}
             (None, false) => self.constant_rhs.extend_from_slice(&self.held_rhs),
             (Some(mu), held_is_empty) => {
@@ -103,7 +103,7 @@ impl System {
     /// [`System::load_rhs`](Self): Σ g f_v per solved vertex over every group's loads.
     pub(super) fn update_load_rhs(&mut self) {
         self.load_rhs.clear();
-        if !self.assembled {
+        if !self.is_assembled() {
             return;
         }
         let a = &self.assembly;
@@ -139,7 +139,7 @@ impl System {
     pub(super) fn update_held_rhs(&mut self) {
         self.held_rhs.clear();
         let a = &self.assembly;
-        if self.assembled && !self.held.is_empty() {
+        if self.is_assembled() && !self.held.is_empty() {
             let mut at = vec![DVec3::ZERO; self.num_vertices];
             for &(v, x) in &self.held {
                 at[v as usize] = x;

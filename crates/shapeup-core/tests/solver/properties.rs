@@ -16,7 +16,7 @@
 //! `#[test]` with its literal input.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-mod common;
+use crate::common;
 
 use common::random::{Base, MeshCase, magnitude, mesh_case, motion, vertex};
 use common::turned_options;

@@ -1,0 +1,9 @@
+//! The solver's tests, one binary: invariants of a static solve, property tests on random small
+//! meshes, and Projective Dynamics.
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod dynamics;
+mod invariants;
+mod properties;
