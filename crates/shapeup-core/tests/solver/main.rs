@@ -1,5 +1,6 @@
 //! The solver's tests, one binary: invariants of a static solve, property tests on random small
 //! meshes, and Projective Dynamics.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
 
 #[path = "../common/mod.rs"]
 mod common;
