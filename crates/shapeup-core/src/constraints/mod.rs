@@ -55,7 +55,7 @@ pub use edge_strain::{EdgeStrain, EdgeStrainType};
 pub use floor::{Floor, FloorType};
 pub use force::{Force, ForceType};
 pub use gravity::GravityType;
-pub use group::{GroupDescription, build_group, held_vertices};
+pub use group::{ConstraintGroup, GroupDescription, GroupId, WeightError, build_group, check_weight, held_vertices};
 pub use hinge_bending::{HingeBending, HingeBendingType};
 pub use iso_one_ring::{IsoOneRing, IsoOneRingType};
 pub use laplacian::{Laplacian, LaplacianType};

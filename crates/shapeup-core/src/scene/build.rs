@@ -116,8 +116,10 @@ impl Scene {
             group_ids.push(system.add_group(group).map_err(|e| invalid(&entry, e.to_string()))?);
         }
         // Vertices that only zero-area triangles use follow their edge (math reference, "Edge cases").
-        let (attached, stranded) =
-            attach_degenerate_vertices(&mut system, &rest).map_err(|e| invalid("[mesh]", e.to_string()))?;
+        let (group, attached, stranded) = attach_degenerate_vertices(&rest, system.groups().map(|(_, g)| g));
+        if let Some(group) = group {
+            system.add_group(group).map_err(|e| invalid("[mesh]", e.to_string()))?;
+        }
         warnings.add_many(
             "degenerate_vertices_attached",
             "vertices that only degenerate (zero-area) triangles use, attached to their edge",

@@ -691,3 +691,41 @@ fn one_and_two_threads_give_the_same_bits() {
         assert!(q1 == q2, "{acceleration:?}: positions differ by {}", max_distance(&q1, &q2));
     }
 }
+
+/// `run` reads the system's own iterations and tolerance: the same positions, bit for bit, as
+/// `solve` with them when energies are needed (a tolerance or an acceleration), and as the
+/// plain `iterate` when not; `run_with` is `solve_with` with them.
+#[test]
+fn run_solves_with_the_settings_iterations_and_tolerance() {
+    let mesh = grid(8);
+    let (low, high) = ends(&mesh, 0);
+    let up = |p: DVec3| p + DVec3::Y * 0.2;
+    for (acceleration, tolerance) in [(Acceleration::None, 0.0), (Acceleration::None, 1e-3), (Acceleration::Lbfgs, 0.0)]
+    {
+        let params = SolverParams { iterations: 7, tolerance, acceleration, ..SolverParams::default() };
+        let mut by_settings = system(&mesh, MODELS[0], &low, &high, up);
+        by_settings.set_params(params);
+        let mut explicit = system(&mesh, MODELS[0], &low, &high, up);
+        explicit.set_params(params);
+        let (mut q, mut p) = (mesh.positions.clone(), mesh.positions.clone());
+        let report = by_settings.run(&mut q).unwrap();
+        let expected = if params.needs_energy() {
+            explicit.solve(&mut p, 7, tolerance).unwrap()
+        } else {
+            explicit.iterate(&mut p, 7).unwrap()
+        };
+        assert_eq!(q, p, "{acceleration:?}, tolerance {tolerance}");
+        assert_eq!(report.energies, expected.energies);
+        assert_eq!(report.energies.is_empty(), !params.needs_energy());
+        let mut calls = 0;
+        let with = by_settings.run_with(&mut q, |_, _| {
+            calls += 1;
+            std::ops::ControlFlow::Continue(())
+        });
+        let expected = explicit.solve(&mut p, 7, tolerance).unwrap();
+        assert_eq!(
+            (q.clone(), with.unwrap().energies, calls),
+            (p.clone(), expected.energies.clone(), expected.energies.len())
+        );
+    }
+}
