@@ -133,7 +133,7 @@ pub fn corner_normal_weights(positions: &[DVec3], polygons: &crate::mesh::Polygo
 
 /// Normals as a file indexes them: normal `j` is the normalized sum of
 /// [`corner_normal_weights`] over the corners c with `corner_index[c] == j` (corners with
-/// [`crate::attributes::NO_INDEX`] count for none). `None` for a normal no corner uses, or
+/// [`crate::io::attributes::NO_INDEX`] count for none). `None` for a normal no corner uses, or
 /// whose sum vanishes (the caller keeps the file's value). Indexing per vertex
 /// (`corner_index = polygons.indices()`) gives smooth vertex normals; a file's own indexing
 /// keeps its hard edges and smoothing groups.

@@ -570,7 +570,7 @@ impl EditorApp {
     }
 
     fn export_mesh(&mut self, path: PathBuf) {
-        self.view.status = match shapeup_core::io::write_mesh(&path, &self.document.current_mesh()) {
+        self.view.status = match shapeup_core::io::write_mesh(&path, &self.document.current_mesh(), self.document.attributes()) {
             Ok(warnings) if warnings.is_empty() => format!("wrote {}", path.display()),
             // What the format could not keep (or recomputed), said once each.
             Ok(warnings) => {

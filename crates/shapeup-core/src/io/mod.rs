@@ -18,7 +18,7 @@
 //!
 //! **Nothing is lost**: faces stay polygons ([`Mesh::polygons`]; the solver uses their
 //! triangulation) and what a file carries besides positions and faces is kept in
-//! [`Mesh::attributes`](crate::attributes::Attributes). Every writer returns [`Warnings`] for
+//! [`LoadedMesh::attributes`], which the writers take beside the mesh. Every writer returns [`Warnings`] for
 //! what it recomputed (normals) or what its format cannot hold; readers return theirs in
 //! [`LoadedMesh::warnings`]. Only `.msh` and `.node`/`.ele` store tetrahedra; a mesh read from
 //! them has the boundary of its tetrahedra as triangles (see [`msh`], [`tetgen`]).
@@ -34,6 +34,7 @@
 //! where a file is broken); no input makes them panic, and counts from a header never size an
 //! allocation beyond [`MAX_PREALLOCATION`]. Every writer goes through [`write_atomic`].
 
+pub mod attributes;
 pub mod msh;
 pub mod obj;
 pub mod off;
@@ -46,11 +47,15 @@ use std::fs::{self, File};
 use std::io::{self, BufRead, BufReader, BufWriter, Write};
 use std::path::{Path, PathBuf};
 
-use crate::attributes::AttributeKind;
 use crate::mesh::{Mesh, MeshError, Polygons};
 use crate::warnings::Warnings;
 
+pub use attributes::{AttributeKind, NO_INDEX, TexCoords, VertexScalar};
 pub use ply::PlyEncoding;
+
+use obj::ObjAttributes;
+use off::OffAttributes;
+use ply::PlyAttributes;
 
 /// Most elements any reader reserves room for up front, whatever a header claims; vectors grow
 /// past it as data actually arrives.
@@ -139,8 +144,10 @@ fn describe_extension(extension: &str) -> String {
 /// A mesh read from a file, with what reading changed.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LoadedMesh {
-    /// The mesh, vertices in file order, with the file's polygons and attributes.
+    /// The mesh, vertices in file order, with the file's polygons.
     pub mesh: Mesh,
+    /// What the file carried besides positions and faces, for writing the mesh back.
+    pub attributes: Attributes,
     /// What was split, dropped or recomputed (polygons triangulated, faces left out of the
     /// triangulation, …), each naming the file.
     pub warnings: Warnings,
@@ -178,6 +185,87 @@ impl MeshFormat {
             "msh" => Ok(Self::Msh),
             "node" | "ele" => Ok(Self::TetGen),
             _ => Err(IoError::UnsupportedFormat { path: path.to_path_buf(), extension }),
+        }
+    }
+}
+
+/// What a mesh file carries besides positions and faces, kept so that outputs lose nothing.
+///
+/// It holds the data of the format a mesh was read from, complete: written back in the same
+/// format it reproduces the file (OBJ line for line, PLY property by property with their types,
+/// OFF value by value), with only positions (and normals, recomputed from the moved geometry)
+/// changed. Written to another format, the writer keeps what that format can hold through the
+/// format-neutral views ([`Attributes::texcoords`], [`Attributes::vertex_colors`],
+/// [`Attributes::has_normals`], [`Attributes::vertex_scalars`]) and reports the rest
+/// ([`Attributes::kinds`]) as a warning.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub enum Attributes {
+    /// Nothing besides positions and faces (generated meshes, STL, MSH, TetGen files).
+    #[default]
+    None,
+    /// Everything an OBJ file held: its lines in order, texture coordinates, normals.
+    Obj(Box<ObjAttributes>),
+    /// Everything a PLY file held: header, every element and property with its type.
+    Ply(Box<PlyAttributes>),
+    /// Everything an OFF file held: its header keyword and the values after each vertex and face.
+    Off(Box<OffAttributes>),
+}
+
+impl Attributes {
+    /// The same attributes as a file written from them holds them (OFF drops comment lines).
+    pub fn with_comments(self, comments: usize) -> Self {
+        match self {
+            Attributes::Off(a) => Attributes::Off(Box::new(a.with_comments(comments))),
+            other => other,
+        }
+    }
+
+    /// Texture coordinates per corner, if the file has any.
+    pub fn texcoords(&self, polygons: &Polygons) -> Option<TexCoords> {
+        match self {
+            Attributes::None => None,
+            Attributes::Obj(a) => a.texcoords(polygons),
+            Attributes::Ply(a) => a.texcoords(polygons),
+            Attributes::Off(a) => a.texcoords(polygons),
+        }
+    }
+
+    /// Per-vertex colours (r, g, b in [0, 1]), if the file has them for every vertex.
+    pub fn vertex_colors(&self) -> Option<Vec<[f64; 3]>> {
+        match self {
+            Attributes::None => None,
+            Attributes::Obj(a) => a.vertex_colors(),
+            Attributes::Ply(a) => a.vertex_colors(),
+            Attributes::Off(a) => a.vertex_colors(),
+        }
+    }
+
+    /// Whether the file stores vertex normals (outputs then write recomputed ones).
+    pub fn has_normals(&self) -> bool {
+        match self {
+            Attributes::None => false,
+            Attributes::Obj(a) => a.has_normals(),
+            Attributes::Ply(a) => a.has_normals(),
+            Attributes::Off(a) => a.has_normals(),
+        }
+    }
+
+    /// Per-vertex scalar properties other than positions, normals and colours (PLY).
+    pub fn vertex_scalars(&self) -> Vec<VertexScalar> {
+        match self {
+            Attributes::Ply(a) => a.vertex_scalars(),
+            _ => Vec::new(),
+        }
+    }
+
+    /// Every kind of attribute the file carries, for writers of another format to say what
+    /// they drop.
+    pub fn kinds(&self) -> Vec<AttributeKind> {
+        match self {
+            Attributes::None => Vec::new(),
+            Attributes::Obj(a) => a.kinds(),
+            Attributes::Ply(a) => a.kinds(),
+            Attributes::Off(a) => a.kinds(),
         }
     }
 }
@@ -249,15 +337,16 @@ pub fn read_mesh(path: &Path) -> Result<LoadedMesh, IoError> {
     }
 }
 
-/// Writes a mesh in the default encoding for the extension (see [`WriteFormat::from_path`]),
-/// atomically. Returns what the format could not keep or what was recomputed (normals), each
+/// Writes a mesh with the attributes of the file it was read from ([`LoadedMesh::attributes`],
+/// or [`Attributes::None`]) in the default encoding for the extension (see
+/// [`WriteFormat::from_path`]), atomically. Returns what the format could not keep or what was recomputed (normals), each
 /// naming `path`.
 ///
 /// # Errors
 /// [`IoError::UnsupportedFormat`], [`IoError::Mesh`] if the mesh does not validate, or
 /// [`IoError::Write`].
-pub fn write_mesh(path: &Path, mesh: &Mesh) -> Result<Warnings, IoError> {
-    write_mesh_with(path, mesh, WriteFormat::from_path(path)?)
+pub fn write_mesh(path: &Path, mesh: &Mesh, attributes: &Attributes) -> Result<Warnings, IoError> {
+    write_mesh_with(path, mesh, attributes, WriteFormat::from_path(path)?)
 }
 
 /// Writes a mesh in the given encoding, whatever the extension, atomically ([`WriteFormat::TetGen`]
@@ -267,7 +356,12 @@ pub fn write_mesh(path: &Path, mesh: &Mesh) -> Result<Warnings, IoError> {
 /// # Errors
 /// [`IoError::Mesh`] if the mesh does not validate (nothing is written), [`IoError::Invalid`] for
 /// TetGen without tetrahedra (nothing is written), or [`IoError::Write`].
-pub fn write_mesh_with(path: &Path, mesh: &Mesh, format: WriteFormat) -> Result<Warnings, IoError> {
+pub fn write_mesh_with(
+    path: &Path,
+    mesh: &Mesh,
+    attributes: &Attributes,
+    format: WriteFormat,
+) -> Result<Warnings, IoError> {
     // A `Mesh` has public fields; refuse to write indices that would not read back.
     mesh.validate().map_err(|source| IoError::Mesh { path: path.to_path_buf(), source })?;
     let mut warnings = Warnings::new();
@@ -281,28 +375,28 @@ pub fn write_mesh_with(path: &Path, mesh: &Mesh, format: WriteFormat) -> Result<
         );
     }
     match format {
-        WriteFormat::Obj => write_atomic(path, |w| obj::write_obj(w, mesh, warn))?,
-        WriteFormat::Ply(encoding) => write_atomic(path, |w| ply::write_ply(w, mesh, encoding, warn))?,
-        WriteFormat::StlBinary => write_atomic(path, |w| stl::write_stl_binary(w, mesh, warn))?,
-        WriteFormat::Off => write_atomic(path, |w| off::write_off(w, mesh, warn))?,
+        WriteFormat::Obj => write_atomic(path, |w| obj::write_obj(w, mesh, attributes, warn))?,
+        WriteFormat::Ply(encoding) => write_atomic(path, |w| ply::write_ply(w, mesh, attributes, encoding, warn))?,
+        WriteFormat::StlBinary => write_atomic(path, |w| stl::write_stl_binary(w, mesh, attributes, warn))?,
+        WriteFormat::Off => write_atomic(path, |w| off::write_off(w, mesh, attributes, warn))?,
         WriteFormat::Msh => {
-            report_dropped(mesh, &[], "MSH", warn);
+            report_dropped(attributes, &[], "MSH", warn);
             write_atomic(path, |w| msh::write_msh(w, mesh))?;
         }
         WriteFormat::TetGen => {
-            report_dropped(mesh, &[], "TetGen files", warn);
+            report_dropped(attributes, &[], "TetGen files", warn);
             tetgen::write_tetgen_files(path, mesh)?;
         }
-        WriteFormat::Vtu => write_atomic(path, |w| vtu::write_vtu(w, mesh, &[], warn))?,
+        WriteFormat::Vtu => write_atomic(path, |w| vtu::write_vtu(w, mesh, attributes, &[], warn))?,
     }
     Ok(warnings.for_file(path))
 }
 
-/// Names, in one warning, every kind of `mesh`'s attributes that a writer of `format` does not
-/// keep (`kept`).
-pub(crate) fn report_dropped(mesh: &Mesh, kept: &[AttributeKind], format: &str, warnings: &mut Warnings) {
+/// Names, in one warning, every kind of `attributes` that a writer of `format` does not keep
+/// (`kept`).
+pub(crate) fn report_dropped(attributes: &Attributes, kept: &[AttributeKind], format: &str, warnings: &mut Warnings) {
     let dropped: Vec<String> =
-        mesh.attributes.kinds().into_iter().filter(|k| !kept.contains(k)).map(|k| k.describe()).collect();
+        attributes.kinds().into_iter().filter(|k| !kept.contains(k)).map(|k| k.describe()).collect();
     if let Some(first) = dropped.first().cloned() {
         warnings.add_many(
             "attributes_dropped",
@@ -754,11 +848,12 @@ impl<R: BufRead> Lines<R> {
     }
 }
 
-/// Builds the mesh from polygons, attributing any error (and every warning) to `path`.
+/// Builds the mesh from polygons, attributing any error (and every warning) to `path`; no
+/// attributes (the readers that have some set them).
 pub(crate) fn build_mesh(path: &Path, positions: Vec<glam::DVec3>, polygons: Polygons) -> Result<LoadedMesh, IoError> {
     let (mesh, warnings) = Mesh::from_polygons(positions, polygons)
         .map_err(|source| IoError::Mesh { path: path.to_path_buf(), source })?;
-    Ok(LoadedMesh { mesh, warnings: warnings.for_file(path) })
+    Ok(LoadedMesh { mesh, attributes: Attributes::None, warnings: warnings.for_file(path) })
 }
 
 /// Parses one coordinate, naming it in the error.

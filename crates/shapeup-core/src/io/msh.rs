@@ -453,7 +453,7 @@ fn tetrahedra_to_mesh(
     }
     let boundary = tetrahedron_boundary(&mesh.tetrahedra);
     mesh.set_triangles(boundary);
-    Ok(LoadedMesh { mesh, warnings: crate::warnings::Warnings::new() })
+    Ok(LoadedMesh { mesh, attributes: super::Attributes::None, warnings: crate::warnings::Warnings::new() })
 }
 
 /// Writes `mesh` as MSH 4.1 ASCII: node tags are vertex indices + 1; element tags number the
