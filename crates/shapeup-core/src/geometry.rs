@@ -244,11 +244,6 @@ impl WorkingFrame {
     pub fn vector_to_working(&self, v: DVec3) -> DVec3 {
         v * self.scale
     }
-
-    /// A length from the input frame to the working frame.
-    pub fn length_to_working(&self, l: f64) -> f64 {
-        l * self.scale
-    }
 }
 
 /// Everything about the rest shape that constraints need, computed once.

@@ -62,6 +62,7 @@ pub mod scene;
 pub mod solver;
 #[cfg(feature = "tetgen")]
 pub mod tetrahedralize;
+pub mod text;
 pub mod topology;
 pub mod warnings;
 

@@ -129,11 +129,6 @@ impl Polygons {
     pub fn num_corners(&self) -> usize {
         self.indices.len()
     }
-
-    /// Whether every polygon is a triangle.
-    pub fn all_triangles(&self) -> bool {
-        self.offsets.windows(2).all(|w| w[1] - w[0] == 3)
-    }
 }
 
 impl<'a> FromIterator<&'a [u32]> for Polygons {
