@@ -166,8 +166,12 @@ fn convergence_stops_at_the_tolerance_or_the_cap() {
     let dir = tempfile::tempdir().unwrap();
     let (positions, triangles) = grid(10, DVec3::ZERO);
     let mesh_path = dir.path().join("sheet.obj");
-    shapeup_core::io::write_mesh(&mesh_path, &shapeup_core::mesh::Mesh::new(positions, triangles).unwrap(), &Attributes::None)
-        .unwrap();
+    shapeup_core::io::write_mesh(
+        &mesh_path,
+        &shapeup_core::mesh::Mesh::new(positions, triangles).unwrap(),
+        &Attributes::None,
+    )
+    .unwrap();
     let mut doc = Document::open(&mesh_path, ShapeModel::EdgeSprings).unwrap();
     assert_eq!(doc.tolerance(), shapeup_app::document::DEFAULT_TOLERANCE);
     let left: Vec<u32> = (0..11).map(|y| y * 11).collect();

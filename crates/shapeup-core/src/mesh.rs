@@ -276,13 +276,7 @@ impl Mesh {
             triangle_polygon.resize(triangles.len(), index as u32);
             debug_assert!(triangles.len() > before);
         }
-        let mesh = Mesh {
-            positions,
-            polygons,
-            triangles,
-            triangle_polygon,
-            tetrahedra: Vec::new(),
-        };
+        let mesh = Mesh { positions, polygons, triangles, triangle_polygon, tetrahedra: Vec::new() };
         mesh.validate()?;
         Ok((mesh, warnings))
     }

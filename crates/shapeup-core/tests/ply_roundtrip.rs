@@ -10,7 +10,9 @@ use glam::{DQuat, DVec3};
 use proptest::prelude::*;
 use shapeup_core::Mesh;
 use shapeup_core::io::ply::{self, PlyAttributes, PlyScalar, PlyType};
-use shapeup_core::io::{AttributeKind, Attributes, IoError, NO_INDEX, PlyEncoding, WriteFormat, read_mesh, write_mesh_with};
+use shapeup_core::io::{
+    AttributeKind, Attributes, IoError, NO_INDEX, PlyEncoding, WriteFormat, read_mesh, write_mesh_with,
+};
 use shapeup_core::mesh::Polygons;
 use shapeup_core::warnings::Warnings;
 

@@ -311,8 +311,14 @@ fn bad_point_data_is_refused_before_anything_is_written() {
     let mesh = tet_box([1, 1, 1], DVec3::ONE);
     let short = vec![DVec3::ZERO; 3];
     let mut out = Vec::new();
-    let err = write_vtu(&mut out, &mesh, &Attributes::None, &[PointVectors { name: "velocity", values: &short }], &mut Warnings::new())
-        .unwrap_err();
+    let err = write_vtu(
+        &mut out,
+        &mesh,
+        &Attributes::None,
+        &[PointVectors { name: "velocity", values: &short }],
+        &mut Warnings::new(),
+    )
+    .unwrap_err();
     assert_eq!(err.kind(), ErrorKind::InvalidInput);
     assert!(err.to_string().contains("velocity"), "{err}");
     let full = vec![DVec3::ZERO; 8];

@@ -162,11 +162,8 @@ impl PyMesh {
     #[getter]
     fn texcoords(&self) -> Option<(Vec<[f64; 2]>, Vec<i64>)> {
         let t = self.attributes.texcoords(&self.mesh.polygons)?;
-        let corners = t
-            .corners
-            .iter()
-            .map(|&c| if c == shapeup_core::io::NO_INDEX { -1 } else { i64::from(c) })
-            .collect();
+        let corners =
+            t.corners.iter().map(|&c| if c == shapeup_core::io::NO_INDEX { -1 } else { i64::from(c) }).collect();
         Some((t.values, corners))
     }
 

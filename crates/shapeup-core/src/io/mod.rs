@@ -34,8 +34,8 @@
 //! where a file is broken); no input makes them panic, and counts from a header never size an
 //! allocation beyond [`MAX_PREALLOCATION`]. Every writer goes through [`write_atomic`].
 
-pub mod attributes;
 mod atomic;
+pub mod attributes;
 mod decode;
 pub mod msh;
 pub mod obj;
@@ -52,10 +52,10 @@ use std::path::{Path, PathBuf};
 use crate::mesh::{Mesh, MeshError, Polygons};
 use crate::warnings::Warnings;
 
-pub use attributes::{AttributeKind, NO_INDEX, TexCoords, VertexScalar};
 pub use crate::text::one_line;
 pub(crate) use crate::text::shown;
 pub use atomic::{MESH_OUTPUT_EXTENSIONS, OutputError, check_output_extension, check_output_folder, write_atomic};
+pub use attributes::{AttributeKind, NO_INDEX, TexCoords, VertexScalar};
 pub use decode::UTF8_BOM;
 pub(crate) use decode::{
     DecodeError, Lines, TextReader, bounded_vec, decode_text, parse_coordinate, read_error, read_text_file,

@@ -40,12 +40,12 @@ use std::path::Path;
 
 use glam::DVec3;
 
+use super::Attributes;
+use super::attributes::{AttributeKind, NO_INDEX, TexCoords};
 use super::{
     IoError, LoadedMesh, UTF8_BOM, build_mesh, decode_text, parse_coordinate, read_error, report_dropped, shown,
     write_f64, write_xyz,
 };
-use super::Attributes;
-use super::attributes::{AttributeKind, NO_INDEX, TexCoords};
 use crate::geometry::indexed_normals;
 use crate::mesh::{Mesh, Polygons};
 use crate::warnings::Warnings;
@@ -677,8 +677,7 @@ fn write_new(
         }
         w.write_all(b"\n")?;
     }
-    let texcoords =
-        attributes.texcoords(polygons).filter(|t| same_faces && t.corners.len() == polygons.num_corners());
+    let texcoords = attributes.texcoords(polygons).filter(|t| same_faces && t.corners.len() == polygons.num_corners());
     if let Some(t) = &texcoords {
         for [u, v] in &t.values {
             w.write_all(b"vt ")?;
@@ -835,7 +834,10 @@ mod tests {
         let loaded = read(text).unwrap();
         assert_eq!(loaded.mesh.triangles.len(), 1);
         assert!(!obj(&loaded.attributes).final_newline);
-        assert_eq!(write(&loaded.mesh, &loaded.attributes).0, "v 0.0 0.0 0.0\nv 1.0 0.0 0.0\nv 0.0 1.0 0.0\nf 1 2 3 \\");
+        assert_eq!(
+            write(&loaded.mesh, &loaded.attributes).0,
+            "v 0.0 0.0 0.0\nv 1.0 0.0 0.0\nv 0.0 1.0 0.0\nf 1 2 3 \\"
+        );
     }
 
     #[test]

@@ -39,12 +39,12 @@ use std::path::Path;
 
 use glam::DVec3;
 
+use super::Attributes;
+use super::attributes::{AttributeKind, NO_INDEX, TexCoords, VertexScalar};
 use super::{
     IoError, Lines, LoadedMesh, MAX_PREALLOCATION, build_mesh, decode_text, read_error, report_dropped, shown,
     utf16_encoding, write_f64,
 };
-use super::Attributes;
-use super::attributes::{AttributeKind, NO_INDEX, TexCoords, VertexScalar};
 use crate::mesh::{Mesh, Polygons};
 use crate::warnings::Warnings;
 
