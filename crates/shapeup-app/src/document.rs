@@ -21,7 +21,7 @@ use shapeup_core::constraints::{
     selects_any,
 };
 use shapeup_core::geometry::{RestGeometry, WorkingFrame};
-use shapeup_core::io::read_mesh;
+use shapeup_core::io::{Attributes, read_mesh};
 use shapeup_core::mesh::Mesh;
 use shapeup_core::scene::{GroupSpec, MeshSettings, Scene, SelectionSpec, SolverSettings, Targets};
 use shapeup_core::solver::{Acceleration, ConstraintGroup, GroupId, SolveError, SolveReport, SolverParams, System};
@@ -597,6 +597,8 @@ pub struct Document {
     opened_rest: Arc<Rest>,
     /// The mesh file the document was read from (`None`: made in memory or generated).
     source: Option<PathBuf>,
+    /// What that file carried besides positions and faces, written back with the mesh.
+    attributes: Attributes,
     /// `Some(recorded)` during a drag: whether its undo step was recorded yet.
     drag: Option<bool>,
     next_key: u32,
@@ -631,6 +633,7 @@ impl Document {
         let loaded = read_mesh(path).map_err(|e| EditorError::Load(e.to_string()))?;
         let mut document = Document::new(loaded.mesh, model)?;
         document.source = Some(path.to_path_buf());
+        document.attributes = loaded.attributes;
         Ok(document)
     }
 
@@ -665,6 +668,7 @@ impl Document {
             modified: false,
             opened_rest: Arc::clone(&rest),
             source: None,
+            attributes: Attributes::None,
             drag: None,
             next_key: 0,
             solver_settings,
@@ -706,6 +710,7 @@ impl Document {
         let loaded = scene.read_mesh().map_err(|e| EditorError::Load(e.to_string()))?;
         let mut document = Document::from_scene_with_mesh(scene, loaded.mesh)?;
         document.source = scene.mesh.generate.is_none().then(|| scene.mesh_path());
+        document.attributes = loaded.attributes;
         Ok(document)
     }
 
@@ -861,7 +866,7 @@ impl Document {
                 let stem = scene_path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
                 let name = format!("{stem}.rest.{ext}");
                 let rest_path = scene_path.with_file_name(&name);
-                let warnings = shapeup_core::io::write_mesh(&rest_path, &self.state.rest.mesh)
+                let warnings = shapeup_core::io::write_mesh(&rest_path, &self.state.rest.mesh, &self.attributes)
                     .map_err(|e| save_error(e.to_string()))?;
                 (PathBuf::from(name), Some(rest_path), warnings.iter().map(ToString::to_string).collect())
             }
@@ -938,8 +943,8 @@ impl Document {
         &self.state.rest.mesh
     }
 
-    /// The current shape as a mesh (input frame), e.g. to export: the opened file's every
-    /// vertex in order, its polygons and attributes, at the current positions.
+    /// The current shape as a mesh (input frame), e.g. to export with [`Document::attributes`]:
+    /// the opened file's every vertex in order and its polygons, at the current positions.
     pub fn current_mesh(&self) -> Mesh {
         self.state.rest.mesh.with_positions(self.positions.clone())
     }
@@ -1431,6 +1436,12 @@ impl Document {
     /// The mesh file the document was read from, if any.
     pub fn source(&self) -> Option<&Path> {
         self.source.as_deref()
+    }
+
+    /// What the opened mesh file carried besides positions and faces ([`Attributes::None`] for a
+    /// mesh made in memory), to write with [`Document::current_mesh`].
+    pub fn attributes(&self) -> &Attributes {
+        &self.attributes
     }
 
     /// E of the current shape per group, in the order of [`Document::groups`].

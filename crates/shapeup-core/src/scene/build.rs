@@ -8,7 +8,7 @@ use crate::constraints::{
 };
 use crate::dynamics::{DynamicsParams, Simulation};
 use crate::geometry::{RestGeometry, WorkingFrame, lumped_masses_surface, lumped_masses_volume};
-use crate::io::read_mesh;
+use crate::io::{Attributes, read_mesh};
 use crate::mesh::Mesh;
 use crate::solver::{ConstraintGroup, GroupId, SolveError, SolveReport, SolverParams, System};
 use crate::warnings::Warnings;
@@ -23,6 +23,9 @@ pub struct LoadedScene {
     /// The mesh as read (input frame); after `tetrahedralize`, with TetGen's points after the
     /// input's vertices.
     pub mesh: Mesh,
+    /// What the mesh file carried besides positions and faces, which outputs write back
+    /// ([`Attributes::None`] for a mesh [`Scene::build`] was given).
+    pub attributes: Attributes,
     /// Vertices of the input mesh (before tetrahedralization added points): what outputs write.
     pub input_vertices: usize,
     /// What loading changed (polygons triangulated, faces left out…), each naming the file.
@@ -50,7 +53,9 @@ impl Scene {
         let t = Instant::now();
         let loaded = self.read_mesh()?;
         let load_seconds = t.elapsed().as_secs_f64();
-        self.build(loaded.mesh, loaded.warnings, load_seconds)
+        let mut built = self.build(loaded.mesh, loaded.warnings, load_seconds)?;
+        built.attributes = loaded.attributes;
+        Ok(built)
     }
 
     /// The scene's mesh: read from its file, or generated.
@@ -68,7 +73,11 @@ impl Scene {
                     entry: "[mesh]".into(),
                     message,
                 })?;
-                Ok(crate::io::LoadedMesh { mesh: generated.mesh(), warnings: Warnings::new() })
+                Ok(crate::io::LoadedMesh {
+                    mesh: generated.mesh(),
+                    attributes: Attributes::None,
+                    warnings: Warnings::new(),
+                })
             }
             None => read_mesh(&self.mesh_path()).map_err(|source| SceneError::Mesh { path: self.file.clone(), source }),
         }
@@ -138,6 +147,7 @@ impl Scene {
         Ok(LoadedScene {
             scene: self.clone(),
             mesh,
+            attributes: Attributes::None,
             input_vertices,
             warnings,
             frame,
@@ -321,7 +331,7 @@ impl LoadedScene {
         positions.iter().map(|&p| self.frame.to_working(p)).collect()
     }
 
-    /// The input mesh (faces, attributes, tetrahedra) with its positions replaced by `q`
+    /// The input mesh (faces, tetrahedra) with its positions replaced by `q`
     /// (working frame) mapped back; vertices that no constraint touches keep their input
     /// positions bit for bit. [`LoadedScene::output_mesh`] for a volume format.
     pub fn mesh_at(&self, q: &[DVec3]) -> Mesh {
@@ -332,7 +342,7 @@ impl LoadedScene {
     /// whole mesh when `volume` (a format that stores tetrahedra: `.msh`, `.vtu`) or when the
     /// mesh was read with tetrahedra (a surface format then writes their boundary and says
     /// so); for a surface the scene tetrahedralized, that surface: every input vertex in file
-    /// order, its faces and attributes, without TetGen's points (which come after the input's
+    /// order, its faces, without TetGen's points (which come after the input's
     /// vertices), so outputs line up with the input file. Vertices `is_solved` says no
     /// constraint touches keep their input positions bit for bit (the round trip through the
     /// working frame may change the last bit).

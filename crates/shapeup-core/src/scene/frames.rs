@@ -106,7 +106,7 @@ impl FrameWriter<'_> {
         let warnings = if self.format == FrameFormat::Vtu {
             self.write_vtu(&path, &mesh, simulation)?
         } else {
-            write_mesh(&path, &mesh)?
+            write_mesh(&path, &mesh, &self.loaded.attributes)?
         };
         if self.warnings.is_none() {
             self.warnings = Some(warnings);
@@ -130,7 +130,7 @@ impl FrameWriter<'_> {
             .collect();
         let mut warnings = Warnings::new();
         let vectors = [PointVectors { name: "velocity", values: &velocity }];
-        write_atomic(path, |w| write_vtu(w, mesh, &vectors, &mut warnings))?;
+        write_atomic(path, |w| write_vtu(w, mesh, &self.loaded.attributes, &vectors, &mut warnings))?;
         Ok(warnings.for_file(path))
     }
 

@@ -19,7 +19,7 @@ use glam::DVec3;
 use serde::{Deserialize, Serialize};
 use serde_json::{Map, Value};
 
-use crate::io::one_line;
+use crate::text::one_line;
 use std::path::{Path, PathBuf};
 
 /// Static (ShapeUp) or dynamic (Projective Dynamics) solving.

@@ -102,7 +102,7 @@ impl LoadedScene {
         };
         let volume = matches!(format, WriteFormat::Msh | WriteFormat::Vtu | WriteFormat::TetGen);
         let mesh = self.output_mesh(q, volume, |v| self.system.is_solved(v));
-        let warnings = write_mesh_with(path, &mesh, format)?;
+        let warnings = write_mesh_with(path, &mesh, &self.attributes, format)?;
         Ok((mesh, warnings))
     }
 

@@ -377,7 +377,7 @@ fn normalized_frame_is_scale_invariant() {
     let scale = 1000.0;
     let big = rest.with_positions(rest.positions.iter().map(|&p| p * scale).collect());
     let big_path = ws.path("spot1000.obj");
-    write_mesh(&big_path, &big).unwrap();
+    write_mesh(&big_path, &big, &read_mesh(Path::new(SPOT)).unwrap().attributes).unwrap();
 
     let small_scene = ws.scene("small.toml", &toml_scene(Path::new(SPOT), "", &handle_body(1.0)));
     let big_scene = ws.scene("big.toml", &toml_scene(&big_path, "normalize = true", &handle_body(scale)));
