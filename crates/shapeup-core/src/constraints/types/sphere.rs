@@ -1,0 +1,387 @@
+//! Sphere: a set of vertices kept on a common sphere.
+//!
+//! Term: ω Σ_i ‖(q_i − q̄) − p_i‖² over the k ≥ 4 selected vertices, q̄ = (1/k) Σ_j q_j. The k
+//! rows of C are mean-centred as in ShapeOp, C = I − 11ᵀ/k, so the set is that of the centred
+//! configurations on one sphere, S = {p : Σ_i p_i = 0, ‖p_i − c‖ = r for some c, r}, taken
+//! with its closure: the coplanar configurations (spheres of infinite radius). Without them the
+//! nearest point would not exist for flat input, whose best spheres grow without bound.
+//!
+//! Projection: the nearest point of S to d_i = q_i − q̄ (the rows of C q) is the geometric
+//! best-fit sphere, argmin Σ_i (‖d_i − c‖ − r)², with each d_i moved to its nearest point on it,
+//! p_i = c + r (d_i − c)/‖d_i − c‖; then p is recentred (a shift stays on a sphere and only
+//! brings p nearer to the centred d). The fit, on the points scaled to unit RMS radius:
+//! 1. starts: the algebraic (Kåsa) sphere, the least-squares solution of
+//!    ‖x‖² + b·x + e = 0 (linear in b, e); the same sphere curved the other way at its point
+//!    nearest the centroid (the other side of a nearly flat set); the best-fit plane (PCA);
+//! 2. each start refined by Levenberg–Marquardt with Gauss–Newton steps (to steps of 1e-7,
+//!    at most 30 iterations), then the lowest (the first on ties) refined on to steps of 1e-13
+//!    (at most 60 iterations): by Gauss–Newton while it converges fast, by damped Newton on the
+//!    exact Hessian (forward-mode second derivatives of the same residuals) once it is slow,
+//!    as in the flat valleys of nearly flat sets. Damping μ = λ tr(A)/4 on the step's matrix A,
+//!    λ ×4 until the cost falls and ÷3 after ([`best_fit`]). Deterministic, and equivariant
+//!    under rigid motions since every start is.
+//!
+//! The sphere is parametrized by a point s on it, the unit normal n there and the signed
+//! curvature κ (centre s − n/κ, radius 1/|κ|; κ = 0 the plane through s normal to n), with the
+//! signed distance of x, y = x − s, w = n + κ y:
+//! dist = (2 y·n + κ‖y‖²) / (1 + ‖w‖), nearest point x − dist·w/‖w‖,
+//! which is exact, has no cancellation for large radii and passes smoothly through planes
+//! (Karimäki's circle parametrization, in 3D). Steps rotate n about s (two tangent angles),
+//! move s along n and change κ: the sphere's 4 degrees of freedom.
+//!
+//! Set residual (a direct test of the definition, no fit): the smallest singular value σ₅ of
+//! the k×5 matrix with rows (‖y_i‖²/L, y_i, L), y_i = p_i − p̄, L = max ‖y_i‖
+//! ([`sets::lifted_singular_values`]), which vanishes exactly when one sphere or plane holds
+//! every p_i, combined with the centroid offset ‖Σ p_i‖/√k.
+//!
+//! ω = 1: the term is already the squared distance (length²) of the points from the set; as in
+//! ShapeOp the weight is left to the group multiplier. Default multiplier 10 (as edge springs).
+//!
+//! Sources: ShapeUp (Bouaziz et al. 2012, §4 "spheres": points projected on their best-fit
+//! sphere) and ShapeOp's `SphereConstraint` (Deuss et al. 2015: mean-centred rows, the
+//! algebraic (Kåsa) sphere; when its 3×3 system is nearly singular, determinant ≤ 1e-5, the
+//! points are left as they are). Choices left open: the algebraic fit is not the nearest point
+//! of the set (it minimizes Σ(‖x_i − c‖² − r²)², which weights points by their distance), so we
+//! refine it to the geometric fit; nearly flat sets go to large spheres or the plane (the
+//! closure) instead of a scale-dependent determinant threshold; the starts, the parametrization
+//! and the schedule above are ours; four points always lie on a sphere or plane, so at k = 4
+//! the term is zero.
+//!
+//! This file also holds the fit machinery that [`super::circle`] shares: the generalized-sphere
+//! distance ([`distance`]), the algebraic-to-curvature conversion ([`from_algebraic`]), the
+//! small Cholesky solve ([`solve_spd`]), numbers with derivatives ([`Scalar`], [`V3`]) and the
+//! multi-start Levenberg–Marquardt fit ([`Model`], [`best_fit`]).
+
+use crate::constraints::contract::{BuildContext, Constraint, ConstraintType, RowSink};
+use crate::constraints::error::ConstraintError;
+use crate::constraints::kit::sets;
+use crate::constraints::kit::vertex_set::{centred, centred_rows, centred_view, recentre, to_row_frame, vertex_set};
+use crate::constraints::options::OptionSpec;
+use crate::constraints::params::Params;
+use crate::constraints::selection::Element;
+use glam::{DQuat, DVec3};
+use crate::constraints::kit::fit::{Model, best_fit, distance, distance_in, from_algebraic, rms_radius};
+use crate::linalg::jet::{Scalar, V3};
+use crate::linalg::small::linear_least_squares;
+
+/// Name in scene files.
+const KIND: &str = "sphere";
+
+
+
+
+/// A generalized sphere through `s` with unit normal `n` there and curvature `kappa`.
+#[derive(Debug, Clone, Copy)]
+struct SphereFit {
+    s: DVec3,
+    n: DVec3,
+    kappa: f64,
+}
+
+impl Model<4> for SphereFit {
+    /// θ = (two tangent angles of n about s, s along n, κ): n(θ) = R(n × τ) n with
+    /// τ = θ₀t₁ + θ₁t₂, s(θ) = s + θ₂n, κ(θ) = κ + θ₃.
+    fn residuals<T: Scalar>(&self, points: &[DVec3], theta: [T; 4], mut each: impl FnMut(T)) {
+        let (t1, t2) = self.n.any_orthonormal_pair();
+        let tangent = V3::along(t1, theta[0]).add(V3::along(t2, theta[1]));
+        let n = V3::turned(self.n, V3::constant(self.n).cross(tangent));
+        let s = V3::constant(self.s).add(V3::along(self.n, theta[2]));
+        let kappa = T::constant(self.kappa) + theta[3];
+        for &x in points {
+            each(distance_in(V3::constant(x).sub(s), n, kappa));
+        }
+    }
+    fn step(&self, delta: &[f64; 4]) -> Self {
+        let (t1, t2) = self.n.any_orthonormal_pair();
+        let tangent = delta[0] * t1 + delta[1] * t2;
+        let n = (DQuat::from_scaled_axis(self.n.cross(tangent)) * self.n).normalize_or(self.n);
+        SphereFit { s: self.s + delta[2] * self.n, n, kappa: self.kappa + delta[3] }
+    }
+}
+
+/// The geometric best-fit generalized sphere of `points` (centred, unit RMS radius), and its
+/// cost: the best of the fits from the algebraic start, its mirror and the best-fit plane.
+fn fit_sphere(points: &[DVec3]) -> (SphereFit, f64) {
+    let (_, _, axes) = sets::principal_axes(points);
+    let mut starts = Vec::with_capacity(3);
+    let kasa = linear_least_squares(points.iter().map(|&x| ([x.x, x.y, x.z, 1.0], -x.length_squared())));
+    if let Some((s, n, kappa)) = kasa.and_then(|a| from_algebraic(1.0, DVec3::new(a[0], a[1], a[2]), a[3], axes[2])) {
+        starts.push(SphereFit { s, n, kappa });
+        starts.push(SphereFit { s, n, kappa: -kappa });
+    }
+    let plane = SphereFit { s: DVec3::ZERO, n: axes[2], kappa: 0.0 };
+    starts.push(plane);
+    best_fit(starts, points).unwrap_or((plane, f64::INFINITY))
+}
+
+/// The sphere constraint on a vertex set.
+#[derive(Debug, Clone)]
+pub struct Sphere {
+    vertices: Box<[u32]>,
+}
+
+impl Sphere {
+    /// Keeps `vertices` (k ≥ 4, distinct) on one sphere; `None` with fewer than 4.
+    pub fn new(vertices: Vec<u32>) -> Option<Self> {
+        (vertices.len() >= 4).then(|| Sphere { vertices: vertices.into() })
+    }
+}
+
+impl Constraint for Sphere {
+    fn kind(&self) -> &'static str {
+        KIND
+    }
+    fn vertices(&self) -> &[u32] {
+        &self.vertices
+    }
+    fn element_weight(&self) -> f64 {
+        1.0
+    }
+    fn num_rows(&self) -> usize {
+        self.vertices.len()
+    }
+    fn rows(&self, sink: &mut RowSink) {
+        centred_rows(&self.vertices, sink);
+    }
+    fn project(&self, q: &[DVec3], out: &mut [DVec3]) {
+        let d = centred(&self.vertices, q);
+        let (mean, scale) = rms_radius(&d);
+        if !(scale > 0.0 && scale.is_finite()) {
+            // Coincident points are on every sphere through them (non-finite input: as given).
+            for (o, &x) in out.iter_mut().zip(&d) {
+                *o = x - mean;
+            }
+            to_row_frame(&self.vertices, q, out);
+            return;
+        }
+        let points: Vec<DVec3> = d.iter().map(|&x| (x - mean) / scale).collect();
+        let (fit, _) = fit_sphere(&points);
+        for (o, &x) in out.iter_mut().zip(&points) {
+            let dist = distance(x - fit.s, fit.n, fit.kappa);
+            *o = (x - dist.d * dist.direction(fit.n)) * scale;
+        }
+        recentre(out);
+        to_row_frame(&self.vertices, q, out);
+    }
+    /// √(‖Σ p_i‖²/k + σ₅²), σ₅ the smallest singular value of the lifted rows
+    /// (‖y_i‖²/L, y_i, L): zero exactly on one sphere (or plane), centred.
+    fn set_residual(&self, p: &[DVec3]) -> f64 {
+        let p = centred_view(p);
+        let sigma = sets::lifted_singular_values(&p);
+        (sets::centroid_offset(&p).powi(2) + sigma[4] * sigma[4]).sqrt()
+    }
+}
+
+/// Builds one [`Sphere`] over all the selected vertices (at least 4). No options. Default
+/// multiplier 10.
+#[derive(Debug, Clone, Copy)]
+pub struct SphereType;
+
+impl ConstraintType for SphereType {
+    fn name(&self) -> &'static str {
+        KIND
+    }
+    fn summary(&self) -> &'static str {
+        "sphere: the selected vertices stay on one sphere"
+    }
+    fn options(&self) -> &'static [OptionSpec] {
+        &[]
+    }
+    fn element(&self) -> Element {
+        Element::VertexSet { min: 4 }
+    }
+    fn default_multiplier(&self) -> f64 {
+        10.0
+    }
+    fn build(&self, ctx: &BuildContext, _params: &mut Params) -> Result<Vec<Box<dyn Constraint>>, ConstraintError> {
+        let vertices = vertex_set(ctx, KIND, 4, "four points always lie on a sphere or a plane")?;
+        let sphere = Sphere::new(vertices)
+            .ok_or_else(|| ConstraintError::Invalid { kind: KIND, problem: "needs at least 4 vertices".into() })?;
+        Ok(vec![Box::new(sphere)])
+    }
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    #![allow(clippy::unwrap_used, clippy::expect_used)]
+    use super::*;
+    use crate::constraints::kit::fit::tests::check_derivatives;
+    use crate::constraints::kit::test_util::{Rng, dist2};
+    use crate::constraints::{Selection, build_constraints};
+    use crate::geometry::{RestGeometry, WorkingFrame};
+
+    fn project(c: &dyn Constraint, q: &[DVec3]) -> Vec<DVec3> {
+        let mut out = vec![DVec3::ZERO; c.num_rows()];
+        c.project(q, &mut out);
+        out
+    }
+
+    /// Σ_i (‖x_i − c‖ − r)²: the squared distance of the points from the sphere (c, r).
+    fn sphere_cost(points: &[DVec3], c: DVec3, r: f64) -> f64 {
+        points.iter().map(|&x| ((x - c).length() - r).powi(2)).sum()
+    }
+
+    /// The smallest singular value of the lifted rows, by nalgebra (independent of the
+    /// Jacobi SVD the residual uses).
+    fn lifted_smallest(p: &[DVec3], columns: usize) -> f64 {
+        let mean = p.iter().copied().sum::<DVec3>() / p.len() as f64;
+        let l = p.iter().map(|&x| (x - mean).length()).fold(0.0, f64::max);
+        let m = nalgebra::DMatrix::from_fn(p.len(), 5, |i, j| {
+            let y = p[i] - mean;
+            [y.length_squared() / l, y.x, y.y, y.z, l][j]
+        });
+        let mut s: Vec<f64> = m.singular_values().iter().copied().collect();
+        s.sort_by(|a, b| b.total_cmp(a));
+        s.resize(5, 0.0);
+        s[columns - 1]
+    }
+
+    /// k points near a sphere of radius r about a random centre, covering a cap of the given
+    /// angular extent, with noise.
+    fn near_sphere(rng: &mut Rng, k: usize, r: f64, cap: f64, noise: f64) -> Vec<DVec3> {
+        let c = rng.vec3();
+        (0..k)
+            .map(|_| {
+                let (theta, phi) = (cap * (0.5 + 0.5 * rng.uniform()), std::f64::consts::PI * rng.uniform());
+                let u = DVec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos());
+                c + r * u + noise * rng.vec3()
+            })
+            .collect()
+    }
+
+    #[test]
+    fn derivatives_are_those_of_the_steps() {
+        let mut rng = Rng(19);
+        for trial in 0..20 {
+            let points: Vec<DVec3> = (0..7).map(|_| rng.vec3()).collect();
+            let kappa = [0.0, 0.8, -1.5, 1e-6][trial % 4];
+            check_derivatives(SphereFit { s: 0.3 * rng.vec3(), n: rng.vec3().normalize(), kappa }, &points);
+        }
+    }
+
+    #[test]
+    fn projection_is_cospherical_centred_and_no_sampled_sphere_is_closer() {
+        let mut rng = Rng(29);
+        for trial in 0..60 {
+            let k = 4 + trial % 20;
+            let c = Sphere::new((0..k as u32).collect()).unwrap();
+            let noise = [0.0, 0.01, 0.1, 0.5][trial % 4];
+            let cap = [3.0, 1.0, 0.4][trial % 3];
+            let r = 0.3 + rng.uniform().abs();
+            let q = near_sphere(&mut rng, k, r, cap, noise);
+            let cq = c.apply(&q);
+            let p = project(&c, &q);
+            let size = 1.0 + cq.iter().map(|x| x.length()).fold(0.0, f64::max);
+            assert!(lifted_smallest(&p, 5) < 1e-12 * size, "trial {trial}: σ₅ = {:e}", lifted_smallest(&p, 5));
+            assert!(sets::centroid_offset(&p) < 1e-13 * size);
+            assert!(c.set_residual(&p) < 1e-12 * size);
+            let d = dist2(&cq, &p);
+            // The fit's sphere, and spheres near it and far from it: none is nearer.
+            let (mean, scale) = rms_radius(&cq);
+            let points: Vec<DVec3> = cq.iter().map(|&x| (x - mean) / scale).collect();
+            let (fit, cost) = fit_sphere(&points);
+            assert!((cost * scale * scale - d).abs() <= 1e-10 * (1.0 + d), "{} vs {d}", cost * scale * scale);
+            if fit.kappa.abs() > 1e-6 {
+                let (centre, r) = (mean + scale * (fit.s - fit.n / fit.kappa), scale / fit.kappa.abs());
+                for j in 0..300 {
+                    let eps = [1e-4, 1e-2, 0.2][j % 3] * r;
+                    let cost = sphere_cost(&cq, centre + eps * rng.vec3(), r + eps * rng.uniform());
+                    assert!(d <= cost + 1e-12, "trial {trial}: a sampled sphere is nearer ({cost:e} < {d:e})");
+                }
+            }
+            // Spheres through 4 random points of the input, and the best plane (in the closure).
+            let plane = crate::constraints::Plane::new((0..k as u32).collect()).unwrap();
+            assert!(d <= plane.energy(&q) + 1e-12);
+            for _ in 0..50 {
+                let pick: Vec<DVec3> = (0..4).map(|_| cq[(rng.uniform().abs() * k as f64) as usize % k]).collect();
+                let a = linear_least_squares(pick.iter().map(|&x| ([x.x, x.y, x.z, 1.0], -x.length_squared())));
+                if let Some(a) = a {
+                    let centre = -0.5 * DVec3::new(a[0], a[1], a[2]);
+                    let r2 = centre.length_squared() - a[3];
+                    if r2 > 0.0 {
+                        assert!(d <= sphere_cost(&cq, centre, r2.sqrt()) + 1e-12);
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_fit_is_the_lowest_of_many_random_starts() {
+        let mut rng = Rng(31);
+        for trial in 0..30 {
+            let k = 5 + trial % 10;
+            let q = near_sphere(&mut rng, k, 0.5, [2.5, 0.8][trial % 2], 0.3);
+            let (mean, scale) = rms_radius(&q);
+            let points: Vec<DVec3> = q.iter().map(|&x| (x - mean) / scale).collect();
+            let (fit, cost) = fit_sphere(&points);
+            // Converged: refining the fit again moves no projected point.
+            let (again, _) = best_fit([fit], &points).unwrap();
+            let nearest = |f: &SphereFit, x: DVec3| {
+                let dist = distance(x - f.s, f.n, f.kappa);
+                x - dist.d * dist.direction(f.n)
+            };
+            let moved = points.iter().map(|&x| (nearest(&fit, x) - nearest(&again, x)).length()).fold(0.0, f64::max);
+            assert!(moved < 1e-12, "trial {trial}: a second fit moves a point by {moved:e}");
+            for _ in 0..40 {
+                let start = SphereFit { s: rng.vec3(), n: rng.vec3().normalize(), kappa: 2.0 * rng.uniform() };
+                let (_, other) = best_fit([start], &points).unwrap();
+                assert!(cost <= other + 1e-12, "trial {trial}: a random start found {other:e} < {cost:e}");
+            }
+        }
+    }
+
+    #[test]
+    fn points_on_a_sphere_stay_and_degenerate_sets_stay_finite() {
+        let mut rng = Rng(37);
+        let c = Sphere::new((0..8).collect()).unwrap();
+        let on = near_sphere(&mut rng, 8, 0.7, 2.0, 0.0);
+        let cq = c.apply(&on);
+        assert!(dist2(&project(&c, &on), &cq) < 1e-24, "a cospherical set is its own projection");
+        // Coplanar, not concyclic: on the closure (a plane), so it stays and is finite.
+        let flat: Vec<DVec3> = (0..8).map(|_| DVec3::new(rng.uniform(), rng.uniform(), 0.0)).collect();
+        let p = project(&c, &flat);
+        assert!(p.iter().all(|x| x.is_finite()));
+        assert!(c.set_residual(&p) < 1e-12);
+        assert!(dist2(&p, &c.apply(&flat)) < 1e-20, "{:e}", dist2(&p, &c.apply(&flat)));
+        // Collinear and coincident points.
+        let line: Vec<DVec3> = (0..8).map(|i| DVec3::new(i as f64, 2.0 * i as f64, 0.5)).collect();
+        assert!(project(&c, &line).iter().all(|x| x.is_finite()));
+        assert!(project(&c, &[DVec3::ONE; 8]).iter().all(|x| *x == DVec3::ZERO));
+    }
+
+    #[test]
+    fn rigid_motions_move_the_projection_along() {
+        let mut rng = Rng(41);
+        let c = Sphere::new((0..12).collect()).unwrap();
+        for trial in 0..20 {
+            let q = near_sphere(&mut rng, 12, 0.6, [2.0, 0.5][trial % 2], 0.2);
+            let turn = DQuat::from_xyzw(rng.uniform(), rng.uniform(), rng.uniform(), rng.uniform()).normalize();
+            let shift = rng.vec3();
+            let moved: Vec<DVec3> = q.iter().map(|&x| turn * x + shift).collect();
+            let turned: Vec<DVec3> = project(&c, &q).iter().map(|&x| turn * x).collect();
+            let off = dist2(&turned, &project(&c, &moved));
+            assert!(off < 1e-20, "trial {trial}: {off:e}");
+        }
+    }
+
+    #[test]
+    fn build_refuses_fewer_than_four_vertices() {
+        let p = vec![DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z, DVec3::ONE];
+        let rest = RestGeometry::new(p, vec![[0, 1, 2], [0, 2, 3], [1, 4, 2]], vec![]);
+        let frame = WorkingFrame::IDENTITY;
+        let all = BuildContext { rest: &rest, selection: &Selection::All, frame: &frame };
+        let built = build_constraints(KIND, &all, Params::default()).unwrap();
+        assert_eq!(built.len(), 1);
+        assert_eq!(built[0].num_rows(), 5);
+        let three = Selection::from_indices(5, &[0, 1, 4]);
+        let err =
+            build_constraints(KIND, &BuildContext { rest: &rest, selection: &three, frame: &frame }, Params::default())
+                .unwrap_err();
+        let text = err.to_string();
+        assert!(
+            matches!(err, ConstraintError::Invalid { .. }) && text.contains("has 3") && !text.contains('\n'),
+            "{text}"
+        );
+    }
+}
