@@ -145,35 +145,68 @@ pub struct BuildContext<'a> {
     pub frame: &'a WorkingFrame,
 }
 
-/// A kind of constraint as users see it: a name, a default multiplier, and how to build its
-/// constraints on a selection.
-pub trait ConstraintType: Sync {
+/// A constraint type's static description, one `const` in its file: what scenes, menus, the
+/// catalogue and the shared tests read.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TypeInfo {
     /// Name used in scene files and the editor (`"edge_spring"`).
-    fn name(&self) -> &'static str;
+    pub name: &'static str,
     /// One line for menus and `--help`.
-    fn summary(&self) -> &'static str;
+    pub summary: &'static str,
     /// The options [`ConstraintType::build`] takes (besides the common ones: selection,
     /// weight, name, hard, targets), with their ranges and defaults.
-    fn options(&self) -> &'static [OptionSpec];
+    pub options: &'static [OptionSpec],
     /// The elements it builds constraints on.
-    fn element(&self) -> Element;
+    pub element: Element,
+    /// The editor's default group multiplier g (math reference, "Notes").
+    pub default_multiplier: f64,
     /// Whether its constraints have targets a scene or the editor moves
     /// ([`Constraint::set_targets`]): the group takes `translate`, `rotate`, `targets` and
-    /// `spin`, and the editor treats it as a handle. Default `false`.
-    fn has_targets(&self) -> bool {
-        false
-    }
+    /// `spin`, and the editor treats it as a handle.
+    pub has_targets: bool,
     /// Whether moving the input rigidly (and turning its vector options with it) moves the
     /// result the same way; `false` only for types tied to the world frame (a floor at y = h).
-    /// The shared tests check it. Default `true`.
-    fn is_rigidly_invariant(&self) -> bool {
-        true
-    }
-    /// The editor's default group multiplier g (math reference, "Notes").
-    fn default_multiplier(&self) -> f64;
+    /// The shared tests check it.
+    pub rigidly_invariant: bool,
+}
+
+/// A kind of constraint as users see it: its description ([`TypeInfo`]) and how to build its
+/// constraints on a selection. The other methods read [`ConstraintType::info`].
+pub trait ConstraintType: Sync {
+    /// The type's static description.
+    fn info(&self) -> &'static TypeInfo;
     /// Builds this type's constraints on `ctx.selection`, taking its options from `params`.
     ///
     /// # Errors
     /// [`ConstraintError`] for a bad option or a selection with nothing to constrain.
     fn build(&self, ctx: &BuildContext, params: &mut Params) -> Result<Vec<Box<dyn Constraint>>, ConstraintError>;
+
+    /// [`TypeInfo::name`].
+    fn name(&self) -> &'static str {
+        self.info().name
+    }
+    /// [`TypeInfo::summary`].
+    fn summary(&self) -> &'static str {
+        self.info().summary
+    }
+    /// [`TypeInfo::options`].
+    fn options(&self) -> &'static [OptionSpec] {
+        self.info().options
+    }
+    /// [`TypeInfo::element`].
+    fn element(&self) -> Element {
+        self.info().element
+    }
+    /// [`TypeInfo::has_targets`].
+    fn has_targets(&self) -> bool {
+        self.info().has_targets
+    }
+    /// [`TypeInfo::rigidly_invariant`].
+    fn is_rigidly_invariant(&self) -> bool {
+        self.info().rigidly_invariant
+    }
+    /// [`TypeInfo::default_multiplier`].
+    fn default_multiplier(&self) -> f64 {
+        self.info().default_multiplier
+    }
 }

@@ -24,7 +24,7 @@ mod types;
 pub use attachment::{
     DEGENERATE_FACES_GROUP, DegenerateAttachments, EdgeAttachment, attach_degenerate_vertices, degenerate_attachments,
 };
-pub use contract::{BuildContext, Constraint, ConstraintType, Load, RowEntry, RowSink};
+pub use contract::{BuildContext, Constraint, ConstraintType, Load, RowEntry, RowSink, TypeInfo};
 pub use error::ConstraintError;
 pub use group::{GroupDescription, build_group, held_vertices};
 pub use options::{OptionKind, OptionSpec, option_markdown};

@@ -32,7 +32,7 @@
 //! both given with min > max is refused. Corners with a rest edge of length ≤ 1e-12 (or a
 //! repeated vertex) get no constraint.
 
-use crate::constraints::contract::{BuildContext, Constraint, ConstraintType, RowSink};
+use crate::constraints::contract::{TypeInfo, BuildContext, Constraint, ConstraintType, RowSink};
 use crate::constraints::error::ConstraintError;
 use crate::constraints::kit::build::non_empty;
 use crate::constraints::kit::sets::interval_distance;
@@ -175,21 +175,20 @@ impl Constraint for Angle {
 #[derive(Debug, Clone, Copy)]
 pub struct AngleType;
 
+/// What menus, scenes, the catalogue and the shared tests read of this type.
+const INFO: TypeInfo = TypeInfo {
+    name: KIND,
+    summary: "angle: the angle at each corner of a face stays within [min, max] radians (default its rest angle)",
+    options: &[MIN_OPTION, MAX_OPTION],
+    element: Element::Face { min: 3, max: usize::MAX },
+    default_multiplier: 10.0,
+    has_targets: false,
+    rigidly_invariant: true,
+};
+
 impl ConstraintType for AngleType {
-    fn name(&self) -> &'static str {
-        KIND
-    }
-    fn summary(&self) -> &'static str {
-        "angle: the angle at each corner of a face stays within [min, max] radians (default its rest angle)"
-    }
-    fn options(&self) -> &'static [OptionSpec] {
-        &[MIN_OPTION, MAX_OPTION]
-    }
-    fn element(&self) -> Element {
-        Element::Face { min: 3, max: usize::MAX }
-    }
-    fn default_multiplier(&self) -> f64 {
-        10.0
+    fn info(&self) -> &'static TypeInfo {
+        &INFO
     }
     fn build(&self, ctx: &BuildContext, params: &mut Params) -> Result<Vec<Box<dyn Constraint>>, ConstraintError> {
         let min = params.number(KIND, &MIN_OPTION)?;

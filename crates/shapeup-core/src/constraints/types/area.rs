@@ -30,7 +30,7 @@
 //! frame of the current triangle built from its first edge; the projection here is computed in
 //! the same kind of frame (the columns of T span it), exact, and rigid-motion equivariant.
 
-use crate::constraints::contract::{BuildContext, Constraint, ConstraintType, RowSink};
+use crate::constraints::contract::{TypeInfo, BuildContext, Constraint, ConstraintType, RowSink};
 use crate::constraints::error::ConstraintError;
 use crate::constraints::kit::build::non_empty;
 use crate::constraints::kit::gradient::TriangleGradient;
@@ -163,21 +163,20 @@ impl Constraint for Area {
 #[derive(Debug, Clone, Copy)]
 pub struct AreaType;
 
+/// What menus, scenes, the catalogue and the shared tests read of this type.
+const INFO: TypeInfo = TypeInfo {
+    name: KIND,
+    summary: "area: each triangle keeps its area within [min, max] times its rest area",
+    options: &[MIN_OPTION, MAX_OPTION],
+    element: Element::Triangle,
+    default_multiplier: 10.0,
+    has_targets: false,
+    rigidly_invariant: true,
+};
+
 impl ConstraintType for AreaType {
-    fn name(&self) -> &'static str {
-        KIND
-    }
-    fn summary(&self) -> &'static str {
-        "area: each triangle keeps its area within [min, max] times its rest area"
-    }
-    fn options(&self) -> &'static [OptionSpec] {
-        &[MIN_OPTION, MAX_OPTION]
-    }
-    fn element(&self) -> Element {
-        Element::Triangle
-    }
-    fn default_multiplier(&self) -> f64 {
-        10.0
+    fn info(&self) -> &'static TypeInfo {
+        &INFO
     }
     fn build(&self, ctx: &BuildContext, params: &mut Params) -> Result<Vec<Box<dyn Constraint>>, ConstraintError> {
         let (min, max) = take_range(KIND, params, &MIN_OPTION, &MAX_OPTION)?;

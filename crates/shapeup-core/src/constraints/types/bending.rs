@@ -9,7 +9,7 @@
 //! sign(n̄·H) ≠ sign(n̄⁰·H⁰) and ‖H‖ > 1e-5 ‖H⁰‖. The thresholds are relative, so that the
 //! constraint means the same at every scale (H is an inverse length).
 
-use crate::constraints::contract::{BuildContext, Constraint, ConstraintType, RowSink};
+use crate::constraints::contract::{TypeInfo, BuildContext, Constraint, ConstraintType, RowSink};
 use crate::constraints::error::ConstraintError;
 use crate::constraints::kit::build::per_selected_vertex;
 use crate::constraints::options::OptionSpec;
@@ -142,21 +142,20 @@ const PREVENT_FLIPS: OptionSpec = OptionSpec {
 #[derive(Debug, Clone, Copy)]
 pub struct BendingType;
 
+/// What menus, scenes, the catalogue and the shared tests read of this type.
+const INFO: TypeInfo = TypeInfo {
+    name: "bending",
+    summary: "bending: each interior vertex keeps its mean curvature magnitude",
+    options: &[PREVENT_FLIPS],
+    element: Element::Vertex,
+    default_multiplier: 10.0,
+    has_targets: false,
+    rigidly_invariant: true,
+};
+
 impl ConstraintType for BendingType {
-    fn name(&self) -> &'static str {
-        "bending"
-    }
-    fn summary(&self) -> &'static str {
-        "bending: each interior vertex keeps its mean curvature magnitude"
-    }
-    fn options(&self) -> &'static [OptionSpec] {
-        &[PREVENT_FLIPS]
-    }
-    fn element(&self) -> Element {
-        Element::Vertex
-    }
-    fn default_multiplier(&self) -> f64 {
-        10.0
+    fn info(&self) -> &'static TypeInfo {
+        &INFO
     }
     fn build(&self, ctx: &BuildContext, params: &mut Params) -> Result<Vec<Box<dyn Constraint>>, ConstraintError> {
         let prevent_flips = params.flag("bending", &PREVENT_FLIPS)?;

@@ -57,14 +57,13 @@
 //! the starts, the parametrization and the schedule above are ours; three points always lie on
 //! a circle or line, so with k = 3 the term is zero.
 
-use crate::constraints::contract::{BuildContext, Constraint, ConstraintType, RowSink};
+use crate::constraints::contract::{TypeInfo, BuildContext, Constraint, ConstraintType, RowSink};
 use crate::constraints::error::ConstraintError;
 use crate::constraints::kit::sets;
 use crate::constraints::kit::build::non_empty;
 use crate::constraints::kit::faces::{WHOLE_SELECTION, selected_faces};
 use crate::constraints::kit::fit::{Model, best_fit, distance, distance_in, from_algebraic, rms_radius};
 use crate::constraints::kit::vertex_set::{centred, centred_rows, centred_view, recentre, to_row_frame, vertex_set};
-use crate::constraints::options::OptionSpec;
 use crate::constraints::params::Params;
 use crate::constraints::selection::Element;
 use crate::linalg::jet::{Scalar, V3};
@@ -248,21 +247,20 @@ impl Constraint for Circle {
 #[derive(Debug, Clone, Copy)]
 pub struct CircleType;
 
+/// What menus, scenes, the catalogue and the shared tests read of this type.
+const INFO: TypeInfo = TypeInfo {
+    name: KIND,
+    summary: "circle: the corners of each polygon face (or the whole selection) stay on one circle",
+    options: &[WHOLE_SELECTION],
+    element: Element::Face { min: 4, max: usize::MAX },
+    default_multiplier: 10.0,
+    has_targets: false,
+    rigidly_invariant: true,
+};
+
 impl ConstraintType for CircleType {
-    fn name(&self) -> &'static str {
-        KIND
-    }
-    fn summary(&self) -> &'static str {
-        "circle: the corners of each polygon face (or the whole selection) stay on one circle"
-    }
-    fn options(&self) -> &'static [OptionSpec] {
-        &[WHOLE_SELECTION]
-    }
-    fn element(&self) -> Element {
-        Element::Face { min: 4, max: usize::MAX }
-    }
-    fn default_multiplier(&self) -> f64 {
-        10.0
+    fn info(&self) -> &'static TypeInfo {
+        &INFO
     }
     fn build(&self, ctx: &BuildContext, params: &mut Params) -> Result<Vec<Box<dyn Constraint>>, ConstraintError> {
         let sets: Vec<Vec<u32>> = if params.flag(KIND, &WHOLE_SELECTION)? {

@@ -4,10 +4,9 @@
 //! x⁰_j − x⁰_i when the current edge is at most 1e-12 L⁰ long: it has no reliable direction,
 //! and every point of the sphere is nearly as near), ω = L⁰ the rest length.
 
-use crate::constraints::contract::{BuildContext, Constraint, ConstraintType, RowSink};
+use crate::constraints::contract::{TypeInfo, BuildContext, Constraint, ConstraintType, RowSink};
 use crate::constraints::error::ConstraintError;
 use crate::constraints::kit::build::non_empty;
-use crate::constraints::options::OptionSpec;
 use crate::constraints::params::Params;
 use crate::constraints::selection::Element;
 use glam::DVec3;
@@ -68,21 +67,20 @@ impl Constraint for EdgeSpring {
 #[derive(Debug, Clone, Copy)]
 pub struct EdgeSpringType;
 
+/// What menus, scenes, the catalogue and the shared tests read of this type.
+const INFO: TypeInfo = TypeInfo {
+    name: "edge_spring",
+    summary: "edge springs: every edge keeps its rest length",
+    options: &[],
+    element: Element::Edge,
+    default_multiplier: 10.0,
+    has_targets: false,
+    rigidly_invariant: true,
+};
+
 impl ConstraintType for EdgeSpringType {
-    fn name(&self) -> &'static str {
-        "edge_spring"
-    }
-    fn summary(&self) -> &'static str {
-        "edge springs: every edge keeps its rest length"
-    }
-    fn options(&self) -> &'static [OptionSpec] {
-        &[]
-    }
-    fn element(&self) -> Element {
-        Element::Edge
-    }
-    fn default_multiplier(&self) -> f64 {
-        10.0
+    fn info(&self) -> &'static TypeInfo {
+        &INFO
     }
     fn build(&self, ctx: &BuildContext, _params: &mut Params) -> Result<Vec<Box<dyn Constraint>>, ConstraintError> {
         let rest = &ctx.rest.positions;

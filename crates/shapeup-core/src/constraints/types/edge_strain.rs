@@ -13,7 +13,7 @@
 //! exactly an edge spring, so the type's point is the band. Elements are those of edge springs:
 //! every mesh edge, or on a tet mesh every edge of its tetrahedra.
 
-use crate::constraints::contract::{BuildContext, Constraint, ConstraintType, RowSink};
+use crate::constraints::contract::{TypeInfo, BuildContext, Constraint, ConstraintType, RowSink};
 use crate::constraints::error::ConstraintError;
 use crate::constraints::kit::build::non_empty;
 use crate::constraints::kit::sets::interval_distance;
@@ -108,21 +108,20 @@ impl Constraint for EdgeStrain {
 #[derive(Debug, Clone, Copy)]
 pub struct EdgeStrainType;
 
+/// What menus, scenes, the catalogue and the shared tests read of this type.
+const INFO: TypeInfo = TypeInfo {
+    name: KIND,
+    summary: "edge strain: every edge keeps its length within ±strain_freedom of its rest length",
+    options: &[STRAIN_FREEDOM_OPTION],
+    element: Element::Edge,
+    default_multiplier: 10.0,
+    has_targets: false,
+    rigidly_invariant: true,
+};
+
 impl ConstraintType for EdgeStrainType {
-    fn name(&self) -> &'static str {
-        KIND
-    }
-    fn summary(&self) -> &'static str {
-        "edge strain: every edge keeps its length within ±strain_freedom of its rest length"
-    }
-    fn options(&self) -> &'static [OptionSpec] {
-        &[STRAIN_FREEDOM_OPTION]
-    }
-    fn element(&self) -> Element {
-        Element::Edge
-    }
-    fn default_multiplier(&self) -> f64 {
-        10.0
+    fn info(&self) -> &'static TypeInfo {
+        &INFO
     }
     fn build(&self, ctx: &BuildContext, params: &mut Params) -> Result<Vec<Box<dyn Constraint>>, ConstraintError> {
         let f = params.number(KIND, &STRAIN_FREEDOM_OPTION)?.unwrap_or(0.05);

@@ -4,7 +4,7 @@
 //! κ ≥ 0, default 0: the closest point of the half-space y ≥ h). ω = 10 A_i on a surface, or
 //! m_i / ρ = Σ_{T ∋ i} |V_T| / 4 on a tetrahedral mesh.
 
-use crate::constraints::contract::{BuildContext, Constraint, ConstraintType, RowSink};
+use crate::constraints::contract::{TypeInfo, BuildContext, Constraint, ConstraintType, RowSink};
 use crate::constraints::error::ConstraintError;
 use crate::constraints::kit::build::per_selected_vertex;
 use crate::constraints::options::OptionSpec;
@@ -80,29 +80,25 @@ const PUSH: OptionSpec = OptionSpec {
 #[derive(Debug, Clone, Copy)]
 pub struct FloorType;
 
+/// What menus, scenes, the catalogue and the shared tests read of this type.
+const INFO: TypeInfo = TypeInfo {
+    name: "floor",
+    summary: "floor: vertices stay above the plane y = height",
+    options: &[HEIGHT, PUSH],
+    element: Element::Vertex,
+    // A floor must win against the shape and, in dynamic mode, against inertia and the
+    // weight of the body resting on the few vertices in contact (m/h² ≈ 3600 m at 60 steps/s
+    // vs k·g·ω = 100·g·m). Measured: a falling box sinks < 1 % of its height at 1e3; Spot on
+    // its hooves sinks 4.5 cm at 1e4 and 1.7 cm at 1e5 (of 1.7 m). Stiffer floors slow the
+    // convergence of everything else, as the floor term holds every vertex it covers.
+    default_multiplier: 1e4,
+    has_targets: false,
+    rigidly_invariant: false,
+};
+
 impl ConstraintType for FloorType {
-    fn name(&self) -> &'static str {
-        "floor"
-    }
-    fn summary(&self) -> &'static str {
-        "floor: vertices stay above the plane y = height"
-    }
-    fn options(&self) -> &'static [OptionSpec] {
-        &[HEIGHT, PUSH]
-    }
-    fn is_rigidly_invariant(&self) -> bool {
-        false
-    }
-    fn element(&self) -> Element {
-        Element::Vertex
-    }
-    fn default_multiplier(&self) -> f64 {
-        // A floor must win against the shape and, in dynamic mode, against inertia and the
-        // weight of the body resting on the few vertices in contact (m/h² ≈ 3600 m at 60 steps/s
-        // vs k·g·ω = 100·g·m). Measured: a falling box sinks < 1 % of its height at 1e3; Spot on
-        // its hooves sinks 4.5 cm at 1e4 and 1.7 cm at 1e5 (of 1.7 m). Stiffer floors slow the
-        // convergence of everything else, as the floor term holds every vertex it covers.
-        1e4
+    fn info(&self) -> &'static TypeInfo {
+        &INFO
     }
     fn build(&self, ctx: &BuildContext, params: &mut Params) -> Result<Vec<Box<dyn Constraint>>, ConstraintError> {
         let rest = ctx.rest;

@@ -36,7 +36,7 @@
 //!   solver stands a load acts there as the physical force k g f; the dynamic mode's own gravity
 //!   and per-vertex forces are the physical ones.
 
-use crate::constraints::contract::{BuildContext, Constraint, ConstraintType};
+use crate::constraints::contract::{TypeInfo, BuildContext, Constraint, ConstraintType};
 use crate::constraints::error::ConstraintError;
 use crate::constraints::kit::build::non_empty;
 use crate::constraints::options::{OptionKind, OptionSpec};
@@ -59,21 +59,20 @@ const FORCE: OptionSpec = OptionSpec {
 #[derive(Debug, Clone, Copy)]
 pub struct ForceType;
 
+/// What menus, scenes, the catalogue and the shared tests read of this type.
+const INFO: TypeInfo = TypeInfo {
+    name: KIND,
+    summary: "force: a constant force on each selected vertex (static loads, form finding)",
+    options: &[FORCE],
+    element: Element::Vertex,
+    default_multiplier: 1.0,
+    has_targets: false,
+    rigidly_invariant: true,
+};
+
 impl ConstraintType for ForceType {
-    fn name(&self) -> &'static str {
-        KIND
-    }
-    fn summary(&self) -> &'static str {
-        "force: a constant force on each selected vertex (static loads, form finding)"
-    }
-    fn options(&self) -> &'static [OptionSpec] {
-        &[FORCE]
-    }
-    fn element(&self) -> Element {
-        Element::Vertex
-    }
-    fn default_multiplier(&self) -> f64 {
-        1.0
+    fn info(&self) -> &'static TypeInfo {
+        &INFO
     }
     fn build(&self, ctx: &BuildContext, params: &mut Params) -> Result<Vec<Box<dyn Constraint>>, ConstraintError> {
         let force = ctx.frame.vector_to_working(params.vector(KIND, &FORCE)?);

@@ -31,7 +31,7 @@
 //! - ShapeOp's gravity is one vector for every vertex (times one scalar mass for all of them),
 //!   whatever its share of the surface; that is the `force` type here.
 
-use crate::constraints::contract::{BuildContext, Constraint, ConstraintType};
+use crate::constraints::contract::{TypeInfo, BuildContext, Constraint, ConstraintType};
 use crate::constraints::error::ConstraintError;
 use crate::constraints::options::{OptionKind, OptionSpec};
 use crate::constraints::params::Params;
@@ -84,21 +84,20 @@ pub(crate) fn lumped_measures(rest: &RestGeometry) -> Vec<f64> {
 #[derive(Debug, Clone, Copy)]
 pub struct GravityType;
 
+/// What menus, scenes, the catalogue and the shared tests read of this type.
+const INFO: TypeInfo = TypeInfo {
+    name: KIND,
+    summary: "gravity: the self-weight of the selected vertices (lumped area or volume), static form finding",
+    options: &[ACCELERATION, DENSITY],
+    element: Element::Vertex,
+    default_multiplier: 1.0,
+    has_targets: false,
+    rigidly_invariant: true,
+};
+
 impl ConstraintType for GravityType {
-    fn name(&self) -> &'static str {
-        KIND
-    }
-    fn summary(&self) -> &'static str {
-        "gravity: the self-weight of the selected vertices (lumped area or volume), static form finding"
-    }
-    fn options(&self) -> &'static [OptionSpec] {
-        &[ACCELERATION, DENSITY]
-    }
-    fn element(&self) -> Element {
-        Element::Vertex
-    }
-    fn default_multiplier(&self) -> f64 {
-        1.0
+    fn info(&self) -> &'static TypeInfo {
+        &INFO
     }
     fn build(&self, ctx: &BuildContext, params: &mut Params) -> Result<Vec<Box<dyn Constraint>>, ConstraintError> {
         let a = ctx.frame.vector_to_working(params.vector(KIND, &ACCELERATION)?);

@@ -41,7 +41,7 @@
 //!   set, so the local step always minimizes its term.
 //! - `min` > `max` is refused (an empty band).
 
-use crate::constraints::contract::{BuildContext, Constraint, ConstraintType, RowSink};
+use crate::constraints::contract::{TypeInfo, BuildContext, Constraint, ConstraintType, RowSink};
 use crate::constraints::error::ConstraintError;
 use crate::constraints::kit::sets;
 use crate::constraints::kit::build::non_empty;
@@ -217,21 +217,20 @@ fn hinges(rest: &RestGeometry, selected: impl Fn(u32) -> bool) -> Vec<[u32; 4]> 
 #[derive(Debug, Clone, Copy)]
 pub struct HingeBendingType;
 
+/// What menus, scenes, the catalogue and the shared tests read of this type.
+const INFO: TypeInfo = TypeInfo {
+    name: KIND,
+    summary: "hinge bending: each interior edge keeps its rest bending (discrete quadratic bending, as ShapeOp)",
+    options: &[MIN, MAX],
+    element: Element::Edge,
+    default_multiplier: 1.0,
+    has_targets: false,
+    rigidly_invariant: true,
+};
+
 impl ConstraintType for HingeBendingType {
-    fn name(&self) -> &'static str {
-        KIND
-    }
-    fn summary(&self) -> &'static str {
-        "hinge bending: each interior edge keeps its rest bending (discrete quadratic bending, as ShapeOp)"
-    }
-    fn options(&self) -> &'static [OptionSpec] {
-        &[MIN, MAX]
-    }
-    fn element(&self) -> Element {
-        Element::Edge
-    }
-    fn default_multiplier(&self) -> f64 {
-        1.0
+    fn info(&self) -> &'static TypeInfo {
+        &INFO
     }
     fn build(&self, ctx: &BuildContext, params: &mut Params) -> Result<Vec<Box<dyn Constraint>>, ConstraintError> {
         let min = params.number(KIND, &MIN)?.unwrap_or(1.0);

@@ -5,10 +5,9 @@
 //! S = Σ_j e_j e⁰_jᵀ = UΣVᵀ, R = U diag(1, 1, det(UVᵀ)) Vᵀ ([`nearest_rotation3`]`(S)`).
 //! Projection p_j = R e⁰_j. ω = A_i, the rest vertex area.
 
-use crate::constraints::contract::{BuildContext, Constraint, ConstraintType, RowSink};
+use crate::constraints::contract::{TypeInfo, BuildContext, Constraint, ConstraintType, RowSink};
 use crate::constraints::error::ConstraintError;
 use crate::constraints::kit::build::non_empty;
-use crate::constraints::options::OptionSpec;
 use crate::constraints::params::Params;
 use crate::constraints::selection::Element;
 use crate::linalg::nearest_rotation3;
@@ -92,21 +91,20 @@ impl Constraint for IsoOneRing {
 #[derive(Debug, Clone, Copy)]
 pub struct IsoOneRingType;
 
+/// What menus, scenes, the catalogue and the shared tests read of this type.
+const INFO: TypeInfo = TypeInfo {
+    name: KIND,
+    summary: "isometric one-ring: the edges around each vertex move as rigidly as possible",
+    options: &[],
+    element: Element::Vertex,
+    default_multiplier: 100.0,
+    has_targets: false,
+    rigidly_invariant: true,
+};
+
 impl ConstraintType for IsoOneRingType {
-    fn name(&self) -> &'static str {
-        KIND
-    }
-    fn summary(&self) -> &'static str {
-        "isometric one-ring: the edges around each vertex move as rigidly as possible"
-    }
-    fn options(&self) -> &'static [OptionSpec] {
-        &[]
-    }
-    fn element(&self) -> Element {
-        Element::Vertex
-    }
-    fn default_multiplier(&self) -> f64 {
-        100.0
+    fn info(&self) -> &'static TypeInfo {
+        &INFO
     }
     fn build(&self, ctx: &BuildContext, _params: &mut Params) -> Result<Vec<Box<dyn Constraint>>, ConstraintError> {
         let rest = ctx.rest;

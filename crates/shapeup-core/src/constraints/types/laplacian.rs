@@ -22,10 +22,9 @@
 //! - N(i) is the one-ring of the triangles (`topology.one_rings`); for a tetrahedral mesh that is
 //!   its boundary surface, so interior tet vertices get no constraint.
 
-use crate::constraints::contract::{BuildContext, Constraint, ConstraintType, RowSink};
+use crate::constraints::contract::{TypeInfo, BuildContext, Constraint, ConstraintType, RowSink};
 use crate::constraints::error::ConstraintError;
 use crate::constraints::kit::build::per_selected_vertex;
-use crate::constraints::options::OptionSpec;
 use crate::constraints::params::Params;
 use crate::constraints::selection::Element;
 use crate::geometry::RestGeometry;
@@ -78,21 +77,20 @@ impl Constraint for Laplacian {
 #[derive(Debug, Clone, Copy)]
 pub struct LaplacianType;
 
+/// What menus, scenes, the catalogue and the shared tests read of this type.
+const INFO: TypeInfo = TypeInfo {
+    name: KIND,
+    summary: "uniform Laplacian: fairs the selected vertices (each towards its neighbours' centroid)",
+    options: &[],
+    element: Element::Vertex,
+    default_multiplier: 1.0,
+    has_targets: false,
+    rigidly_invariant: true,
+};
+
 impl ConstraintType for LaplacianType {
-    fn name(&self) -> &'static str {
-        KIND
-    }
-    fn summary(&self) -> &'static str {
-        "uniform Laplacian: fairs the selected vertices (each towards its neighbours' centroid)"
-    }
-    fn options(&self) -> &'static [OptionSpec] {
-        &[]
-    }
-    fn element(&self) -> Element {
-        Element::Vertex
-    }
-    fn default_multiplier(&self) -> f64 {
-        1.0
+    fn info(&self) -> &'static TypeInfo {
+        &INFO
     }
     fn build(&self, ctx: &BuildContext, _params: &mut Params) -> Result<Vec<Box<dyn Constraint>>, ConstraintError> {
         let rest = ctx.rest;

@@ -42,7 +42,7 @@
 //!   rigid (or similar, with `similarity`).
 //! - N(i) is the triangles' one-ring (`topology.one_rings`), as in `laplacian`.
 
-use crate::constraints::contract::{BuildContext, Constraint, ConstraintType, RowSink};
+use crate::constraints::contract::{TypeInfo, BuildContext, Constraint, ConstraintType, RowSink};
 use crate::constraints::error::ConstraintError;
 use crate::constraints::kit::build::per_selected_vertex;
 use crate::constraints::kit::laplacian_row::UniformLaplacianRow;
@@ -207,21 +207,20 @@ impl Constraint for LaplacianDisplacement {
 #[derive(Debug, Clone, Copy)]
 pub struct LaplacianDisplacementType;
 
+/// What menus, scenes, the catalogue and the shared tests read of this type.
+const INFO: TypeInfo = TypeInfo {
+    name: KIND,
+    summary: "Laplacian displacement: each vertex keeps its rest detail vector, turning with its one-ring",
+    options: &[SIMILARITY],
+    element: Element::Vertex,
+    default_multiplier: 1.0,
+    has_targets: false,
+    rigidly_invariant: true,
+};
+
 impl ConstraintType for LaplacianDisplacementType {
-    fn name(&self) -> &'static str {
-        KIND
-    }
-    fn summary(&self) -> &'static str {
-        "Laplacian displacement: each vertex keeps its rest detail vector, turning with its one-ring"
-    }
-    fn options(&self) -> &'static [OptionSpec] {
-        &[SIMILARITY]
-    }
-    fn element(&self) -> Element {
-        Element::Vertex
-    }
-    fn default_multiplier(&self) -> f64 {
-        1.0
+    fn info(&self) -> &'static TypeInfo {
+        &INFO
     }
     fn build(&self, ctx: &BuildContext, params: &mut Params) -> Result<Vec<Box<dyn Constraint>>, ConstraintError> {
         let similarity = params.flag(KIND, &SIMILARITY)?;

@@ -27,10 +27,9 @@
 //! This file also holds the mean-centred rows and the vertex-set checks that line, plane,
 //! circle and sphere share ([`centred_rows`], [`centred`], [`vertex_set`]).
 
-use crate::constraints::contract::{BuildContext, Constraint, ConstraintType, RowSink};
+use crate::constraints::contract::{TypeInfo, BuildContext, Constraint, ConstraintType, RowSink};
 use crate::constraints::error::ConstraintError;
 use crate::constraints::kit::sets;
-use crate::constraints::options::OptionSpec;
 use crate::constraints::params::Params;
 use crate::constraints::selection::Element;
 use glam::DVec3;
@@ -92,21 +91,20 @@ impl Constraint for Line {
 #[derive(Debug, Clone, Copy)]
 pub struct LineType;
 
+/// What menus, scenes, the catalogue and the shared tests read of this type.
+const INFO: TypeInfo = TypeInfo {
+    name: KIND,
+    summary: "line: the selected vertices stay collinear",
+    options: &[],
+    element: Element::VertexSet { min: 2 },
+    default_multiplier: 10.0,
+    has_targets: false,
+    rigidly_invariant: true,
+};
+
 impl ConstraintType for LineType {
-    fn name(&self) -> &'static str {
-        KIND
-    }
-    fn summary(&self) -> &'static str {
-        "line: the selected vertices stay collinear"
-    }
-    fn options(&self) -> &'static [OptionSpec] {
-        &[]
-    }
-    fn element(&self) -> Element {
-        Element::VertexSet { min: 2 }
-    }
-    fn default_multiplier(&self) -> f64 {
-        10.0
+    fn info(&self) -> &'static TypeInfo {
+        &INFO
     }
     fn build(&self, ctx: &BuildContext, _params: &mut Params) -> Result<Vec<Box<dyn Constraint>>, ConstraintError> {
         let vertices = vertex_set(ctx, KIND, 2, "a line needs two points")?;

@@ -24,12 +24,11 @@
 //! convergence; the 4 rows are kept for ShapeOp's form and the same rows as rectangle. Only
 //! quads as read are constrained; a triangulated mesh is refused.
 
-use crate::constraints::contract::{BuildContext, Constraint, ConstraintType, RowSink};
+use crate::constraints::contract::{TypeInfo, BuildContext, Constraint, ConstraintType, RowSink};
 use crate::constraints::error::ConstraintError;
 use crate::constraints::kit::build::non_empty;
 use crate::constraints::kit::faces::selected_quads;
 use crate::constraints::kit::vertex_set::{centre_into, push_centred_rows};
-use crate::constraints::options::OptionSpec;
 use crate::constraints::params::Params;
 use crate::constraints::selection::Element;
 use glam::DVec3;
@@ -89,21 +88,20 @@ impl Constraint for Parallelogram {
 #[derive(Debug, Clone, Copy)]
 pub struct ParallelogramType;
 
+/// What menus, scenes, the catalogue and the shared tests read of this type.
+const INFO: TypeInfo = TypeInfo {
+    name: KIND,
+    summary: "parallelogram: every selected quad face becomes a parallelogram",
+    options: &[],
+    element: Element::Face { min: 4, max: 4 },
+    default_multiplier: 10.0,
+    has_targets: false,
+    rigidly_invariant: true,
+};
+
 impl ConstraintType for ParallelogramType {
-    fn name(&self) -> &'static str {
-        KIND
-    }
-    fn summary(&self) -> &'static str {
-        "parallelogram: every selected quad face becomes a parallelogram"
-    }
-    fn options(&self) -> &'static [OptionSpec] {
-        &[]
-    }
-    fn element(&self) -> Element {
-        Element::Face { min: 4, max: 4 }
-    }
-    fn default_multiplier(&self) -> f64 {
-        10.0
+    fn info(&self) -> &'static TypeInfo {
+        &INFO
     }
     fn build(&self, ctx: &BuildContext, _params: &mut Params) -> Result<Vec<Box<dyn Constraint>>, ConstraintError> {
         let built = selected_quads(ctx, KIND)?

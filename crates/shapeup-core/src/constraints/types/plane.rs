@@ -25,12 +25,11 @@
 //! read (its quads and n-gons, not their triangles, which are always planar; faces that are
 //! triangles are skipped), or one over the whole selection.
 
-use crate::constraints::contract::{BuildContext, Constraint, ConstraintType, RowSink};
+use crate::constraints::contract::{TypeInfo, BuildContext, Constraint, ConstraintType, RowSink};
 use crate::constraints::error::ConstraintError;
 use crate::constraints::kit::sets;
 use crate::constraints::kit::build::non_empty;
 use crate::constraints::kit::vertex_set::{centred, centred_rows, centred_view, to_row_frame, vertex_set};
-use crate::constraints::options::OptionSpec;
 use crate::constraints::params::Params;
 use crate::constraints::selection::Element;
 use glam::DVec3;
@@ -100,21 +99,20 @@ impl Constraint for Plane {
 #[derive(Debug, Clone, Copy)]
 pub struct PlaneType;
 
+/// What menus, scenes, the catalogue and the shared tests read of this type.
+const INFO: TypeInfo = TypeInfo {
+    name: KIND,
+    summary: "plane: the corners of each polygon face (or the whole selection) stay coplanar",
+    options: &[WHOLE_SELECTION],
+    element: Element::Face { min: 4, max: usize::MAX },
+    default_multiplier: 10.0,
+    has_targets: false,
+    rigidly_invariant: true,
+};
+
 impl ConstraintType for PlaneType {
-    fn name(&self) -> &'static str {
-        KIND
-    }
-    fn summary(&self) -> &'static str {
-        "plane: the corners of each polygon face (or the whole selection) stay coplanar"
-    }
-    fn options(&self) -> &'static [OptionSpec] {
-        &[WHOLE_SELECTION]
-    }
-    fn element(&self) -> Element {
-        Element::Face { min: 4, max: usize::MAX }
-    }
-    fn default_multiplier(&self) -> f64 {
-        10.0
+    fn info(&self) -> &'static TypeInfo {
+        &INFO
     }
     fn build(&self, ctx: &BuildContext, params: &mut Params) -> Result<Vec<Box<dyn Constraint>>, ConstraintError> {
         let sets: Vec<Vec<u32>> = if params.flag(KIND, &WHOLE_SELECTION)? {

@@ -3,10 +3,9 @@
 //! Term: ω ‖Q_S − Y‖² with Q_S the |S| selected positions (one row each), p = Y the targets,
 //! ω = 1. Targets can change between solves without refactoring ([`Position::set_targets`]).
 
-use crate::constraints::contract::{BuildContext, Constraint, ConstraintType, RowSink};
+use crate::constraints::contract::{TypeInfo, BuildContext, Constraint, ConstraintType, RowSink};
 use crate::constraints::error::ConstraintError;
 use crate::constraints::kit::build::non_empty;
-use crate::constraints::options::OptionSpec;
 use crate::constraints::params::Params;
 use crate::constraints::selection::Element;
 use glam::DVec3;
@@ -77,24 +76,20 @@ impl Constraint for Position {
 #[derive(Debug, Clone, Copy)]
 pub struct PositionType;
 
+/// What menus, scenes, the catalogue and the shared tests read of this type.
+const INFO: TypeInfo = TypeInfo {
+    name: "position",
+    summary: "position (handle): selected vertices pulled to targets",
+    options: &[],
+    element: Element::VertexSet { min: 1 },
+    default_multiplier: 1.0,
+    has_targets: true,
+    rigidly_invariant: true,
+};
+
 impl ConstraintType for PositionType {
-    fn name(&self) -> &'static str {
-        "position"
-    }
-    fn summary(&self) -> &'static str {
-        "position (handle): selected vertices pulled to targets"
-    }
-    fn options(&self) -> &'static [OptionSpec] {
-        &[]
-    }
-    fn element(&self) -> Element {
-        Element::VertexSet { min: 1 }
-    }
-    fn default_multiplier(&self) -> f64 {
-        1.0
-    }
-    fn has_targets(&self) -> bool {
-        true
+    fn info(&self) -> &'static TypeInfo {
+        &INFO
     }
     fn build(&self, ctx: &BuildContext, _params: &mut Params) -> Result<Vec<Box<dyn Constraint>>, ConstraintError> {
         let rest = &ctx.rest.positions;

@@ -36,11 +36,10 @@
 //! triangulated input has none and is refused with a clear line; a face given in the other
 //! winding is the same constraint (the sign pattern is symmetric under reversal).
 
-use crate::constraints::contract::{BuildContext, Constraint, ConstraintType, RowSink};
+use crate::constraints::contract::{TypeInfo, BuildContext, Constraint, ConstraintType, RowSink};
 use crate::constraints::error::ConstraintError;
 use crate::constraints::kit::build::non_empty;
 use crate::constraints::kit::vertex_set::{centre_into, push_centred_rows};
-use crate::constraints::options::OptionSpec;
 use crate::constraints::params::Params;
 use crate::constraints::selection::Element;
 use glam::DVec3;
@@ -137,21 +136,20 @@ impl Constraint for Rectangle {
 #[derive(Debug, Clone, Copy)]
 pub struct RectangleType;
 
+/// What menus, scenes, the catalogue and the shared tests read of this type.
+const INFO: TypeInfo = TypeInfo {
+    name: KIND,
+    summary: "rectangle: every selected quad face becomes a rectangle",
+    options: &[],
+    element: Element::Face { min: 4, max: 4 },
+    default_multiplier: 10.0,
+    has_targets: false,
+    rigidly_invariant: true,
+};
+
 impl ConstraintType for RectangleType {
-    fn name(&self) -> &'static str {
-        KIND
-    }
-    fn summary(&self) -> &'static str {
-        "rectangle: every selected quad face becomes a rectangle"
-    }
-    fn options(&self) -> &'static [OptionSpec] {
-        &[]
-    }
-    fn element(&self) -> Element {
-        Element::Face { min: 4, max: 4 }
-    }
-    fn default_multiplier(&self) -> f64 {
-        10.0
+    fn info(&self) -> &'static TypeInfo {
+        &INFO
     }
     fn build(&self, ctx: &BuildContext, _params: &mut Params) -> Result<Vec<Box<dyn Constraint>>, ConstraintError> {
         let built = selected_quads(ctx, KIND)?

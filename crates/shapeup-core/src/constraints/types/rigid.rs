@@ -29,10 +29,9 @@
 //! choice); rows relative to one vertex would be sparser but the fit would then not be the
 //! shape-matching one.
 
-use crate::constraints::contract::{BuildContext, Constraint, ConstraintType, RowSink};
+use crate::constraints::contract::{TypeInfo, BuildContext, Constraint, ConstraintType, RowSink};
 use crate::constraints::error::ConstraintError;
 use crate::constraints::kit::vertex_set::{centred_view, to_row_frame};
-use crate::constraints::options::OptionSpec;
 use crate::constraints::params::Params;
 use crate::constraints::selection::Element;
 use crate::linalg::nearest_rotation3;
@@ -98,21 +97,20 @@ impl Constraint for Rigid {
 #[derive(Debug, Clone, Copy)]
 pub struct RigidType;
 
+/// What menus, scenes, the catalogue and the shared tests read of this type.
+const INFO: TypeInfo = TypeInfo {
+    name: KIND,
+    summary: "rigid: the selected vertices move as one rigid body (shape matching)",
+    options: &[],
+    element: Element::VertexSet { min: 2 },
+    default_multiplier: 100.0,
+    has_targets: false,
+    rigidly_invariant: true,
+};
+
 impl ConstraintType for RigidType {
-    fn name(&self) -> &'static str {
-        KIND
-    }
-    fn summary(&self) -> &'static str {
-        "rigid: the selected vertices move as one rigid body (shape matching)"
-    }
-    fn options(&self) -> &'static [OptionSpec] {
-        &[]
-    }
-    fn element(&self) -> Element {
-        Element::VertexSet { min: 2 }
-    }
-    fn default_multiplier(&self) -> f64 {
-        100.0
+    fn info(&self) -> &'static TypeInfo {
+        &INFO
     }
     fn build(&self, ctx: &BuildContext, _params: &mut Params) -> Result<Vec<Box<dyn Constraint>>, ConstraintError> {
         let vertices = ShapeMatch::selected(ctx, KIND)?;

@@ -24,10 +24,9 @@
 //! (clamp s: R does not depend on s, and the energy is a parabola in s) but is left out until a
 //! scene needs it. Vertices weigh equally and ω = 1, as rigid.
 
-use crate::constraints::contract::{BuildContext, Constraint, ConstraintType, RowSink};
+use crate::constraints::contract::{TypeInfo, BuildContext, Constraint, ConstraintType, RowSink};
 use crate::constraints::error::ConstraintError;
 use crate::constraints::kit::vertex_set::{ShapeMatch, centre_into, centred_view, push_centred_rows, to_row_frame};
-use crate::constraints::options::OptionSpec;
 use crate::constraints::params::Params;
 use crate::constraints::selection::Element;
 use crate::linalg::nearest_rotation3;
@@ -110,21 +109,20 @@ impl Constraint for Similarity {
 #[derive(Debug, Clone, Copy)]
 pub struct SimilarityType;
 
+/// What menus, scenes, the catalogue and the shared tests read of this type.
+const INFO: TypeInfo = TypeInfo {
+    name: KIND,
+    summary: "similarity: the selected vertices move as one rigid body that may scale uniformly",
+    options: &[],
+    element: Element::VertexSet { min: 2 },
+    default_multiplier: 100.0,
+    has_targets: false,
+    rigidly_invariant: true,
+};
+
 impl ConstraintType for SimilarityType {
-    fn name(&self) -> &'static str {
-        KIND
-    }
-    fn summary(&self) -> &'static str {
-        "similarity: the selected vertices move as one rigid body that may scale uniformly"
-    }
-    fn options(&self) -> &'static [OptionSpec] {
-        &[]
-    }
-    fn element(&self) -> Element {
-        Element::VertexSet { min: 2 }
-    }
-    fn default_multiplier(&self) -> f64 {
-        100.0
+    fn info(&self) -> &'static TypeInfo {
+        &INFO
     }
     fn build(&self, ctx: &BuildContext, _params: &mut Params) -> Result<Vec<Box<dyn Constraint>>, ConstraintError> {
         let vertices = ShapeMatch::selected(ctx, KIND)?;

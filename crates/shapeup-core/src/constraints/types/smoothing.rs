@@ -2,11 +2,10 @@
 //!
 //! Term: ω ‖H(q)‖² with H(q) = Σ_j (c_ij / A_i)(q_i − q_j), p = 0, ω = 0.01 A_i.
 
-use crate::constraints::contract::{BuildContext, Constraint, ConstraintType, RowSink};
+use crate::constraints::contract::{TypeInfo, BuildContext, Constraint, ConstraintType, RowSink};
 use crate::constraints::error::ConstraintError;
 use crate::constraints::kit::build::per_selected_vertex;
 use crate::constraints::kit::laplacian_row::LaplacianRow;
-use crate::constraints::options::OptionSpec;
 use crate::constraints::params::Params;
 use crate::constraints::selection::Element;
 use crate::geometry::RestGeometry;
@@ -54,21 +53,20 @@ impl Constraint for Smoothing {
 #[derive(Debug, Clone, Copy)]
 pub struct SmoothingType;
 
+/// What menus, scenes, the catalogue and the shared tests read of this type.
+const INFO: TypeInfo = TypeInfo {
+    name: "smoothing",
+    summary: "smoothing: flattens the selected region (Laplacian to zero)",
+    options: &[],
+    element: Element::Vertex,
+    default_multiplier: 1.0,
+    has_targets: false,
+    rigidly_invariant: true,
+};
+
 impl ConstraintType for SmoothingType {
-    fn name(&self) -> &'static str {
-        "smoothing"
-    }
-    fn summary(&self) -> &'static str {
-        "smoothing: flattens the selected region (Laplacian to zero)"
-    }
-    fn options(&self) -> &'static [OptionSpec] {
-        &[]
-    }
-    fn element(&self) -> Element {
-        Element::Vertex
-    }
-    fn default_multiplier(&self) -> f64 {
-        1.0
+    fn info(&self) -> &'static TypeInfo {
+        &INFO
     }
     fn build(&self, ctx: &BuildContext, _params: &mut Params) -> Result<Vec<Box<dyn Constraint>>, ConstraintError> {
         let rest = ctx.rest;

@@ -52,11 +52,10 @@
 //! small Cholesky solve ([`solve_spd`]), numbers with derivatives ([`Scalar`], [`V3`]) and the
 //! multi-start Levenberg–Marquardt fit ([`Model`], [`best_fit`]).
 
-use crate::constraints::contract::{BuildContext, Constraint, ConstraintType, RowSink};
+use crate::constraints::contract::{TypeInfo, BuildContext, Constraint, ConstraintType, RowSink};
 use crate::constraints::error::ConstraintError;
 use crate::constraints::kit::sets;
 use crate::constraints::kit::vertex_set::{centred, centred_rows, centred_view, recentre, to_row_frame, vertex_set};
-use crate::constraints::options::OptionSpec;
 use crate::constraints::params::Params;
 use crate::constraints::selection::Element;
 use glam::{DQuat, DVec3};
@@ -177,21 +176,20 @@ impl Constraint for Sphere {
 #[derive(Debug, Clone, Copy)]
 pub struct SphereType;
 
+/// What menus, scenes, the catalogue and the shared tests read of this type.
+const INFO: TypeInfo = TypeInfo {
+    name: KIND,
+    summary: "sphere: the selected vertices stay on one sphere",
+    options: &[],
+    element: Element::VertexSet { min: 4 },
+    default_multiplier: 10.0,
+    has_targets: false,
+    rigidly_invariant: true,
+};
+
 impl ConstraintType for SphereType {
-    fn name(&self) -> &'static str {
-        KIND
-    }
-    fn summary(&self) -> &'static str {
-        "sphere: the selected vertices stay on one sphere"
-    }
-    fn options(&self) -> &'static [OptionSpec] {
-        &[]
-    }
-    fn element(&self) -> Element {
-        Element::VertexSet { min: 4 }
-    }
-    fn default_multiplier(&self) -> f64 {
-        10.0
+    fn info(&self) -> &'static TypeInfo {
+        &INFO
     }
     fn build(&self, ctx: &BuildContext, _params: &mut Params) -> Result<Vec<Box<dyn Constraint>>, ConstraintError> {
         let vertices = vertex_set(ctx, KIND, 4, "four points always lie on a sphere or a plane")?;

@@ -26,10 +26,9 @@
 //! surface meshed at h κ ≈ 0.05 misses it by 2.5 % of h). Give a weak `position` group beside it
 //! so the net cannot slide without bound.
 
-use crate::constraints::contract::{BuildContext, Constraint, ConstraintType, RowSink};
+use crate::constraints::contract::{TypeInfo, BuildContext, Constraint, ConstraintType, RowSink};
 use crate::constraints::error::ConstraintError;
 use crate::constraints::kit::build::per_selected_vertex;
-use crate::constraints::options::OptionSpec;
 use crate::constraints::params::Params;
 use crate::constraints::selection::Element;
 use crate::geometry::{RestGeometry, vertex_normals};
@@ -116,25 +115,21 @@ impl Constraint for SurfaceCloseness {
 #[derive(Debug, Clone, Copy)]
 pub struct SurfaceClosenessType;
 
+/// What menus, scenes, the catalogue and the shared tests read of this type.
+const INFO: TypeInfo = TypeInfo {
+    name: KIND,
+    summary: "surface closeness: vertices stay on the input surface (its rest tangent planes) and may slide along it",
+    options: &[],
+    element: Element::Vertex,
+    default_multiplier: 1.0,
+    has_targets: false,
+    // Tied to the rest surface, as `position` is to the rest positions.
+    rigidly_invariant: false,
+};
+
 impl ConstraintType for SurfaceClosenessType {
-    fn name(&self) -> &'static str {
-        KIND
-    }
-    fn summary(&self) -> &'static str {
-        "surface closeness: vertices stay on the input surface (its rest tangent planes) and may slide along it"
-    }
-    fn options(&self) -> &'static [OptionSpec] {
-        &[]
-    }
-    fn is_rigidly_invariant(&self) -> bool {
-        // Tied to the rest surface, as `position` is to the rest positions.
-        false
-    }
-    fn element(&self) -> Element {
-        Element::Vertex
-    }
-    fn default_multiplier(&self) -> f64 {
-        1.0
+    fn info(&self) -> &'static TypeInfo {
+        &INFO
     }
     fn build(&self, ctx: &BuildContext, _params: &mut Params) -> Result<Vec<Box<dyn Constraint>>, ConstraintError> {
         let rest = ctx.rest;

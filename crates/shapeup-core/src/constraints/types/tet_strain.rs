@@ -9,11 +9,10 @@
 //! det +1 even for an inverted tetrahedron). ω = |V_T|, the rest volume; tetrahedra of volume
 //! ≤ 1e-12 get no constraint.
 
-use crate::constraints::contract::{BuildContext, Constraint, ConstraintType, RowSink};
+use crate::constraints::contract::{TypeInfo, BuildContext, Constraint, ConstraintType, RowSink};
 use crate::constraints::error::ConstraintError;
 use crate::constraints::kit::build::non_empty;
 use crate::constraints::kit::options::take_strain_freedom;
-use crate::constraints::options::OptionSpec;
 use crate::constraints::params::Params;
 use crate::constraints::selection::Element;
 use crate::linalg::{nearest_rotation3, svd3_rotations};
@@ -118,21 +117,20 @@ impl Constraint for TetStrain {
 #[derive(Debug, Clone, Copy)]
 pub struct TetStrainType;
 
+/// What menus, scenes, the catalogue and the shared tests read of this type.
+const INFO: TypeInfo = TypeInfo {
+    name: KIND,
+    summary: "tetrahedral strain: each tetrahedron stays a rotation of its rest shape (stretch within ±strain_freedom)",
+    options: &[STRAIN_FREEDOM_OPTION],
+    element: Element::Tetrahedron,
+    default_multiplier: 10.0,
+    has_targets: false,
+    rigidly_invariant: true,
+};
+
 impl ConstraintType for TetStrainType {
-    fn name(&self) -> &'static str {
-        KIND
-    }
-    fn summary(&self) -> &'static str {
-        "tetrahedral strain: each tetrahedron stays a rotation of its rest shape (stretch within ±strain_freedom)"
-    }
-    fn options(&self) -> &'static [OptionSpec] {
-        &[STRAIN_FREEDOM_OPTION]
-    }
-    fn element(&self) -> Element {
-        Element::Tetrahedron
-    }
-    fn default_multiplier(&self) -> f64 {
-        10.0
+    fn info(&self) -> &'static TypeInfo {
+        &INFO
     }
     fn build(&self, ctx: &BuildContext, params: &mut Params) -> Result<Vec<Box<dyn Constraint>>, ConstraintError> {
         let f = take_strain_freedom(KIND, params)?;

@@ -12,10 +12,9 @@
 //! P(q) takes the current normal's orientation, so `det P(q)ᵀT ≥ 0` and the 2×2 polar factor
 //! is a rotation: a triangle flipped in 3D projects to the nearest rotation in its own plane.
 
-use crate::constraints::contract::{BuildContext, Constraint, ConstraintType, RowSink};
+use crate::constraints::contract::{TypeInfo, BuildContext, Constraint, ConstraintType, RowSink};
 use crate::constraints::error::ConstraintError;
 use crate::constraints::kit::build::non_empty;
-use crate::constraints::options::OptionSpec;
 use crate::constraints::params::Params;
 use crate::constraints::selection::Element;
 use crate::linalg::{clamp_singular_values2, nearest_rotation2};
@@ -84,21 +83,20 @@ impl Constraint for TriangleStrain {
 pub struct TriangleStrainType;
 
 
+/// What menus, scenes, the catalogue and the shared tests read of this type.
+const INFO: TypeInfo = TypeInfo {
+    name: KIND,
+    summary: "triangle strain: each triangle stays a rotation of its rest shape (stretch within ±strain_freedom)",
+    options: &[STRAIN_FREEDOM_OPTION],
+    element: Element::Triangle,
+    default_multiplier: 10.0,
+    has_targets: false,
+    rigidly_invariant: true,
+};
+
 impl ConstraintType for TriangleStrainType {
-    fn name(&self) -> &'static str {
-        KIND
-    }
-    fn summary(&self) -> &'static str {
-        "triangle strain: each triangle stays a rotation of its rest shape (stretch within ±strain_freedom)"
-    }
-    fn options(&self) -> &'static [OptionSpec] {
-        &[STRAIN_FREEDOM_OPTION]
-    }
-    fn element(&self) -> Element {
-        Element::Triangle
-    }
-    fn default_multiplier(&self) -> f64 {
-        10.0
+    fn info(&self) -> &'static TypeInfo {
+        &INFO
     }
     fn build(&self, ctx: &BuildContext, params: &mut Params) -> Result<Vec<Box<dyn Constraint>>, ConstraintError> {
         let f = take_strain_freedom(KIND, params)?;

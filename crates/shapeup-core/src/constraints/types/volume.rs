@@ -37,7 +37,7 @@
 //! ω = |V_T|, the rest volume; tetrahedra of volume ≤ 1e-12 get no constraint. ShapeOp takes
 //! five Gauss–Newton steps on the singular values instead of the exact nearest point.
 
-use crate::constraints::contract::{BuildContext, Constraint, ConstraintType, RowSink};
+use crate::constraints::contract::{TypeInfo, BuildContext, Constraint, ConstraintType, RowSink};
 use crate::constraints::error::ConstraintError;
 use crate::constraints::kit::build::non_empty;
 use crate::constraints::kit::gradient::TetGradient;
@@ -214,21 +214,20 @@ impl Constraint for Volume {
 #[derive(Debug, Clone, Copy)]
 pub struct VolumeType;
 
+/// What menus, scenes, the catalogue and the shared tests read of this type.
+const INFO: TypeInfo = TypeInfo {
+    name: KIND,
+    summary: "volume: each tetrahedron keeps its volume within [min, max] times its rest volume",
+    options: &[MIN_OPTION, MAX_OPTION],
+    element: Element::Tetrahedron,
+    default_multiplier: 10.0,
+    has_targets: false,
+    rigidly_invariant: true,
+};
+
 impl ConstraintType for VolumeType {
-    fn name(&self) -> &'static str {
-        KIND
-    }
-    fn summary(&self) -> &'static str {
-        "volume: each tetrahedron keeps its volume within [min, max] times its rest volume"
-    }
-    fn options(&self) -> &'static [OptionSpec] {
-        &[MIN_OPTION, MAX_OPTION]
-    }
-    fn element(&self) -> Element {
-        Element::Tetrahedron
-    }
-    fn default_multiplier(&self) -> f64 {
-        10.0
+    fn info(&self) -> &'static TypeInfo {
+        &INFO
     }
     fn build(&self, ctx: &BuildContext, params: &mut Params) -> Result<Vec<Box<dyn Constraint>>, ConstraintError> {
         let (min, max) = take_range(KIND, params, &MIN_OPTION, &MAX_OPTION)?;
