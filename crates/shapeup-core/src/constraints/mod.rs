@@ -19,6 +19,7 @@ mod options;
 mod params;
 mod registry;
 mod selection;
+mod shape_model;
 mod types;
 
 pub use attachment::{
@@ -31,5 +32,6 @@ pub use options::{OptionKind, OptionSpec, option_markdown};
 pub use params::Params;
 pub use registry::{build_constraints, catalogue_markdown, constraint_type, registry, type_names};
 pub use selection::{Element, Selection, selects_any};
+pub use shape_model::ShapeModel;
 // Every type's constraint and `ConstraintType`: the list is the `types!` line of each in types/mod.rs.
 pub use types::*;
