@@ -1,61 +1,17 @@
 //! Circle (circularity): the corners of each polygon face, or a whole vertex set, kept on one
 //! circle.
 //!
-//! Term: ω Σ_i ‖(q_i − q̄) − p_i‖² over the k corners of a face (k ≥ 4), or over all the
-//! selected vertices (k ≥ 3) with `whole_selection = true`; q̄ = (1/k) Σ_j q_j. The k rows of C
-//! are mean-centred as in ShapeOp, C = I − 11ᵀ/k, so the set is that of the centred concyclic
-//! configurations (points of one circle in 3D), taken with its closure: the collinear
-//! configurations (circles of infinite radius). Without them the nearest point would not exist
-//! for straight input, whose best circles grow without bound.
+//! Term ω Σ_i ‖(q_i − q̄) − p_i‖² over the k corners of a face (k ≥ 4), or over all the selected
+//! vertices (k ≥ 3) with `whole_selection = true`, mean-centred rows C = I − 11ᵀ/k (as
+//! ShapeOp); the set is the centred concyclic configurations, with its closure, the collinear
+//! ones. Projection: the nearest points on the geometric best-fit circle in 3D, found by the
+//! multi-start Levenberg–Marquardt fit of [`kit::fit`](crate::constraints::kit::fit), then
+//! recentred. Residual: the centroid offset and σ₄ of the lifted matrix
+//! ([`lifted_singular_values`](crate::constraints::kit::sets::lifted_singular_values)). ω = 1,
+//! default multiplier 10.
 //!
-//! Projection: the nearest point of the set to d_i = q_i − q̄ (the rows of C q) is the
-//! geometric best-fit circle in 3D, argmin over circles Σ_i dist(d_i, circle)², with
-//! dist² = (m·(d_i − c))² + (ρ_i − r)² (m the circle's axis, c its centre, r its radius, ρ_i the
-//! distance of d_i from the axis), and each d_i moved to its nearest point on it (into the
-//! circle's plane, then radially onto the circle); then p is recentred (a shift stays on a
-//! circle and only brings p nearer to the centred d). The fit, on the points scaled to unit
-//! RMS radius:
-//! 1. starts: the best-fit plane (PCA) with the algebraic (Kåsa) circle in it, the
-//!    least-squares solution of u² + v² + a u + b v + e = 0 in plane coordinates (u, v); the
-//!    best-fit line (PCA); and the circle through each of a few triples of the points (every
-//!    triple for k ≤ 6, four spread ones beyond), each in its own plane (these find the best
-//!    circle when the points are far from one, where several local minima compete);
-//! 2. as for spheres ([`super::sphere::best_fit`]): each start refined by Levenberg–Marquardt
-//!    with Gauss–Newton steps (to steps of 1e-7, at most 30 iterations), then the lowest (the
-//!    first on ties) refined on to steps of 1e-13 (at most 60 iterations), by Gauss–Newton
-//!    while it converges fast and damped Newton on the exact Hessian once it is slow (the flat
-//!    valleys of nearly straight sets). Deterministic, and equivariant under rigid motions
-//!    since every start is.
-//!
-//! The circle is parametrized by a point s on it, an orthonormal frame (m axis, n the in-plane
-//! normal at s, t = m × n the tangent) and the signed curvature κ (centre s − n/κ, radius 1/|κ|,
-//! κ = 0 the line through s along t). With y = x − s, z = m·y, y_p = y − z m, w = n + κ y_p:
-//! dist² = z² + δ², δ = (2 y_p·n + κ‖y_p‖²)/(1 + ‖w‖), nearest point x − z m − δ w/‖w‖:
-//! exact, free of cancellation for large radii and smooth through lines (Karimäki's
-//! parametrization in the circle's plane). Steps turn the frame about s (three angles), move s
-//! along n and m and change κ: the circle's 6 degrees of freedom.
-//!
-//! Set residual (a direct test of the definition, no fit): the fourth singular value σ₄ of the
-//! k×5 matrix with rows (‖y_i‖²/L, y_i, L), y_i = p_i − p̄, L = max ‖y_i‖
-//! ([`sets::lifted_singular_values`]): it vanishes exactly when two independent spheres or
-//! planes, so one circle or line, hold every p_i; combined with the centroid offset
-//! ‖Σ p_i‖/√k.
-//!
-//! ω = 1: the term is already the squared distance (length²) of the points from the set; as in
-//! ShapeOp, and in ShapeUp where every face's projection counts alike, the weight is left to
-//! the group multiplier. Default multiplier 10 (as edge springs and plane).
-//!
-//! Sources: ShapeUp (Bouaziz et al. 2012, §4 "circularity": the corners of each face projected
-//! on a circle, for circular meshes) and ShapeOp's `CircleConstraint` (Deuss et al. 2015:
-//! mean-centred rows, the PCA plane, then the algebraic (Kåsa) circle of the points projected
-//! into it; when its 2×2 system is nearly singular, determinant ≤ 1e-5, the points are only
-//! flattened). Choices left open: ShapeOp's circle (in a plane fitted first and kept) is not
-//! the nearest point of the set: Kåsa minimizes Σ(ρ_i² − r²)², which weights points by their
-//! distance, and the plane is not refined with it; so we refine plane and circle together to
-//! the geometric fit, so that the projection is the nearest point; nearly straight sets go to
-//! large circles or the line (the closure) instead of a scale-dependent determinant threshold;
-//! the starts, the parametrization and the schedule above are ours; three points always lie on
-//! a circle or line, so with k = 3 the term is zero.
+//! The formulas, the starts, the schedule, the sources (ShapeUp, ShapeOp `CircleConstraint`)
+//! and the choices left open are in the math reference, docs/math.md, "circle".
 
 use crate::constraints::contract::{TypeInfo, BuildContext, Constraint, ConstraintType, RowSink};
 use crate::constraints::error::ConstraintError;

@@ -1,56 +1,16 @@
 //! Sphere: a set of vertices kept on a common sphere.
 //!
-//! Term: ω Σ_i ‖(q_i − q̄) − p_i‖² over the k ≥ 4 selected vertices, q̄ = (1/k) Σ_j q_j. The k
-//! rows of C are mean-centred as in ShapeOp, C = I − 11ᵀ/k, so the set is that of the centred
-//! configurations on one sphere, S = {p : Σ_i p_i = 0, ‖p_i − c‖ = r for some c, r}, taken
-//! with its closure: the coplanar configurations (spheres of infinite radius). Without them the
-//! nearest point would not exist for flat input, whose best spheres grow without bound.
+//! Term ω Σ_i ‖(q_i − q̄) − p_i‖² over the k ≥ 4 selected vertices, mean-centred rows
+//! C = I − 11ᵀ/k (as ShapeOp); the set is the centred configurations on one sphere, with its
+//! closure, the coplanar ones. Projection: the nearest points on the geometric best-fit sphere,
+//! found by the multi-start Levenberg–Marquardt fit of [`kit::fit`](crate::constraints::kit::fit)
+//! on the sphere's parametrization (a point s, the normal n there, the curvature κ: [`SphereFit`]),
+//! then recentred. Residual: the centroid offset and σ₅ of the lifted matrix
+//! ([`lifted_singular_values`](crate::constraints::kit::sets::lifted_singular_values)). ω = 1,
+//! default multiplier 10.
 //!
-//! Projection: the nearest point of S to d_i = q_i − q̄ (the rows of C q) is the geometric
-//! best-fit sphere, argmin Σ_i (‖d_i − c‖ − r)², with each d_i moved to its nearest point on it,
-//! p_i = c + r (d_i − c)/‖d_i − c‖; then p is recentred (a shift stays on a sphere and only
-//! brings p nearer to the centred d). The fit, on the points scaled to unit RMS radius:
-//! 1. starts: the algebraic (Kåsa) sphere, the least-squares solution of
-//!    ‖x‖² + b·x + e = 0 (linear in b, e); the same sphere curved the other way at its point
-//!    nearest the centroid (the other side of a nearly flat set); the best-fit plane (PCA);
-//! 2. each start refined by Levenberg–Marquardt with Gauss–Newton steps (to steps of 1e-7,
-//!    at most 30 iterations), then the lowest (the first on ties) refined on to steps of 1e-13
-//!    (at most 60 iterations): by Gauss–Newton while it converges fast, by damped Newton on the
-//!    exact Hessian (forward-mode second derivatives of the same residuals) once it is slow,
-//!    as in the flat valleys of nearly flat sets. Damping μ = λ tr(A)/4 on the step's matrix A,
-//!    λ ×4 until the cost falls and ÷3 after ([`best_fit`]). Deterministic, and equivariant
-//!    under rigid motions since every start is.
-//!
-//! The sphere is parametrized by a point s on it, the unit normal n there and the signed
-//! curvature κ (centre s − n/κ, radius 1/|κ|; κ = 0 the plane through s normal to n), with the
-//! signed distance of x, y = x − s, w = n + κ y:
-//! dist = (2 y·n + κ‖y‖²) / (1 + ‖w‖), nearest point x − dist·w/‖w‖,
-//! which is exact, has no cancellation for large radii and passes smoothly through planes
-//! (Karimäki's circle parametrization, in 3D). Steps rotate n about s (two tangent angles),
-//! move s along n and change κ: the sphere's 4 degrees of freedom.
-//!
-//! Set residual (a direct test of the definition, no fit): the smallest singular value σ₅ of
-//! the k×5 matrix with rows (‖y_i‖²/L, y_i, L), y_i = p_i − p̄, L = max ‖y_i‖
-//! ([`sets::lifted_singular_values`]), which vanishes exactly when one sphere or plane holds
-//! every p_i, combined with the centroid offset ‖Σ p_i‖/√k.
-//!
-//! ω = 1: the term is already the squared distance (length²) of the points from the set; as in
-//! ShapeOp the weight is left to the group multiplier. Default multiplier 10 (as edge springs).
-//!
-//! Sources: ShapeUp (Bouaziz et al. 2012, §4 "spheres": points projected on their best-fit
-//! sphere) and ShapeOp's `SphereConstraint` (Deuss et al. 2015: mean-centred rows, the
-//! algebraic (Kåsa) sphere; when its 3×3 system is nearly singular, determinant ≤ 1e-5, the
-//! points are left as they are). Choices left open: the algebraic fit is not the nearest point
-//! of the set (it minimizes Σ(‖x_i − c‖² − r²)², which weights points by their distance), so we
-//! refine it to the geometric fit; nearly flat sets go to large spheres or the plane (the
-//! closure) instead of a scale-dependent determinant threshold; the starts, the parametrization
-//! and the schedule above are ours; four points always lie on a sphere or plane, so at k = 4
-//! the term is zero.
-//!
-//! This file also holds the fit machinery that [`super::circle`] shares: the generalized-sphere
-//! distance ([`distance`]), the algebraic-to-curvature conversion ([`from_algebraic`]), the
-//! small Cholesky solve ([`solve_spd`]), numbers with derivatives ([`Scalar`], [`V3`]) and the
-//! multi-start Levenberg–Marquardt fit ([`Model`], [`best_fit`]).
+//! The formulas, the starts, the schedule, the sources (ShapeUp §4, ShapeOp `SphereConstraint`)
+//! and the choices left open are in the math reference, docs/math.md, "sphere".
 
 use crate::constraints::contract::{TypeInfo, BuildContext, Constraint, ConstraintType, RowSink};
 use crate::constraints::error::ConstraintError;

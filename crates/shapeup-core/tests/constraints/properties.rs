@@ -12,16 +12,14 @@
 //!   degenerate q (where nearest points may tie: a zero-length edge, coincident points) the
 //!   distance to the set is the same.
 //!
-//! Runs are reproducible: a fixed seed and case count (`common::random::config`;
+//! Runs are reproducible: a fixed seed and case count (`crate::common::random::config`;
 //! PROPTEST_RNG_SEED and PROPTEST_CASES override them), nothing persisted
 //! (`failure_persistence: None`): each failure found was fixed and kept below as a plain
 //! `#[test]` with its literal input.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-mod common;
-
-use common::random::{Base, Degeneration, MeshCase, Shape, mesh_case, motion};
-use common::{dist2, turned_options};
+use crate::common::random::{Base, Degeneration, MeshCase, Shape, mesh_case, motion};
+use crate::common::{Rng, dist2, turned_options};
 use glam::{DQuat, DVec3};
 use proptest::prelude::*;
 use shapeup_core::constraints::{
@@ -61,20 +59,6 @@ fn case() -> impl Strategy<Value = Case> {
         motion,
         seed: seed | 1,
     })
-}
-
-/// xorshift for the sampled configurations (the case's seed drives it).
-struct Rng(u64);
-impl Rng {
-    fn uniform(&mut self) -> f64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        (self.0 >> 11) as f64 / (1u64 << 52) as f64 - 1.0
-    }
-    fn vec3(&mut self) -> DVec3 {
-        DVec3::new(self.uniform(), self.uniform(), self.uniform())
-    }
 }
 
 /// The type's options from the case's picks: the default, the bounds of the range or a value
@@ -380,7 +364,7 @@ fn check_rigid_motion(
 }
 
 proptest! {
-    #![proptest_config(common::random::config(192))]
+    #![proptest_config(crate::common::random::config(192))]
 
     /// Every registered type, on every case.
     #[test]

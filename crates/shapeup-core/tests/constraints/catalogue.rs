@@ -5,52 +5,17 @@
 //! and bad options are refused by name.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+use crate::common::{Rng, dist2, quad_grid, rest_of, turned_options};
 use glam::{DQuat, DVec3};
 use shapeup_core::constraints::{
     ConstraintType, Element, GroupDescription, OptionKind, OptionSpec, Params, Selection, build_group, registry,
 };
 use shapeup_core::geometry::{RestGeometry, WorkingFrame};
-use shapeup_core::mesh::{Mesh, Polygons};
+use shapeup_core::mesh::Mesh;
 use shapeup_core::scene::{Scene, SceneFormat};
 use shapeup_core::solver::{Acceleration, ConstraintGroup, SolverParams, System};
 use shapeup_core::warnings::Warnings;
 use std::path::{Path, PathBuf};
-
-/// xorshift: uniform numbers in [-1, 1) without a dependency.
-struct Rng(u64);
-impl Rng {
-    fn uniform(&mut self) -> f64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        (self.0 >> 11) as f64 / (1u64 << 52) as f64 - 1.0
-    }
-    fn vec3(&mut self) -> DVec3 {
-        DVec3::new(self.uniform(), self.uniform(), self.uniform())
-    }
-}
-
-/// An n×n grid of quads on a wavy surface (non-planar quads, interior vertices, a boundary),
-/// about one unit across, with one pentagon and one triangle in its last row so that faces of
-/// several sizes occur.
-fn quad_grid(n: u32) -> Mesh {
-    let mut positions = Vec::new();
-    for j in 0..=n {
-        for i in 0..=n {
-            let (x, y) = (i as f64 / n as f64 - 0.5, j as f64 / n as f64 - 0.5);
-            positions.push(DVec3::new(x, y, 0.15 * (3.0 * x).sin() * (2.0 * y).cos() + 0.1 * x * y));
-        }
-    }
-    let at = |i: u32, j: u32| j * (n + 1) + i;
-    let mut polygons = Polygons::new();
-    for j in 0..n {
-        for i in 0..n {
-            polygons.push(&[at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)]);
-        }
-    }
-    let (mesh, _) = Mesh::from_polygons(positions, polygons).unwrap();
-    mesh
-}
 
 /// The mesh a type is tested on: tetrahedra for tetrahedron types, else the quad grid (its
 /// triangulation gives triangles, edges and vertices).
@@ -61,18 +26,10 @@ fn mesh_for(ty: &dyn ConstraintType) -> Mesh {
     }
 }
 
-fn rest_of(mesh: &Mesh) -> RestGeometry {
-    RestGeometry::of_mesh(mesh.positions.clone(), mesh)
-}
-
 fn group(ty: &dyn ConstraintType, rest: &RestGeometry, options: Params) -> ConstraintGroup {
     let description = GroupDescription { options, ..GroupDescription::new(ty.name(), Selection::All) };
     build_group(&description, rest, &WorkingFrame::IDENTITY)
         .unwrap_or_else(|e| panic!("{}: default group on the test mesh: {e}", ty.name()))
-}
-
-fn dist2(a: &[DVec3], b: &[DVec3]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| (*x - *y).length_squared()).sum()
 }
 
 #[test]
@@ -196,17 +153,6 @@ fn every_type_time_steps_in_dynamic_mode() {
             );
         }
     }
-}
-
-/// Options of a type moved by a rigid motion: vectors (directions, forces) turn with it.
-fn turned_options(ty: &dyn ConstraintType, turn: DQuat) -> Params {
-    let mut params = Params::default();
-    for option in ty.options() {
-        if let OptionKind::Vector { default } = option.kind {
-            params = params.with(option.key, (turn * DVec3::from(default)).to_array().to_vec());
-        }
-    }
-    params
 }
 
 #[test]

@@ -1,0 +1,10 @@
+//! The constraint suite in one binary: registry-wide checks of every type (`catalogue`),
+//! property tests on random meshes (`properties`) and vertices of degenerate faces
+//! (`degenerate`).
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod catalogue;
+mod degenerate;
+mod properties;
