@@ -6,6 +6,7 @@
 pub mod random;
 mod rng;
 
+#[allow(unused_imports)] // not every test binary that includes `common` draws numbers
 pub use rng::Rng;
 
 use glam::{DQuat, DVec3};

@@ -32,7 +32,7 @@
 
 use crate::constraints::contract::{TypeInfo, BuildContext, Constraint, ConstraintType, RowSink};
 use crate::constraints::error::ConstraintError;
-use crate::constraints::kit::build::non_empty;
+use crate::constraints::kit::build::per_selected_element;
 use crate::constraints::kit::gradient::TriangleGradient;
 use crate::constraints::kit::sets::{bracketed_root, interval_distance};
 use crate::constraints::options::{OptionKind, OptionSpec};
@@ -181,15 +181,8 @@ impl ConstraintType for AreaType {
     fn build(&self, ctx: &BuildContext, params: &mut Params) -> Result<Vec<Box<dyn Constraint>>, ConstraintError> {
         let (min, max) = take_range(KIND, params, &MIN_OPTION, &MAX_OPTION)?;
         let rest = &ctx.rest.positions;
-        let built = ctx
-            .rest
-            .triangles
-            .iter()
-            .filter(|t| ctx.selection.contains_all(&t[..]))
-            .filter_map(|t| Area::new(*t, rest, min, max))
-            .map(|c| Box::new(c) as Box<dyn Constraint>)
-            .collect();
-        non_empty(built, KIND, "triangles")
+        let selected = ctx.rest.triangles.iter().filter(|t| ctx.selection.contains_all(&t[..]));
+        per_selected_element(selected, KIND, "triangles", |t| Area::new(*t, rest, min, max))
     }
 }
 

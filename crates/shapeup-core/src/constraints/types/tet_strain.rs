@@ -11,7 +11,7 @@
 
 use crate::constraints::contract::{TypeInfo, BuildContext, Constraint, ConstraintType, RowSink};
 use crate::constraints::error::ConstraintError;
-use crate::constraints::kit::build::non_empty;
+use crate::constraints::kit::build::per_selected_element;
 use crate::constraints::kit::options::take_strain_freedom;
 use crate::constraints::params::Params;
 use crate::constraints::selection::Element;
@@ -135,15 +135,8 @@ impl ConstraintType for TetStrainType {
     fn build(&self, ctx: &BuildContext, params: &mut Params) -> Result<Vec<Box<dyn Constraint>>, ConstraintError> {
         let f = take_strain_freedom(KIND, params)?;
         let rest = &ctx.rest.positions;
-        let built = ctx
-            .rest
-            .tetrahedra
-            .iter()
-            .filter(|t| ctx.selection.contains_all(&t[..]))
-            .filter_map(|t| TetStrain::new(*t, rest, f))
-            .map(|c| Box::new(c) as Box<dyn Constraint>)
-            .collect();
-        non_empty(built, KIND, "tetrahedra")
+        let selected = ctx.rest.tetrahedra.iter().filter(|t| ctx.selection.contains_all(&t[..]));
+        per_selected_element(selected, KIND, "tetrahedra", |t| TetStrain::new(*t, rest, f))
     }
 }
 

@@ -14,7 +14,7 @@
 
 use crate::constraints::contract::{TypeInfo, BuildContext, Constraint, ConstraintType, RowSink};
 use crate::constraints::error::ConstraintError;
-use crate::constraints::kit::build::non_empty;
+use crate::constraints::kit::build::per_selected_element;
 use crate::constraints::params::Params;
 use crate::constraints::selection::Element;
 use crate::linalg::{clamp_singular_values2, nearest_rotation2};
@@ -101,15 +101,8 @@ impl ConstraintType for TriangleStrainType {
     fn build(&self, ctx: &BuildContext, params: &mut Params) -> Result<Vec<Box<dyn Constraint>>, ConstraintError> {
         let f = take_strain_freedom(KIND, params)?;
         let rest = &ctx.rest.positions;
-        let built = ctx
-            .rest
-            .triangles
-            .iter()
-            .filter(|t| ctx.selection.contains_all(&t[..]))
-            .filter_map(|t| TriangleStrain::new(*t, rest, f))
-            .map(|c| Box::new(c) as Box<dyn Constraint>)
-            .collect();
-        non_empty(built, KIND, "triangles")
+        let selected = ctx.rest.triangles.iter().filter(|t| ctx.selection.contains_all(&t[..]));
+        per_selected_element(selected, KIND, "triangles", |t| TriangleStrain::new(*t, rest, f))
     }
 }
 

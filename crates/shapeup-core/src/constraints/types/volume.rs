@@ -39,7 +39,7 @@
 
 use crate::constraints::contract::{TypeInfo, BuildContext, Constraint, ConstraintType, RowSink};
 use crate::constraints::error::ConstraintError;
-use crate::constraints::kit::build::non_empty;
+use crate::constraints::kit::build::per_selected_element;
 use crate::constraints::kit::gradient::TetGradient;
 use crate::constraints::kit::options::take_range;
 use crate::constraints::kit::sets::{bracketed_root, interval_distance};
@@ -232,15 +232,8 @@ impl ConstraintType for VolumeType {
     fn build(&self, ctx: &BuildContext, params: &mut Params) -> Result<Vec<Box<dyn Constraint>>, ConstraintError> {
         let (min, max) = take_range(KIND, params, &MIN_OPTION, &MAX_OPTION)?;
         let rest = &ctx.rest.positions;
-        let built = ctx
-            .rest
-            .tetrahedra
-            .iter()
-            .filter(|t| ctx.selection.contains_all(&t[..]))
-            .filter_map(|t| Volume::new(*t, rest, min, max))
-            .map(|c| Box::new(c) as Box<dyn Constraint>)
-            .collect();
-        non_empty(built, KIND, "tetrahedra")
+        let selected = ctx.rest.tetrahedra.iter().filter(|t| ctx.selection.contains_all(&t[..]));
+        per_selected_element(selected, KIND, "tetrahedra", |t| Volume::new(*t, rest, min, max))
     }
 }
 
