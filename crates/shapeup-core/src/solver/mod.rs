@@ -12,6 +12,11 @@
 //! For Projective Dynamics ([`crate::dynamics`]) the same system takes per-vertex inertia
 //! weights μ_i and an inertial target s: the global step then solves
 //! (diag(μ) + Σ w_i C_iᵀC_i) q = μ s + Σ w_i C_iᵀ P_i.
+//!
+//! This file is the algorithm: groups, prepare, step, solve, energy, the local and global
+//! steps. Around it, one file per phase: `params` (settings), `rhs` (the right-hand side's
+//! constant part), `iterate` (plain, Anderson, L-BFGS), `convergence` (stopping, reports),
+//! `error`; below them `assemble`, `cholesky`, `global`, `local`.
 
 mod anderson;
 mod assemble;
