@@ -1,5 +1,5 @@
 //! Membership of constraint sets, shared by several types' [`Constraint::set_residual`]
-//! (super::Constraint::set_residual): each is a direct test of the set's definition, not a
+//! (crate::constraints::Constraint::set_residual): each is a direct test of the set's definition, not a
 //! second projection, so that the shared tests can check projections against it.
 
 use crate::linalg::{jacobi_rotation, svd3};

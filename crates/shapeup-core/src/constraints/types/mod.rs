@@ -1,7 +1,7 @@
 //! The constraint types, one file each. A type file imports the contract and the kit, never
 //! another type.
 //!
-//! [`types!`] below is the one list of them, in the order menus show them: each line names a
+//! The `types!` list below is the one list of them, in the order menus show them: each line names a
 //! type's module, its [`ConstraintType`] and the other names it exports. From it come the
 //! `mod` declarations, the re-exports (`shapeup_core::constraints::EdgeSpring`, …) and
 //! [`ALL`], which [`registry`](super::registry) returns.
