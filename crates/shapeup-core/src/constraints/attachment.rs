@@ -10,7 +10,8 @@
 //! attachments are not a scene type: [`degenerate_attachments`] finds them after the scene's
 //! (or the editor's) own groups are built, and the caller adds them as one more group.
 
-use super::{Constraint, ConstraintGroup, RowSink};
+use super::contract::{Constraint, RowSink};
+use super::group::ConstraintGroup;
 use crate::geometry::{RestGeometry, is_degenerate_triangle};
 use glam::DVec3;
 

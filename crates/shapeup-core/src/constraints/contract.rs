@@ -75,7 +75,7 @@ pub trait Constraint: Any + Send + Sync + Debug {
     fn vertices(&self) -> &[u32];
     /// The vertices this constraint pulls to points and those points, when it can hold them
     /// there exactly instead (a position handle): what a hard group fixes
-    /// ([`ConstraintGroup::hard`](crate::solver::ConstraintGroup::hard)). `None` (the default):
+    /// ([`ConstraintGroup::hard`](super::ConstraintGroup::hard)). `None` (the default):
     /// the constraint cannot be hard.
     fn held_points(&self) -> Option<(&[u32], &[DVec3])> {
         None

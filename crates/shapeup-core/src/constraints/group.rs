@@ -3,7 +3,11 @@
 //! groups with [`build_group`], so no layer outside a constraint's own file names a concrete
 //! type. [`ConstraintGroup`] itself lives here, below the solver that takes it.
 
-use super::{BuildContext, Constraint, ConstraintError, Params, Selection, build_constraints, constraint_type};
+use super::contract::{BuildContext, Constraint};
+use super::error::ConstraintError;
+use super::params::Params;
+use super::registry::{build_constraints, constraint_type};
+use super::selection::Selection;
 use crate::geometry::{RestGeometry, WorkingFrame};
 use glam::DVec3;
 
