@@ -1483,7 +1483,7 @@ fn resolve_selection(spec: &SelectionSpec, mesh: &Mesh) -> Result<Option<Vec<u32
 /// rest rotated about its centre (default the centroid), then translated.
 fn position_targets(vertices: &[u32], targets: &Targets, mesh: &Mesh) -> Result<Vec<DVec3>, String> {
     let rest: Vec<DVec3> = vertices.iter().map(|&v| mesh.positions[v as usize]).collect();
-    targets.resolve(&rest)
+    targets.resolve(&rest).map_err(|e| e.to_string())
 }
 
 #[cfg(test)]

@@ -11,7 +11,7 @@ fn indefinite_article(word: &str) -> &'static str {
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ConstraintError {
     /// No constraint type has this name.
-    #[error("unknown constraint type \"{}\" (known: {})", crate::io::one_line(name), known.join(", "))]
+    #[error("unknown constraint type \"{}\" (known: {})", crate::text::one_line(name), known.join(", "))]
     UnknownType {
         /// The name as written.
         name: String,
@@ -20,7 +20,7 @@ pub enum ConstraintError {
         known: Vec<&'static str>,
     },
     /// An option that this constraint type does not take.
-    #[error("unknown key \"{}\" for {article} {kind} constraint{hint}", crate::io::one_line(key), article = indefinite_article(kind), hint = hint_for(&allowed_hint(allowed)))]
+    #[error("unknown key \"{}\" for {article} {kind} constraint{hint}", crate::text::one_line(key), article = indefinite_article(kind), hint = hint_for(&allowed_hint(allowed)))]
     UnknownOption {
         /// Constraint type.
         kind: &'static str,
@@ -30,7 +30,7 @@ pub enum ConstraintError {
         allowed: &'static [OptionSpec],
     },
     /// An option with a value of the wrong type or out of range.
-    #[error("{kind} option \"{}\": {}", crate::io::one_line(key), crate::io::one_line(problem))]
+    #[error("{kind} option \"{}\": {}", crate::text::one_line(key), crate::text::one_line(problem))]
     BadOption {
         /// Constraint type.
         kind: &'static str,
