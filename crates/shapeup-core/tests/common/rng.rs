@@ -14,6 +14,13 @@ impl Rng {
         self.0 ^= self.0 << 17;
         (self.0 >> 11) as f64 / (1u64 << 52) as f64 - 1.0
     }
+    /// Uniform in [0, 1) (the same stream step as [`Rng::uniform`], 53 bits kept).
+    pub fn unit(&mut self) -> f64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
     /// A vector with entries uniform in [-1, 1).
     pub fn vec3(&mut self) -> DVec3 {
         DVec3::new(self.uniform(), self.uniform(), self.uniform())

@@ -8,7 +8,6 @@ use shapeup_core::scene::{Scene, SelectionSpec};
 use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
 
-
 use crate::common::{Output, shapeup_in};
 
 const SPOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/spot.obj");

@@ -7,7 +7,6 @@ use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-
 use crate::common::Output;
 
 const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data");

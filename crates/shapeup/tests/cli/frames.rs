@@ -8,7 +8,6 @@ use shapeup_core::io::read_mesh;
 use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
 
-
 use crate::common::{Output, shapeup_in};
 
 const EXAMPLES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples");

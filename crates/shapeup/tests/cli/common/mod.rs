@@ -1,6 +1,5 @@
 //! What every end-to-end test of the `shapeup` binary needs: run it, keep what it printed.
 
-
 use std::ffi::OsStr;
 use std::path::Path;
 use std::process::Command;

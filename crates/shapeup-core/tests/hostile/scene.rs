@@ -6,67 +6,13 @@
 //! Memory is measured with a counting global allocator, so this file holds only these tests and
 //! runs them one at a time; each runs on its own thread (the default 2 MiB stack) under a 60 s
 //! watchdog (a hang check, far above the real time, not a timing assertion).
-#![allow(clippy::unwrap_used, clippy::expect_used)]
-// The counting allocator below is the only unsafe code, and it only forwards to `System`.
-#![allow(unsafe_code)]
 
 use shapeup_core::scene::{GeneratedMesh, MAX_GENERATED_BYTES, Scene, SceneError, SceneFormat};
-use std::alloc::{GlobalAlloc, Layout, System};
 use std::path::{Path, PathBuf};
-use std::sync::Mutex;
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::Ordering;
+
+use crate::{CURRENT, PEAK, SERIAL};
 use std::time::Duration;
-
-/// Counts the bytes allocated now and at the peak since the last reset.
-struct Counting;
-
-static CURRENT: AtomicUsize = AtomicUsize::new(0);
-static PEAK: AtomicUsize = AtomicUsize::new(0);
-
-fn grew(by: usize) {
-    let now = CURRENT.fetch_add(by, Ordering::Relaxed) + by;
-    PEAK.fetch_max(now, Ordering::Relaxed);
-}
-
-// SAFETY: every call is forwarded to the system allocator unchanged; the counters are atomics.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        let p = unsafe { System.alloc(layout) };
-        if !p.is_null() {
-            grew(layout.size());
-        }
-        p
-    }
-
-    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
-        let p = unsafe { System.alloc_zeroed(layout) };
-        if !p.is_null() {
-            grew(layout.size());
-        }
-        p
-    }
-
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) };
-        CURRENT.fetch_sub(layout.size(), Ordering::Relaxed);
-    }
-
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        let p = unsafe { System.realloc(ptr, layout, new_size) };
-        if !p.is_null() {
-            // Counted as the new block allocated before the old one is freed (a move's peak).
-            grew(new_size);
-            CURRENT.fetch_sub(layout.size(), Ordering::Relaxed);
-        }
-        p
-    }
-}
-
-#[global_allocator]
-static ALLOCATOR: Counting = Counting;
-
-/// One test at a time, so that the peak is this test's: each test holds it throughout.
-static SERIAL: Mutex<()> = Mutex::new(());
 
 fn serial() -> std::sync::MutexGuard<'static, ()> {
     SERIAL.lock().unwrap_or_else(|e| e.into_inner())
@@ -118,6 +64,7 @@ const JSON_MESH: &str = r#""mesh": {"generate": {"kind": "cloth", "vertices": [4
 
 #[test]
 fn deeply_nested_toml_arrays_and_tables_are_refused() {
+    let _whole_test = crate::whole_test();
     let _serial = serial();
     let depth = 4000;
     let arrays = format!("{}1{}", "[".repeat(depth), "]".repeat(depth));
@@ -136,6 +83,7 @@ fn deeply_nested_toml_arrays_and_tables_are_refused() {
 
 #[test]
 fn deeply_dotted_toml_keys_are_refused() {
+    let _whole_test = crate::whole_test();
     let _serial = serial();
     let path = vec!["a"; 3000].join(".");
     for text in [
@@ -153,6 +101,7 @@ fn deeply_dotted_toml_keys_are_refused() {
 
 #[test]
 fn deeply_nested_json_is_refused() {
+    let _whole_test = crate::whole_test();
     let _serial = serial();
     let arrays = format!("{}1{}", "[".repeat(4000), "]".repeat(4000));
     let objects = format!("{}1{}", "{\"a\": ".repeat(1200), "}".repeat(1200));
@@ -173,6 +122,7 @@ fn deeply_nested_json_is_refused() {
 
 #[test]
 fn repeated_keys_are_refused_naming_the_key() {
+    let _whole_test = crate::whole_test();
     let _serial = serial();
     refused_with(
         &format!("{MESH}[solver]\niterations = 3\niterations = 4\n"),
@@ -208,6 +158,7 @@ fn repeated_keys_are_refused_naming_the_key() {
 
 #[test]
 fn huge_generated_meshes_are_refused_with_the_estimate_and_the_largest_that_fits() {
+    let _whole_test = crate::whole_test();
     let _serial = serial();
     let message = refused_with(
         "[mesh]\ngenerate = { kind = \"tet_box\", cells = [200, 200, 200], size = [1, 1, 1] }\n",
@@ -266,6 +217,7 @@ fn huge_generated_meshes_are_refused_with_the_estimate_and_the_largest_that_fits
 
 #[test]
 fn the_memory_estimate_covers_what_loading_a_generated_mesh_takes() {
+    let _whole_test = crate::whole_test();
     let _serial = serial();
     // Mid-size meshes: the estimate is at least the measured peak and not far above it.
     let mut measurements = Vec::new();
@@ -311,6 +263,7 @@ fn the_memory_estimate_covers_what_loading_a_generated_mesh_takes() {
 
 #[test]
 fn huge_iteration_and_step_counts_are_read_without_allocating_for_them() {
+    let _whole_test = crate::whole_test();
     let _serial = serial();
     // A float where a count goes: refused naming the line.
     refused_with(&format!("{MESH}[solver]\niterations = 1e18\n"), SceneFormat::Toml, &["line 4", "iterations = 1e18"]);
@@ -327,6 +280,7 @@ fn huge_iteration_and_step_counts_are_read_without_allocating_for_them() {
 
 #[test]
 fn long_selection_and_target_lists_are_read_in_proportion() {
+    let _whole_test = crate::whole_test();
     let _serial = serial();
     // About 10 KB of indices: a repeated one, one out of range, a valid long list.
     let zeros = vec!["0"; 3000].join(",");
@@ -364,6 +318,7 @@ fn long_selection_and_target_lists_are_read_in_proportion() {
 
 #[test]
 fn huge_and_tiny_generated_sizes_are_refused_or_stay_finite() {
+    let _whole_test = crate::whole_test();
     let _serial = serial();
     for size in ["1e300", "1e-300"] {
         let text = format!(

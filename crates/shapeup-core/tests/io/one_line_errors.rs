@@ -2,7 +2,6 @@
 //! (a file's carriage returns, escape sequences and newlines, also those a scene's TOML or JSON
 //! escapes spell, are quoted escaped), and OFF vertex lines too short for their keyword's
 //! layout are refused instead of having their texture coordinates taken from other values.
-#![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use std::path::Path;
 

@@ -1,7 +1,6 @@
 //! PLY kept whole: every element, property, type and header line survives read → write → read
 //! in every encoding; only positions (and normals, recomputed) change; triangle strips decode
 //! consistently oriented; malformed files are one-line errors with their position.
-#![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use std::fs;
 use std::path::Path;
@@ -16,9 +15,7 @@ use shapeup_core::io::{
 use shapeup_core::mesh::Polygons;
 use shapeup_core::warnings::Warnings;
 
-#[path = "common/file_mesh.rs"]
-mod file_mesh;
-use file_mesh::FileMesh;
+use crate::file_mesh::FileMesh;
 
 const ENCODINGS: [PlyEncoding; 3] = [PlyEncoding::Ascii, PlyEncoding::BinaryLittleEndian, PlyEncoding::BinaryBigEndian];
 

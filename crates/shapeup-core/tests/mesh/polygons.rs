@@ -1,7 +1,6 @@
 //! Polygon triangulation: holes joined by a bridge edge (a corner and the bridge repeated, as
 //! LightWave and other exporters write them), the reasons a polygon is left out, and work
 //! linear in the corners for convex polygons and bounded for tangled ones.
-#![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use glam::{DQuat, DVec2, DVec3};
 use shapeup_core::io::read_mesh;
@@ -11,16 +10,7 @@ use shapeup_core::mesh::{
 use shapeup_core::scene::{Scene, SceneFormat};
 use std::path::{Path, PathBuf};
 
-/// xorshift64*: a fixed stream of numbers in [0, 1).
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
+use crate::common::Rng;
 
 fn tilt() -> DQuat {
     DQuat::from_axis_angle(DVec3::new(1.0, 2.0, 3.0).normalize(), 0.7)
@@ -186,7 +176,7 @@ fn random_star_shapes_with_bridged_holes_tile() {
         let mut flat: Vec<DVec2> = (0..k)
             .map(|i| {
                 let a = std::f64::consts::TAU * i as f64 / k as f64;
-                (0.6 + rng.next()) * DVec2::new(a.cos(), a.sin())
+                (0.6 + rng.unit()) * DVec2::new(a.cos(), a.sin())
             })
             .collect();
         let outer: Vec<u32> = (0..k as u32).collect();
@@ -367,7 +357,7 @@ fn a_star_polygon_of_20000_corners_is_ear_clipped_within_the_budget() {
     let k = 20_000;
     let mut rng = Rng(7);
     let flat: Vec<DVec2> =
-        circle(k).iter().enumerate().map(|(i, q)| *q * if i % 2 == 0 { 1.0 } else { 0.5 + 0.4 * rng.next() }).collect();
+        circle(k).iter().enumerate().map(|(i, q)| *q * if i % 2 == 0 { 1.0 } else { 0.5 + 0.4 * rng.unit() }).collect();
     let polygon: Vec<u32> = (0..k as u32).collect();
     let (triangles, done) = triangulate(&flat, &polygon);
     eprintln!("{} corners: work {} (budget {})", k, done.work, triangulation_work_budget(k));
@@ -383,7 +373,7 @@ fn a_star_polygon_of_20000_corners_is_ear_clipped_within_the_budget() {
 fn a_random_polygon_of_150000_corners_falls_back_to_a_fan_within_its_budget() {
     let k = 150_000;
     let mut rng = Rng(0x2545_f491_4f6c_dd1d);
-    let flat: Vec<DVec2> = (0..k).map(|_| DVec2::new(rng.next(), rng.next())).collect();
+    let flat: Vec<DVec2> = (0..k).map(|_| DVec2::new(rng.unit(), rng.unit())).collect();
     let polygon: Vec<u32> = (0..k as u32).collect();
     let (triangles, done) = triangulate(&flat, &polygon);
     eprintln!("{} corners: work {} (budget {})", k, done.work, triangulation_work_budget(k));

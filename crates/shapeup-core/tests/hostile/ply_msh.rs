@@ -3,59 +3,15 @@
 //! in time and memory proportional to their real size (a counting allocator bounds the peak, a
 //! watchdog catches hangs), with one line naming the file and the line or byte offset. Also
 //! UTF-16 PLY files: an ascii one is decoded, a binary one refused naming the encoding.
-#![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use std::alloc::{GlobalAlloc, Layout, System};
 use std::path::Path;
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::{Mutex, mpsc};
+use std::sync::atomic::Ordering;
+use std::sync::mpsc;
+
+use crate::{CURRENT as LIVE, PEAK, SERIAL as ONE_AT_A_TIME};
 use std::time::Duration;
 
 use shapeup_core::io::{IoError, LoadedMesh, msh, ply};
-
-/// The system allocator, counting the bytes live and their peak.
-struct Counting;
-
-static LIVE: AtomicUsize = AtomicUsize::new(0);
-static PEAK: AtomicUsize = AtomicUsize::new(0);
-
-// The workspace denies `unsafe`; a global allocator cannot be written without it, and this one
-// only forwards to the system allocator.
-#[allow(unsafe_code)]
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        let p = unsafe { System.alloc(layout) };
-        if !p.is_null() {
-            let live = LIVE.fetch_add(layout.size(), Ordering::Relaxed) + layout.size();
-            PEAK.fetch_max(live, Ordering::Relaxed);
-        }
-        p
-    }
-
-    unsafe fn dealloc(&self, p: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(p, layout) };
-        LIVE.fetch_sub(layout.size(), Ordering::Relaxed);
-    }
-
-    unsafe fn realloc(&self, p: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        let q = unsafe { System.realloc(p, layout, new_size) };
-        if !q.is_null() {
-            if new_size >= layout.size() {
-                let live = LIVE.fetch_add(new_size - layout.size(), Ordering::Relaxed) + new_size - layout.size();
-                PEAK.fetch_max(live, Ordering::Relaxed);
-            } else {
-                LIVE.fetch_sub(layout.size() - new_size, Ordering::Relaxed);
-            }
-        }
-        q
-    }
-}
-
-#[global_allocator]
-static ALLOCATOR: Counting = Counting;
-
-/// Tests measure the peak one at a time.
-static ONE_AT_A_TIME: Mutex<()> = Mutex::new(());
 
 /// Most bytes a hostile input of a few KB may have live at once while it is read.
 const PEAK_LIMIT: usize = 64 << 20;
@@ -132,6 +88,7 @@ fn many_elements(n: usize, count: &str) -> String {
 
 #[test]
 fn ascii_ply_with_hostile_sizes_is_refused_in_proportion() {
+    let _whole_test = crate::whole_test();
     let faces = "element face 1\nproperty list uint int vertex_indices\n";
     let strips = "element tristrips 1\nproperty list uint int vertex_indices\n";
     let long_word = "w".repeat(9000);
@@ -175,6 +132,7 @@ fn ascii_ply_with_hostile_sizes_is_refused_in_proportion() {
 
 #[test]
 fn binary_ply_with_hostile_sizes_is_refused_in_proportion() {
+    let _whole_test = crate::whole_test();
     let faces = "element face 1\nproperty list uint int vertex_indices\n";
     let strips = "element tristrips 1\nproperty list uint int vertex_indices\n";
     let mut claim_4e9 = le_vertices();
@@ -207,6 +165,7 @@ fn binary_ply_with_hostile_sizes_is_refused_in_proportion() {
 
 #[test]
 fn a_face_of_150000_corners_reads_in_a_1_mb_ply() {
+    let _whole_test = crate::whole_test();
     let _guard = ONE_AT_A_TIME.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
     // A convex polygon: its triangulation is simple, so only the reading is measured.
     let n = 150_000;
@@ -235,6 +194,7 @@ const HUGE: &str = "1152921504606846976"; // 2⁶⁰
 
 #[test]
 fn ascii_msh_with_hostile_sizes_is_refused_in_proportion() {
+    let _whole_test = crate::whole_test();
     let head = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n";
     let nodes = "$Nodes\n1 3 1 3\n0 1 0 3\n1\n2\n3\n0 0 0\n1 0 0\n0 1 0\n$EndNodes\n";
     let case = |s: String| s.into_bytes();
@@ -301,6 +261,7 @@ fn binary_nodes(blocks: u64, count: u64, in_block: u64) -> Vec<u8> {
 
 #[test]
 fn binary_msh_with_hostile_sizes_is_refused_in_proportion() {
+    let _whole_test = crate::whole_test();
     let huge = 1u64 << 60;
     let join = |parts: &[&[u8]]| parts.concat();
     let head = binary_msh_head();
@@ -357,6 +318,7 @@ fn binary_msh_with_hostile_sizes_is_refused_in_proportion() {
 
 #[test]
 fn utf16_ply_is_decoded_when_ascii_and_refused_when_binary() {
+    let _whole_test = crate::whole_test();
     let _guard = ONE_AT_A_TIME.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
     let text = String::from_utf8(ascii_ply(
         &format!("{PLY_VERTEX}element face 1\nproperty list uchar int vertex_indices\n"),

@@ -2,7 +2,6 @@
 //! OFF, ascii STL, TetGen pairs and scene files, in both byte orders, with LF and CRLF line
 //! endings; malformed UTF-16 is refused in one line naming the file, the encoding and the byte
 //! offset; a binary STL whose header starts with FF FE stays binary.
-#![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use std::fs;
 use std::path::{Path, PathBuf};

@@ -6,69 +6,15 @@
 //! Memory is measured with a counting global allocator, so this file holds only these tests and
 //! runs them one at a time; each runs on its own thread under a 60 s watchdog (a hang check, far
 //! above the real time, not a timing assertion).
-#![allow(clippy::unwrap_used, clippy::expect_used)]
-// The counting allocator below is the only unsafe code, and it only forwards to `System`.
-#![allow(unsafe_code)]
 
-use std::alloc::{GlobalAlloc, Layout, System};
 use std::fmt::Write as _;
 use std::path::Path;
-use std::sync::Mutex;
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::Ordering;
+
+use crate::{CURRENT, PEAK, SERIAL};
 use std::time::Duration;
 
 use shapeup_core::io::{IoError, LoadedMesh, obj, off, stl, tetgen};
-
-/// Counts the bytes allocated now and at the peak since the last reset.
-struct Counting;
-
-static CURRENT: AtomicUsize = AtomicUsize::new(0);
-static PEAK: AtomicUsize = AtomicUsize::new(0);
-
-fn grew(by: usize) {
-    let now = CURRENT.fetch_add(by, Ordering::Relaxed) + by;
-    PEAK.fetch_max(now, Ordering::Relaxed);
-}
-
-// SAFETY: every call is forwarded to the system allocator unchanged; the counters are atomics.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        let p = unsafe { System.alloc(layout) };
-        if !p.is_null() {
-            grew(layout.size());
-        }
-        p
-    }
-
-    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
-        let p = unsafe { System.alloc_zeroed(layout) };
-        if !p.is_null() {
-            grew(layout.size());
-        }
-        p
-    }
-
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) };
-        CURRENT.fetch_sub(layout.size(), Ordering::Relaxed);
-    }
-
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        let p = unsafe { System.realloc(ptr, layout, new_size) };
-        if !p.is_null() {
-            // Counted as the new block allocated before the old one is freed (a move's peak).
-            grew(new_size);
-            CURRENT.fetch_sub(layout.size(), Ordering::Relaxed);
-        }
-        p
-    }
-}
-
-#[global_allocator]
-static ALLOCATOR: Counting = Counting;
-
-/// One measurement at a time, so that the peak is that test's.
-static SERIAL: Mutex<()> = Mutex::new(());
 
 const MB: usize = 1 << 20;
 
@@ -130,6 +76,7 @@ fn refused(read: Reader, name: &'static str, text: &[u8], needles: &[&str]) -> S
 
 #[test]
 fn off_claiming_huge_counts_is_refused_in_small_memory() {
+    let _whole_test = crate::whole_test();
     refused(read_off, "huge.off", b"OFF\n1000000000 1000000000 0\n0 0 0\n", &["line 4", "1 of 1000000000 vertices"]);
     refused(read_off, "glued.off", b"OFF1000000000 1000000000 0\n", &["line 2", "0 of 1000000000 vertices"]);
     let faces = b"OFF\n3 4000000000 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
@@ -145,6 +92,7 @@ fn off_claiming_huge_counts_is_refused_in_small_memory() {
 
 #[test]
 fn stl_claiming_huge_counts_is_refused_in_small_memory() {
+    let _whole_test = crate::whole_test();
     let mut binary = vec![b' '; 80];
     binary.extend_from_slice(&4_000_000_000u32.to_le_bytes());
     binary.extend_from_slice(&[0; 50 * 3]);
@@ -171,6 +119,7 @@ fn read_pair(node: &'static str, ele: &'static str) -> Result<LoadedMesh, String
 
 #[test]
 fn tetgen_claiming_huge_counts_is_refused_in_small_memory() {
+    let _whole_test = crate::whole_test();
     const NODE: &str = "4 3 0 0\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n";
     const ELE: &str = "1 4 0\n1 1 2 3 4\n";
     assert!(read_pair(NODE, ELE).is_ok());
@@ -194,6 +143,7 @@ fn tetgen_claiming_huge_counts_is_refused_in_small_memory() {
 
 #[test]
 fn obj_continuation_lines_join_in_linear_time() {
+    let _whole_test = crate::whole_test();
     // Thousands of continuation lines make one logical line, a face of 3,000 corners.
     let mut text = String::new();
     for i in 0..3000 {
@@ -222,6 +172,7 @@ fn obj_continuation_lines_join_in_linear_time() {
 
 #[test]
 fn long_lines_are_read_in_proportion() {
+    let _whole_test = crate::whole_test();
     let comment = format!("# {}\n", "x".repeat(4 * MB));
     let obj = format!("{comment}v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
     let len = obj.len();
@@ -241,6 +192,7 @@ fn long_lines_are_read_in_proportion() {
 /// OFF, one face record.
 #[test]
 fn a_face_of_150000_corners_reads_in_linear_time() {
+    let _whole_test = crate::whole_test();
     const N: usize = 150_000;
     let point = |i: usize| {
         let t = i as f64 / N as f64 * std::f64::consts::TAU;

@@ -3,7 +3,6 @@
 //! mesh, files written by Gmsh itself (tests/data/gmsh_box_*, see gmsh_box.geo) likewise, a
 //! file cut at every byte ends in one line naming the byte offset, and malformed data is an error
 //! naming its byte offset.
-#![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use std::path::Path;
 

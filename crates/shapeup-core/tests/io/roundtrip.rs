@@ -1,6 +1,5 @@
 //! Mesh I/O: round trips of every writable format, each reader on hand-written bytes, malformed
 //! inputs (an error naming the file and the line or element, never a panic) and atomic writes.
-#![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use std::collections::HashMap;
 use std::fs;
@@ -13,9 +12,7 @@ use shapeup_core::io::{
     write_mesh_with,
 };
 
-#[path = "common/file_mesh.rs"]
-mod file_mesh;
-use file_mesh::FileMesh;
+use crate::file_mesh::FileMesh;
 
 const SPOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/spot.obj");
 const BUNNY: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/stanford-bunny.obj");

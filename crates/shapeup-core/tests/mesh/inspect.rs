@@ -1,6 +1,5 @@
 //! `shapeup_core::inspect::MeshInfo` against independent computations: the bundled meshes, the
 //! generators, hand-made broken meshes and random ones.
-#![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use std::collections::{BTreeMap, BTreeSet, HashMap, HashSet, VecDeque};
 use std::path::Path;

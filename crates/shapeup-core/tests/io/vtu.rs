@@ -1,7 +1,6 @@
 //! `.vtu` and `.pvd` output, read back independently of the writer's crate: the XML with
 //! quick-xml, each inline binary array decoded by hand (base64 of a little-endian `UInt64` byte
 //! count followed by the little-endian values), as VTK's reader does.
-#![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use base64::Engine;
 use glam::DVec3;
@@ -14,9 +13,7 @@ use shapeup_core::mesh::Polygons;
 use shapeup_core::warnings::Warnings;
 use std::collections::HashMap;
 
-#[path = "common/file_mesh.rs"]
-mod file_mesh;
-use file_mesh::FileMesh;
+use crate::file_mesh::FileMesh;
 use std::io::ErrorKind;
 
 /// One `<DataArray>`: its attributes, the element it sits in and its text.

@@ -1,7 +1,6 @@
 //! OBJ files in, the same OBJ files out: every line kept, only `v` coordinates and the used `vn`
 //! normals rewritten; texture coordinates, corner indices and colours read back identical;
 //! normals recomputed with the file's own indexing; bad indices named with file and line.
-#![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use std::path::Path;
 
@@ -15,9 +14,7 @@ use shapeup_core::io::{IoError, read_mesh, write_mesh};
 use shapeup_core::mesh::Polygons;
 use shapeup_core::warnings::Warnings;
 
-#[path = "common/file_mesh.rs"]
-mod file_mesh;
-use file_mesh::FileMesh;
+use crate::file_mesh::FileMesh;
 
 const SPOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/spot.obj");
 const SUZANNE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/suzanne.obj");

@@ -3,7 +3,6 @@
 //! symbolic link at a temporary or final path is never followed into another file; a failed
 //! write leaves nothing behind; written files get the usual mode (or that of the file they
 //! replace).
-#![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use std::fs;
 use std::path::{Path, PathBuf};

@@ -1,7 +1,6 @@
 //! Tetrahedral mesh I/O: Gmsh `.msh` and TetGen `.node`/`.ele` round trips, hand-written files of
 //! both MSH versions, the derived boundary surface, and malformed inputs (an error naming the file
 //! and line, never a panic) and failed writes (nothing left behind).
-#![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use std::fs;
 use std::path::{Path, PathBuf};

@@ -1,6 +1,5 @@
 //! Every text reader skips a UTF-8 byte-order mark; OFF keeps its colours, normals and texture
 //! coordinates; writers say what a format cannot hold.
-#![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use std::fs;
 use std::path::{Path, PathBuf};
