@@ -15,6 +15,7 @@ use std::hint::black_box;
 
 const BATCH: usize = 1024;
 
+#[allow(dead_code)] // the tests use more of it than this bench
 #[path = "../tests/common/rng.rs"]
 mod rng;
 use rng::Rng;
