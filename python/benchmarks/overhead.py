@@ -49,7 +49,7 @@ def main() -> None:
     print(f"  Python overhead      {(wall - inside) * 1e3:9.2f} ms = {100 * (wall - inside) / inside:.2f} % of the solve")
     start = time.perf_counter()
     for _ in range(100):
-        shapeup._api._vertices(V)
+        shapeup._checks._vertices(V)
     print(f"  V check (no copy)    {(time.perf_counter() - start) * 10:9.3f} ms per call")
     assert np.isfinite(q).all()
 

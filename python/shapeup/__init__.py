@@ -7,25 +7,38 @@ Dynamics (Bouaziz et al. SIGGRAPH 2014) for numpy meshes.
 
 Arrays follow libigl / trimesh / meshio: V float64 (n, 3), F int (m, 3) or a list of polygons,
 T int (t, 4). :mod:`shapeup.batch` runs scene files on a Dask cluster.
+
+One module per concept: ``mesh`` (Mesh, read_mesh, write_mesh), ``types`` (ConstraintType,
+constraint_types), ``groups`` (Group), ``solver`` (Solver), ``simulation`` (Simulation),
+``scene`` (Scene); ``_checks`` holds the argument checks they share.
 """
 
-from ._api import (
-    ConstraintType,
-    Group,
-    Mesh,
-    Scene,
-    Simulation,
-    SolveFailed,
-    Solver,
-    constraint_types,
-    read_mesh,
-    write_mesh,
-)
-from ._shapeup import __version__, catalogue_markdown, set_threads
+from ._shapeup import SolveFailed, __version__, catalogue_markdown, set_threads
+from .groups import Group
+from .mesh import Mesh, read_mesh, write_mesh
+from .scene import Scene
+from .simulation import Simulation
+from .solver import Solver
+from .types import ConstraintType, constraint_types
 
 from . import _api
 
-__all__ = [*_api.__all__, "__version__", "batch", "catalogue_markdown", "set_threads"]
+__all__ = [
+    "ConstraintType",
+    "Group",
+    "Mesh",
+    "Scene",
+    "Simulation",
+    "SolveFailed",
+    "Solver",
+    "constraint_types",
+    "read_mesh",
+    "write_mesh",
+    "__version__",
+    "batch",
+    "catalogue_markdown",
+    "set_threads",
+]
 
 
 def __getattr__(name: str):

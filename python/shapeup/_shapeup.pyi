@@ -1,4 +1,5 @@
-# Type stubs of the native module (crates/shapeup-py). The public API is shapeup/_api.py.
+# Type stubs of the native module (crates/shapeup-py). The public API is in shapeup/ (mesh.py,
+# types.py, groups.py, solver.py, simulation.py, scene.py).
 from typing import Any
 
 import numpy as np
@@ -28,7 +29,15 @@ def mesh_from_arrays(
     polygons: tuple[npt.NDArray[np.int64], npt.NDArray[np.int64]] | None = None,
     tetrahedra: npt.NDArray[np.int64] | None = None,
 ) -> _Mesh: ...
-def constraint_types() -> list[tuple[str, str, float, str, bool, list[tuple[str, str, str]]]]: ...
+class _TypeInfo:
+    name: str
+    acts_on: str
+    default_weight: float
+    summary: str
+    has_targets: bool
+    options: list[tuple[str, str, str]]
+
+def constraint_types() -> list[_TypeInfo]: ...
 def catalogue_markdown() -> str: ...
 def set_threads(n: int) -> None: ...
 

@@ -1,0 +1,164 @@
+//! `_Simulation`: Projective Dynamics on one mesh.
+
+use crate::convert::{points, to_array};
+use crate::errors::{solve_error, value_error};
+use crate::groups::{add_entry, held, remove, set_targets, set_weight};
+use crate::mesh::PyMesh;
+use crate::signals::Interrupt;
+use glam::DVec3;
+use numpy::{PyArray2, PyReadonlyArray2};
+use pyo3::prelude::*;
+use shapeup_core::dynamics::{DynamicsParams, Simulation as CoreSimulation};
+use shapeup_core::geometry::RestGeometry;
+use shapeup_core::mesh::Mesh as CoreMesh;
+use shapeup_core::scene::lumped_masses;
+use shapeup_core::solver::{SolveError, SolverParams, System};
+
+/// A Projective Dynamics simulation on one mesh (user coordinates and units).
+#[pyclass(name = "_Simulation", module = "shapeup._shapeup")]
+pub(crate) struct PySimulation {
+    mesh: CoreMesh,
+    rest: RestGeometry,
+    simulation: CoreSimulation,
+}
+
+#[pymethods]
+impl PySimulation {
+    /// `params`: JSON text with time_step, gravity, stiffness, damping, density, iterations,
+    /// tolerance, acceleration (each optional; defaults as in scene files).
+    #[new]
+    fn new(mesh: &PyMesh, params: &str) -> PyResult<Self> {
+        let settings: shapeup_core::scene::SolverSettings =
+            serde_json::from_str(params).map_err(|e| value_error(format!("bad simulation settings: {e}")))?;
+        let rest = RestGeometry::of_mesh(mesh.mesh.positions.clone(), &mesh.mesh);
+        if !(settings.density.is_finite() && settings.density > 0.0) {
+            return Err(value_error(format!("density must be a finite number > 0, found {}", settings.density)));
+        }
+        let masses = lumped_masses(&rest, settings.density);
+        let solver = SolverParams {
+            acceleration: settings.acceleration,
+            anderson_window: settings.anderson_window,
+            lbfgs_memory: settings.lbfgs_memory,
+            ..SolverParams::default()
+        };
+        let dynamics = DynamicsParams {
+            time_step: settings.time_step,
+            stiffness: settings.stiffness,
+            damping: settings.damping,
+            gravity: DVec3::from_array(settings.gravity),
+            iterations: settings.iterations,
+            tolerance: settings.tolerance,
+        };
+        dynamics.validate().map_err(value_error)?;
+        let system = System::new(mesh.mesh.num_vertices(), solver);
+        let simulation = CoreSimulation::new(system, masses, rest.positions.clone(), dynamics).map_err(value_error)?;
+        Ok(PySimulation { mesh: mesh.mesh.clone(), rest, simulation })
+    }
+
+    fn add(&mut self, entry: &str) -> PyResult<(u32, String, String, usize)> {
+        add_entry(self.simulation.system_mut(), &self.mesh, &self.rest, entry)
+    }
+
+    fn held(&self, id: u32) -> PyResult<Vec<u32>> {
+        held(self.simulation.system(), id)
+    }
+
+    fn set_targets(&mut self, id: u32, targets: PyReadonlyArray2<'_, f64>) -> PyResult<()> {
+        set_targets(self.simulation.system_mut(), id, &targets)
+    }
+
+    fn set_weight(&mut self, id: u32, weight: f64) -> PyResult<()> {
+        set_weight(self.simulation.system_mut(), id, weight)
+    }
+
+    fn remove(&mut self, id: u32) -> PyResult<()> {
+        remove(self.simulation.system_mut(), id)
+    }
+
+    /// `n` time steps without the GIL (Ctrl+C stops between steps); returns the steps' reports
+    /// as JSON text.
+    fn step(&mut self, py: Python<'_>, n: usize) -> PyResult<String> {
+        let mut interrupt = Interrupt::new();
+        let simulation = &mut self.simulation;
+        let reports = py.detach(|| {
+            let mut reports = Vec::with_capacity(n.min(1 << 16));
+            for _ in 0..n {
+                let r = simulation.step()?;
+                reports.push(serde_json::json!({
+                    "energy": r.energy, "iterations": r.iterations, "rejected": r.rejected,
+                    "local_s": r.local_seconds, "global_s": r.global_seconds,
+                    "setup_s": r.setup_seconds, "total_s": r.total_seconds,
+                }));
+                if !simulation.kinetic_energy().is_finite() {
+                    return Err(SolveError::NonFiniteEnergy);
+                }
+                if interrupt.poll().is_break() {
+                    break;
+                }
+            }
+            Ok(reports)
+        });
+        if let Some(e) = interrupt.error {
+            return Err(e);
+        }
+        Ok(serde_json::Value::from(reports.map_err(solve_error)?).to_string())
+    }
+
+    #[getter]
+    fn positions<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        to_array(py, self.simulation.positions())
+    }
+
+    #[getter]
+    fn velocities<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        to_array(py, self.simulation.velocities())
+    }
+
+    #[getter]
+    fn masses(&self) -> Vec<f64> {
+        self.simulation.masses().to_vec()
+    }
+
+    #[getter]
+    fn time(&self) -> f64 {
+        self.simulation.time()
+    }
+
+    #[getter]
+    fn steps(&self) -> u64 {
+        self.simulation.steps()
+    }
+
+    #[getter]
+    fn kinetic_energy(&self) -> f64 {
+        self.simulation.kinetic_energy()
+    }
+
+    fn energy(&mut self) -> PyResult<f64> {
+        self.simulation.energy().map_err(solve_error)
+    }
+
+    fn set_state(
+        &mut self,
+        positions: PyReadonlyArray2<'_, f64>,
+        velocities: PyReadonlyArray2<'_, f64>,
+    ) -> PyResult<()> {
+        let (x, v) = (points(&positions, "positions")?, points(&velocities, "velocities")?);
+        self.simulation.set_state(&x, &v).map_err(value_error)
+    }
+
+    #[pyo3(signature = (forces))]
+    fn set_external_forces(&mut self, forces: Option<PyReadonlyArray2<'_, f64>>) -> PyResult<()> {
+        let forces = forces.map(|f| points(&f, "forces")).transpose()?;
+        self.simulation.set_external_forces(forces).map_err(value_error)
+    }
+
+    fn grab(&mut self, vertices: Vec<u32>, targets: PyReadonlyArray2<'_, f64>, strength: f64) -> PyResult<()> {
+        let targets = points(&targets, "targets")?;
+        self.simulation.grab(vertices, targets, strength).map_err(value_error)
+    }
+
+    fn release(&mut self) {
+        self.simulation.release();
+    }
+}

@@ -1,0 +1,119 @@
+//! `_Solver`: constraint groups on one mesh and the ShapeUp solver.
+
+use crate::convert::{points, to_array};
+use crate::errors::{solve_error, value_error};
+use crate::groups::{add_entry, held, remove, set_targets, set_weight};
+use crate::mesh::PyMesh;
+use crate::signals::Interrupt;
+use glam::DVec3;
+use numpy::{PyArray2, PyReadonlyArray2};
+use pyo3::prelude::*;
+use shapeup_core::geometry::RestGeometry;
+use shapeup_core::mesh::Mesh as CoreMesh;
+use shapeup_core::solver::{Acceleration, SolveReport, SolverParams, System};
+
+/// The report of a solve as JSON text.
+fn solve_report_json(report: &SolveReport, acceleration: Acceleration) -> String {
+    serde_json::json!({
+        "iterations": report.energies.len(),
+        "initial_energy": report.initial_energy,
+        "energy": report.energies,
+        "relative_change": shapeup_core::scene::relative_changes(report.initial_energy, &report.energies),
+        "acceleration": acceleration.name(),
+        "rejected": report.rejected,
+        "timings": {
+            "setup_s": report.setup_seconds,
+            "local_s": report.local_seconds,
+            "global_s": report.global_seconds,
+        },
+    })
+    .to_string()
+}
+
+/// `system.solve_with` without the GIL, stopping for Ctrl+C (the `KeyboardInterrupt` is
+/// returned after the solve stops, q left at the last iteration).
+fn solve_interruptible(
+    py: Python<'_>,
+    system: &mut System,
+    q: &mut [DVec3],
+    iterations: usize,
+    tolerance: f64,
+) -> PyResult<SolveReport> {
+    let mut interrupt = Interrupt::new();
+    let result = py.detach(|| system.solve_with(q, iterations, tolerance, |_, _| interrupt.poll()));
+    if let Some(e) = interrupt.error {
+        return Err(e);
+    }
+    result.map_err(solve_error)
+}
+
+/// Constraint groups on one mesh and the ShapeUp solver (user coordinates, no normalization).
+#[pyclass(name = "_Solver", module = "shapeup._shapeup")]
+pub(crate) struct PySolver {
+    mesh: CoreMesh,
+    rest: RestGeometry,
+    system: System,
+}
+
+#[pymethods]
+impl PySolver {
+    #[new]
+    fn new(mesh: &PyMesh) -> Self {
+        let rest = RestGeometry::of_mesh(mesh.mesh.positions.clone(), &mesh.mesh);
+        let system = System::new(mesh.mesh.num_vertices(), SolverParams::default());
+        PySolver { mesh: mesh.mesh.clone(), rest, system }
+    }
+
+    /// Adds a group from a scene entry (JSON text); returns (id, name, type, constraints).
+    fn add(&mut self, entry: &str) -> PyResult<(u32, String, String, usize)> {
+        add_entry(&mut self.system, &self.mesh, &self.rest, entry)
+    }
+
+    fn held(&self, id: u32) -> PyResult<Vec<u32>> {
+        held(&self.system, id)
+    }
+
+    fn set_targets(&mut self, id: u32, targets: PyReadonlyArray2<'_, f64>) -> PyResult<()> {
+        set_targets(&mut self.system, id, &targets)
+    }
+
+    fn set_weight(&mut self, id: u32, weight: f64) -> PyResult<()> {
+        set_weight(&mut self.system, id, weight)
+    }
+
+    fn remove(&mut self, id: u32) -> PyResult<()> {
+        remove(&mut self.system, id)
+    }
+
+    /// Solves from `q` (default the rest shape); returns (q, report as JSON text).
+    #[pyo3(signature = (q, iterations, tolerance, acceleration))]
+    fn solve<'py>(
+        &mut self,
+        py: Python<'py>,
+        q: Option<PyReadonlyArray2<'py, f64>>,
+        iterations: usize,
+        tolerance: f64,
+        acceleration: &str,
+    ) -> PyResult<(Bound<'py, PyArray2<f64>>, String)> {
+        let mut x = match &q {
+            Some(q) => points(q, "q")?,
+            None => self.rest.positions.clone(),
+        };
+        let acceleration = Acceleration::from_name(acceleration).ok_or_else(|| {
+            let names: Vec<&str> = Acceleration::ALL.iter().map(|a| a.name()).collect();
+            value_error(format!("unknown acceleration \"{acceleration}\" ({})", names.join(", ")))
+        })?;
+        if self.system.params().acceleration != acceleration {
+            self.system.set_params(SolverParams { acceleration, ..*self.system.params() });
+        }
+        let report = solve_interruptible(py, &mut self.system, &mut x, iterations, tolerance)?;
+        Ok((to_array(py, &x), solve_report_json(&report, acceleration)))
+    }
+
+    /// (E, [(id, E_group)]) at q.
+    fn energy(&mut self, q: PyReadonlyArray2<'_, f64>) -> PyResult<(f64, Vec<(u32, f64)>)> {
+        let q = points(&q, "q")?;
+        let e = self.system.energy(&q).map_err(solve_error)?;
+        Ok((e.total, e.per_group.iter().map(|(id, v)| (id.0, *v)).collect()))
+    }
+}
