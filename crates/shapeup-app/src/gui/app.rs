@@ -401,18 +401,10 @@ impl EditorApp {
     fn apply(&mut self, commands: Vec<Command>) {
         let mut changed = false;
         for command in commands {
+            let effect = command.effect();
             // Moving targets or changing weights changes nothing drawn until the solve returns.
-            self.geometry_dirty |= !matches!(
-                command,
-                Command::MoveHandle { .. }
-                    | Command::RotateHandle { .. }
-                    | Command::SetWeight { .. }
-                    | Command::SetIterations(_)
-                    | Command::SetTolerance(_)
-                    | Command::SetAcceleration(_)
-                    | Command::RenameHandle { .. }
-            );
-            let solve = command.changes_solve();
+            self.geometry_dirty |= effect.redraws;
+            let solve = effect.changes_solve;
             let fixes = matches!(command, Command::FixSelection | Command::PinFreePieces);
             match self.document.apply(command) {
                 Ok(changed_state) => {
