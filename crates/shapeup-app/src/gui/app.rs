@@ -356,13 +356,6 @@ impl EditorApp {
         self.view.latencies.iter().copied()
     }
 
-    /// Milliseconds from each change to the start of the frame after the one that shows it: by
-    /// then that frame has been painted and handed to the display, so these bound the time to
-    /// the screen from above (an idle pause before the next frame counts too).
-    pub fn on_screen_latencies(&self) -> impl Iterator<Item = f64> + '_ {
-        self.view.on_screen.iter().copied()
-    }
-
     /// Whether dynamic mode is on (a simulation exists, running or paused).
     pub fn is_simulating(&self) -> bool {
         self.simulation.is_some()
