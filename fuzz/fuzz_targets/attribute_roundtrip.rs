@@ -10,8 +10,7 @@
 
 use libfuzzer_sys::fuzz_target;
 use shapeup_core::Mesh;
-use shapeup_core::attributes::Attributes;
-use shapeup_core::io::{IoError, LoadedMesh, PlyEncoding, obj, off, ply};
+use shapeup_core::io::{Attributes, IoError, LoadedMesh, PlyEncoding, obj, off, ply};
 use shapeup_core::warnings::Warnings;
 use shapeup_fuzz::path;
 
@@ -44,13 +43,14 @@ impl Format {
         }
     }
 
-    fn write(self, mesh: &Mesh) -> Vec<u8> {
+    fn write(self, loaded: &LoadedMesh) -> Vec<u8> {
+        let (mesh, attributes) = (&loaded.mesh, &loaded.attributes);
         let mut out = Vec::new();
         let mut warnings = Warnings::new();
         let written = match self {
-            Format::Obj => obj::write_obj(&mut out, mesh, &mut warnings),
-            Format::Ply(encoding) => ply::write_ply(&mut out, mesh, encoding, &mut warnings),
-            Format::Off => off::write_off(&mut out, mesh, &mut warnings),
+            Format::Obj => obj::write_obj(&mut out, mesh, attributes, &mut warnings),
+            Format::Ply(encoding) => ply::write_ply(&mut out, mesh, attributes, encoding, &mut warnings),
+            Format::Off => off::write_off(&mut out, mesh, attributes, &mut warnings),
         };
         if let Err(e) = written {
             panic!("{self:?}: writing a mesh just read failed: {e}");
@@ -88,14 +88,15 @@ fn without_comments(attributes: &Attributes) -> Attributes {
 }
 
 /// The first read against the second: everything but the normals' values.
-fn compare(format: Format, a: &Mesh, b: &Mesh) {
+fn compare(format: Format, a: &LoadedMesh, b: &LoadedMesh) {
+    let (x, y) = (&without_comments(&a.attributes), &without_comments(&b.attributes));
+    let (a, b) = (&a.mesh, &b.mesh);
     let bits = |m: &Mesh| m.positions.iter().map(|p| p.to_array().map(f64::to_bits)).collect::<Vec<_>>();
     check!("positions", bits(a), bits(b));
     check!("polygons", a.polygons, b.polygons);
     check!("triangles", a.triangles, b.triangles);
     check!("triangle_polygon", a.triangle_polygon, b.triangle_polygon);
     check!("tetrahedra", a.tetrahedra, b.tetrahedra);
-    let (x, y) = (&without_comments(&a.attributes), &without_comments(&b.attributes));
     check!("texture coordinates", x.texcoords(&a.polygons), y.texcoords(&b.polygons));
     check!("vertex colours", x.vertex_colors(), y.vertex_colors());
     check!("attribute kinds", x.kinds(), y.kinds());
@@ -171,15 +172,15 @@ fuzz_target!(|data: &[u8]| {
         Err(e) if shapeup_fuzz::expect_valid() => panic!("SHAPEUP_FUZZ_EXPECT_VALID: this input does not read: {e}"),
         Err(_) => return,
     };
-    let written = format.write(&first.mesh);
+    let written = format.write(&first);
     let second = match format.read(&written) {
         Ok(loaded) => loaded,
         Err(e) => {
             panic!("{format:?}: the writer's output does not read back: {e}\n{}", String::from_utf8_lossy(&written))
         }
     };
-    compare(format, &first.mesh, &second.mesh);
-    let rewritten = format.write(&second.mesh);
+    compare(format, &first, &second);
+    let rewritten = format.write(&second);
     if rewritten != written {
         panic!(
             "{format:?}: a second round trip writes other bytes:\n first: {:?}\nsecond: {:?}",
@@ -188,5 +189,5 @@ fuzz_target!(|data: &[u8]| {
         );
     }
     let Ok(third) = format.read(&rewritten) else { panic!("{format:?}: the second write does not read back") };
-    check!("the mesh after a second round trip", second.mesh, third.mesh);
+    check!("the mesh after a second round trip", (&second.mesh, &second.attributes), (&third.mesh, &third.attributes));
 });

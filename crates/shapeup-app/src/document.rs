@@ -23,7 +23,7 @@ use crate::error::{Cause, LoadError};
 use glam::DVec3;
 use history::Snapshot;
 use shapeup_core::constraints::{ConstraintType, Selection, registry, selects_any};
-use shapeup_core::io::read_mesh;
+use shapeup_core::io::{Attributes, read_mesh};
 use shapeup_core::mesh::Mesh;
 use shapeup_core::scene::SolverSettings;
 use shapeup_core::solver::{Acceleration, SolveReport};
@@ -64,6 +64,8 @@ pub struct Document {
     opened_rest: Arc<Rest>,
     /// The mesh file the document was read from (`None`: made in memory or generated).
     source: Option<PathBuf>,
+    /// What that file carried besides positions and faces, written back with the mesh.
+    attributes: Attributes,
     /// `Some(recorded)` during a drag: whether its undo step was recorded yet.
     drag: Option<bool>,
     next_key: u32,
@@ -98,6 +100,7 @@ impl Document {
         let loaded = read_mesh(path).map_err(|e| EditorError::Load(LoadError::Mesh(Cause::new(e))))?;
         let mut document = Document::new(loaded.mesh, model)?;
         document.source = Some(path.to_path_buf());
+        document.attributes = loaded.attributes;
         Ok(document)
     }
 
@@ -132,6 +135,7 @@ impl Document {
             modified: false,
             opened_rest: Arc::clone(&rest),
             source: None,
+            attributes: Attributes::None,
             drag: None,
             next_key: 0,
             solver_settings,
@@ -231,8 +235,8 @@ impl Document {
         &self.state.rest.mesh
     }
 
-    /// The current shape as a mesh (input frame), e.g. to export: the opened file's every
-    /// vertex in order, its polygons and attributes, at the current positions.
+    /// The current shape as a mesh (input frame), e.g. to export with [`Document::attributes`]:
+    /// the opened file's every vertex in order and its polygons, at the current positions.
     pub fn current_mesh(&self) -> Mesh {
         self.state.rest.mesh.with_positions(self.positions.clone())
     }
@@ -483,6 +487,12 @@ impl Document {
     /// The mesh file the document was read from, if any.
     pub fn source(&self) -> Option<&Path> {
         self.source.as_deref()
+    }
+
+    /// What the opened mesh file carried besides positions and faces ([`Attributes::None`] for a
+    /// mesh made in memory), to write with [`Document::current_mesh`].
+    pub fn attributes(&self) -> &Attributes {
+        &self.attributes
     }
 
     /// E of the current shape per group, in the order of [`Document::groups`].

@@ -188,7 +188,13 @@ impl EditSolver {
                     ids.push(system.add_group(build_group(rest, group)?)?);
                 }
                 // Vertices that only zero-area triangles use follow their edge, as in a scene.
-                shapeup_core::constraints::attach_degenerate_vertices(&mut system, &rest.geometry)?;
+                let (group, _, _) = shapeup_core::constraints::attach_degenerate_vertices(
+                    &rest.geometry,
+                    system.groups().map(|(_, g)| g),
+                );
+                if let Some(group) = group {
+                    system.add_group(group)?;
+                }
                 self.q = match &self.rest {
                     // Same positions in the input frame, seen in the new working frame.
                     Some(old) if !same_rest && self.q.len() == rest.mesh.num_vertices() => {

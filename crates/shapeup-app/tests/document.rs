@@ -5,7 +5,7 @@
 use glam::DVec3;
 use shapeup_app::document::{GroupRole, WEIGHT_RANGE};
 use shapeup_app::{Command, Document, EditorError, SelectMode, ShapeModel};
-use shapeup_core::io::read_mesh;
+use shapeup_core::io::{Attributes, read_mesh};
 use shapeup_core::scene::{Scene, SceneFormat};
 use shapeup_core::solver::Acceleration;
 use std::path::Path;
@@ -79,7 +79,7 @@ fn saved_scenes_replay_what_the_editor_converged_to() {
     let (positions, triangles) = grid(10, DVec3::ZERO);
     let mesh_path = dir.path().join("sheet.obj");
     let mesh = shapeup_core::mesh::Mesh::new(positions, triangles).unwrap();
-    shapeup_core::io::write_mesh(&mesh_path, &mesh).unwrap();
+    shapeup_core::io::write_mesh(&mesh_path, &mesh, &Attributes::None).unwrap();
 
     for (session, model) in
         [ShapeModel::StrainBending, ShapeModel::EdgeSprings, ShapeModel::IsoOneRing].into_iter().enumerate()
@@ -166,7 +166,12 @@ fn convergence_stops_at_the_tolerance_or_the_cap() {
     let dir = tempfile::tempdir().unwrap();
     let (positions, triangles) = grid(10, DVec3::ZERO);
     let mesh_path = dir.path().join("sheet.obj");
-    shapeup_core::io::write_mesh(&mesh_path, &shapeup_core::mesh::Mesh::new(positions, triangles).unwrap()).unwrap();
+    shapeup_core::io::write_mesh(
+        &mesh_path,
+        &shapeup_core::mesh::Mesh::new(positions, triangles).unwrap(),
+        &Attributes::None,
+    )
+    .unwrap();
     let mut doc = Document::open(&mesh_path, ShapeModel::EdgeSprings).unwrap();
     assert_eq!(doc.tolerance(), shapeup_app::document::DEFAULT_TOLERANCE);
     let left: Vec<u32> = (0..11).map(|y| y * 11).collect();
@@ -489,7 +494,7 @@ fn export_keeps_every_vertex_the_polygons_and_the_texture_coordinates() {
 
     // What the editor's Export… does.
     let output = dir.path().join("moved.obj");
-    shapeup_core::io::write_mesh(&output, &doc.current_mesh()).unwrap();
+    shapeup_core::io::write_mesh(&output, &doc.current_mesh(), doc.attributes()).unwrap();
     let written = std::fs::read_to_string(&output).unwrap();
     let (a, b): (Vec<&str>, Vec<&str>) = (text.lines().collect(), written.lines().collect());
     assert_eq!(a.len(), b.len(), "line for line");

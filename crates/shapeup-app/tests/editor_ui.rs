@@ -389,7 +389,7 @@ fn a_free_piece_shows_the_banner_keeps_the_shape_and_pin_free_pieces_clears_it()
     // Two separate sheets in an OBJ file; a handle on the first sheet only, moved up.
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("two-sheets.obj");
-    shapeup_core::io::write_mesh(&path, &grids(6, 2)).unwrap();
+    shapeup_core::io::write_mesh(&path, &grids(6, 2), &shapeup_core::io::Attributes::None).unwrap();
     let mut doc = Document::open(&path, ShapeModel::StrainBending).unwrap();
     assert_eq!(doc.pieces().count, 2);
     let left_column: Vec<u32> = (0..=6).map(|y| y * 7).collect();

@@ -15,17 +15,11 @@ use std::hint::black_box;
 
 const BATCH: usize = 1024;
 
-struct Rng(u64);
+#[path = "../tests/common/rng.rs"]
+mod rng;
+use rng::Rng;
+
 impl Rng {
-    fn uniform(&mut self) -> f64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        (self.0 >> 11) as f64 / (1u64 << 52) as f64 - 1.0
-    }
-    fn vec3(&mut self) -> DVec3 {
-        DVec3::new(self.uniform(), self.uniform(), self.uniform())
-    }
     fn mat3(&mut self) -> DMat3 {
         DMat3::from_cols(self.vec3(), self.vec3(), self.vec3())
     }

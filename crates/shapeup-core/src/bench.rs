@@ -2,6 +2,7 @@
 //! 2 % lowest vertices (by y) fixed and its 2 % highest moved by (0.25 D, 0.1 D, 0), D the
 //! bounding-box diagonal, under one of three shape models.
 
+use crate::constraints::ShapeModel;
 use crate::mesh::Mesh;
 use crate::scene::{GroupSpec, LoadedScene, MeshSettings, Scene, SceneError, SelectionSpec, SolverSettings, Targets};
 use std::path::PathBuf;
@@ -31,12 +32,13 @@ impl Scenario {
     }
 
     /// Shape groups: (type, multiplier).
-    fn shape(self) -> &'static [(&'static str, f64)] {
+    fn shape(self) -> Vec<(&'static str, f64)> {
         match self {
-            Scenario::Springs => &[("edge_spring", 10.0)],
-            Scenario::StrainBending => &[("triangle_strain", 10.0), ("bending", 10.0)],
-            Scenario::Iso => &[("iso_one_ring", 100.0)],
+            Scenario::Springs => ShapeModel::EdgeSprings,
+            Scenario::StrainBending => ShapeModel::StrainBending,
+            Scenario::Iso => ShapeModel::IsoOneRing,
         }
+        .groups()
     }
 }
 

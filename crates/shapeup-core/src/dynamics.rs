@@ -50,26 +50,26 @@ impl DynamicsParams {
     /// Checks every value, naming the first bad one.
     ///
     /// # Errors
-    /// A one-line message: which setting, its value and the allowed range.
-    pub fn validate(&self) -> Result<(), String> {
+    /// [`ParamError`]: which setting, its value and the allowed range.
+    pub fn validate(&self) -> Result<(), ParamError> {
         let DynamicsParams { time_step, stiffness, damping, gravity, iterations, tolerance } = *self;
         if !(time_step.is_finite() && time_step > 0.0) {
-            return Err(format!("time_step must be a finite number > 0, found {time_step}"));
+            return Err(ParamError::TimeStep(time_step));
         }
         if !(stiffness.is_finite() && stiffness > 0.0) {
-            return Err(format!("stiffness must be a finite number > 0, found {stiffness}"));
+            return Err(ParamError::Stiffness(stiffness));
         }
         if !(0.0..1.0).contains(&damping) {
-            return Err(format!("damping must be in [0, 1), found {damping}"));
+            return Err(ParamError::Damping(damping));
         }
         if !gravity.is_finite() {
-            return Err(format!("gravity must be finite, found {gravity:?}"));
+            return Err(ParamError::Gravity(gravity));
         }
         if iterations == 0 {
-            return Err("iterations must be at least 1 in dynamic mode".into());
+            return Err(ParamError::NoIterations);
         }
         if !(tolerance.is_finite() && tolerance >= 0.0) {
-            return Err(format!("tolerance must be a finite number ≥ 0, found {tolerance}"));
+            return Err(ParamError::Tolerance(tolerance));
         }
         Ok(())
     }
@@ -81,12 +81,42 @@ impl DynamicsParams {
     }
 }
 
+/// A time-stepping setting out of range ([`DynamicsParams::validate`]).
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+pub enum ParamError {
+    /// h is not a finite number > 0.
+    #[error("time_step must be a finite number > 0, found {0}")]
+    TimeStep(f64),
+    /// k is not a finite number > 0.
+    #[error("stiffness must be a finite number > 0, found {0}")]
+    Stiffness(f64),
+    /// d is outside [0, 1).
+    #[error("damping must be in [0, 1), found {0}")]
+    Damping(f64),
+    /// Gravity has a non-finite component.
+    #[error("gravity must be finite, found {0:?}")]
+    Gravity(DVec3),
+    /// No iterations per step.
+    #[error("iterations must be at least 1 in dynamic mode")]
+    NoIterations,
+    /// The tolerance is not a finite number ≥ 0.
+    #[error("tolerance must be a finite number ≥ 0, found {0}")]
+    Tolerance(f64),
+}
+
+impl From<ParamError> for String {
+    /// The message, for callers that keep errors as text.
+    fn from(e: ParamError) -> String {
+        e.to_string()
+    }
+}
+
 /// Why a simulation cannot be set up.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum DynamicsError {
     /// A setting is out of range.
     #[error("dynamic mode: {0}")]
-    BadParams(String),
+    BadParams(#[from] ParamError),
     /// Masses, positions or velocities do not match the vertex count, or a mass is not > 0.
     #[error("dynamic mode: {0}")]
     BadState(String),
@@ -170,7 +200,7 @@ impl Simulation {
         positions: Vec<DVec3>,
         params: DynamicsParams,
     ) -> Result<Self, DynamicsError> {
-        params.validate().map_err(DynamicsError::BadParams)?;
+        params.validate()?;
         let n = system.num_vertices();
         if masses.len() != n || positions.len() != n {
             return Err(DynamicsError::BadState(format!(
@@ -340,7 +370,7 @@ impl Simulation {
     /// # Errors
     /// [`DynamicsError::BadParams`].
     pub fn set_params(&mut self, params: DynamicsParams) -> Result<(), DynamicsError> {
-        params.validate().map_err(DynamicsError::BadParams)?;
+        params.validate()?;
         let old = std::mem::replace(&mut self.params, params);
         // A hold's weights are relative to the matrix's diagonal, which k and h scale.
         let held = self.hold.is_some().then(|| self.grab.clone()).flatten();

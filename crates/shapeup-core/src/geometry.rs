@@ -133,7 +133,7 @@ pub fn corner_normal_weights(positions: &[DVec3], polygons: &crate::mesh::Polygo
 
 /// Normals as a file indexes them: normal `j` is the normalized sum of
 /// [`corner_normal_weights`] over the corners c with `corner_index[c] == j` (corners with
-/// [`crate::attributes::NO_INDEX`] count for none). `None` for a normal no corner uses, or
+/// [`crate::io::attributes::NO_INDEX`] count for none). `None` for a normal no corner uses, or
 /// whose sum vanishes (the caller keeps the file's value). Indexing per vertex
 /// (`corner_index = polygons.indices()`) gives smooth vertex normals; a file's own indexing
 /// keeps its hard edges and smoothing groups.
@@ -243,11 +243,6 @@ impl WorkingFrame {
     /// A displacement or direction (no translation) from the input frame to the working frame.
     pub fn vector_to_working(&self, v: DVec3) -> DVec3 {
         v * self.scale
-    }
-
-    /// A length from the input frame to the working frame.
-    pub fn length_to_working(&self, l: f64) -> f64 {
-        l * self.scale
     }
 }
 

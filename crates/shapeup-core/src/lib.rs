@@ -48,7 +48,6 @@
 //! ```
 #![warn(missing_docs)]
 
-pub mod attributes;
 pub mod bench;
 pub mod constraints;
 pub mod dynamics;
@@ -63,10 +62,18 @@ pub mod scene;
 pub mod solver;
 #[cfg(feature = "tetgen")]
 pub mod tetrahedralize;
+pub mod text;
 pub mod topology;
 pub mod warnings;
 
 pub use error::Error;
+
+/// The attributes a mesh file carries, under their former path: they live in [`io`] now, beside
+/// the readers that return them ([`io::LoadedMesh::attributes`]).
+pub mod attributes {
+    pub use crate::io::Attributes;
+    pub use crate::io::attributes::{AttributeKind, NO_INDEX, TexCoords, VertexScalar};
+}
 pub use mesh::Mesh;
 
 /// The types most programs need.

@@ -1,13 +1,13 @@
-//! Meshes: positions, polygons with their triangulation, optional tetrahedra, and attributes.
+//! Meshes: positions, polygons with their triangulation, optional tetrahedra.
 //!
 //! A [`Mesh`] is plain data: `n×3` positions in `f64`, the file's faces as [`Polygons`], their
 //! triangulation as `[u32; 3]` (each triangle knowing its polygon) and tetrahedra as `[u32; 4]`
-//! indexing into the positions, plus the file's [`Attributes`]. Every constructor validates indices, so code that
-//! receives a `Mesh` may index positions with them without checks.
+//! indexing into the positions. What a file carries besides (texture coordinates, colours…) is not
+//! part of it: readers return it beside the mesh ([`crate::io::LoadedMesh`]). Every constructor
+//! validates indices, so code that receives a `Mesh` may index positions with them without checks.
 
 use glam::{DVec2, DVec3};
 
-use crate::attributes::Attributes;
 use crate::warnings::Warnings;
 
 /// An error in the elements of a mesh (bad index, empty mesh, non-finite coordinate).
@@ -129,11 +129,6 @@ impl Polygons {
     pub fn num_corners(&self) -> usize {
         self.indices.len()
     }
-
-    /// Whether every polygon is a triangle.
-    pub fn all_triangles(&self) -> bool {
-        self.offsets.windows(2).all(|w| w[1] - w[0] == 3)
-    }
 }
 
 impl<'a> FromIterator<&'a [u32]> for Polygons {
@@ -147,9 +142,7 @@ impl<'a> FromIterator<&'a [u32]> for Polygons {
 }
 
 /// A mesh: positions, the file's faces as polygons, their triangulation (which triangle
-/// constraints, cotan weights and rendering use), optional tetrahedra, and the attributes the
-/// file carried (texture coordinates, normals, colours, properties…) so that writing it back
-/// loses nothing.
+/// constraints, cotan weights and rendering use) and optional tetrahedra.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Mesh {
     /// `n×3` vertex positions, in file order (vertices no element uses are kept).
@@ -164,8 +157,6 @@ pub struct Mesh {
     pub triangle_polygon: Vec<u32>,
     /// `t×4` tetrahedra; empty for a surface mesh.
     pub tetrahedra: Vec<[u32; 4]>,
-    /// What the file carried besides positions and faces, kept for writing.
-    pub attributes: Attributes,
 }
 
 impl Default for Mesh {
@@ -176,7 +167,6 @@ impl Default for Mesh {
             triangles: Vec::new(),
             triangle_polygon: Vec::new(),
             tetrahedra: Vec::new(),
-            attributes: Attributes::None,
         }
     }
 }
@@ -232,7 +222,7 @@ impl Mesh {
     ) -> Self {
         let polygons = Polygons::from_triangles(&triangles);
         let triangle_polygon = (0..triangles.len() as u32).collect();
-        Mesh { positions, polygons, triangles, triangle_polygon, tetrahedra, attributes: Attributes::None }
+        Mesh { positions, polygons, triangles, triangle_polygon, tetrahedra }
     }
 
     /// A mesh from polygons of any size, kept as they are; the triangulation is each
@@ -286,19 +276,12 @@ impl Mesh {
             triangle_polygon.resize(triangles.len(), index as u32);
             debug_assert!(triangles.len() > before);
         }
-        let mesh = Mesh {
-            positions,
-            polygons,
-            triangles,
-            triangle_polygon,
-            tetrahedra: Vec::new(),
-            attributes: Attributes::None,
-        };
+        let mesh = Mesh { positions, polygons, triangles, triangle_polygon, tetrahedra: Vec::new() };
         mesh.validate()?;
         Ok((mesh, warnings))
     }
 
-    /// The same mesh (faces, attributes) at other positions: what every output writes.
+    /// The same mesh (faces, tetrahedra) at other positions: what every output writes.
     ///
     /// # Panics
     /// Never; a wrong length is caught by [`Mesh::validate`] when written.
@@ -309,17 +292,15 @@ impl Mesh {
             triangles: self.triangles.clone(),
             triangle_polygon: self.triangle_polygon.clone(),
             tetrahedra: self.tetrahedra.clone(),
-            attributes: self.attributes.clone(),
         }
     }
 
     /// Replaces the faces by `triangles`, each its own polygon (the boundary of a tetrahedral
-    /// mesh, or any triangle soup); attributes tied to the old faces are dropped.
+    /// mesh, or any triangle soup); attributes tied to the old faces no longer apply.
     pub fn set_triangles(&mut self, triangles: Vec<[u32; 3]>) {
         self.polygons = Polygons::from_triangles(&triangles);
         self.triangle_polygon = (0..triangles.len() as u32).collect();
         self.triangles = triangles;
-        self.attributes = Attributes::None;
     }
 
     /// Number of vertices n.

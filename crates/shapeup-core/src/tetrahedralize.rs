@@ -92,7 +92,7 @@ pub fn tetrahedralize(mesh: &Mesh, max_volume: Option<f64>) -> Result<Mesh, Tetr
             t
         })
         .collect();
-    // The input's faces and attributes stay: its vertices keep their indices.
+    // The input's faces stay (and so do its file's attributes): its vertices keep their indices.
     let mut filled = mesh.with_positions(positions);
     filled.tetrahedra = tetrahedra;
     filled.validate().map_err(|e| TetrahedralizeError::TetGen(format!("invalid output: {e}")))?;

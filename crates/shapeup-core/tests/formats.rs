@@ -7,8 +7,7 @@ use std::path::{Path, PathBuf};
 
 use glam::{DQuat, DVec3};
 use shapeup_core::Mesh;
-use shapeup_core::attributes::Attributes;
-use shapeup_core::io::{LoadedMesh, read_mesh, write_mesh};
+use shapeup_core::io::{Attributes, LoadedMesh, read_mesh, write_mesh};
 use shapeup_core::scene::Scene;
 
 const BOM: &str = "\u{feff}";
@@ -81,10 +80,14 @@ fn scene_files_with_a_byte_order_mark_parse() {
 // ---------------------------------------------------------------------------------------------
 // OFF
 
-fn write_read(mesh: &Mesh, name: &str) -> (PathBuf, String, LoadedMesh, shapeup_core::warnings::Warnings) {
+fn write_read(
+    mesh: &Mesh,
+    attributes: &Attributes,
+    name: &str,
+) -> (PathBuf, String, LoadedMesh, shapeup_core::warnings::Warnings) {
     let dir = tempfile::tempdir().unwrap().keep();
     let path = dir.join(name);
-    let warnings = write_mesh(&path, mesh).unwrap();
+    let warnings = write_mesh(&path, mesh, attributes).unwrap();
     let text = fs::read_to_string(&path).unwrap_or_default();
     let back = read_mesh(&path).unwrap();
     (path, text, back, warnings)
@@ -95,16 +98,16 @@ fn off_keeps_colours_face_colours_and_polygons_and_moves_positions() {
     let text = "# coloured\nCOFF\n5 2 0\n0 0 0 255 0 0 255\n1 0 0 0 255 0 255\n1 1 0 0 0 255 255\n0 1 0 9 9 9 255\n\
                 7 7 7 1 2 3 4\n4 0 1 2 3 10 20 30\n3 0 1 2\n";
     let (_d, loaded) = read_files(&[("c.off", text)]);
-    let Attributes::Off(off) = &loaded.mesh.attributes else { panic!("COFF attributes kept") };
+    let Attributes::Off(off) = &loaded.attributes else { panic!("COFF attributes kept") };
     assert_eq!(off.vertex_extra[4], "1 2 3 4", "unreferenced vertex keeps its values");
-    assert_eq!(loaded.mesh.attributes.vertex_colors().unwrap()[1], [0.0, 1.0, 0.0]);
+    assert_eq!(loaded.attributes.vertex_colors().unwrap()[1], [0.0, 1.0, 0.0]);
     let moved = loaded.mesh.with_positions(loaded.mesh.positions.iter().map(|&p| p + DVec3::X).collect());
-    let (_p, written, back, warnings) = write_read(&moved, "moved.off");
+    let (_p, written, back, warnings) = write_read(&moved, &loaded.attributes, "moved.off");
     assert!(written.starts_with("COFF\n5 2 0\n"), "{written}");
     assert!(written.contains("\n4 0 1 2 3 10 20 30\n") && written.contains("\n3 0 1 2\n"), "{written}");
     assert_eq!(back.mesh.positions, moved.positions);
     assert_eq!(back.mesh.polygons, loaded.mesh.polygons, "the quad stays a quad");
-    assert_eq!(back.mesh.attributes, loaded.mesh.attributes.clone().with_comments(0));
+    assert_eq!(back.attributes, loaded.attributes.clone().with_comments(0));
     assert_eq!(warnings.count("comments_dropped"), 1);
 }
 
@@ -115,7 +118,7 @@ fn noff_normals_are_recomputed_for_the_moved_shape() {
     let (_d, loaded) = read_files(&[("n.off", text)]);
     let turn = DQuat::from_axis_angle(DVec3::new(1.0, 1.0, 0.0).normalize(), 1.0);
     let moved = loaded.mesh.with_positions(loaded.mesh.positions.iter().map(|&p| turn * p).collect());
-    let (_p, written, _back, warnings) = write_read(&moved, "n.off");
+    let (_p, written, _back, warnings) = write_read(&moved, &loaded.attributes, "n.off");
     assert_eq!(warnings.count("normals_recomputed"), 4);
     let expected = turn * DVec3::Z;
     for line in written.lines().skip(2).take(4) {
@@ -128,7 +131,7 @@ fn noff_normals_are_recomputed_for_the_moved_shape() {
 fn stl_output_says_what_it_cannot_keep() {
     let text = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 5 5 5\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nf 1/1 2/2 3/3 4/4\n";
     let (_d, loaded) = read_files(&[("q.obj", text)]);
-    let (_p, _text, back, warnings) = write_read(&loaded.mesh, "q.stl");
+    let (_p, _text, back, warnings) = write_read(&loaded.mesh, &loaded.attributes, "q.stl");
     assert_eq!(back.mesh.num_vertices(), 4, "the unused vertex is lost, and said");
     assert_eq!(warnings.count("vertices_not_kept"), 5);
     assert_eq!(warnings.count("polygons_split"), 1);
@@ -144,7 +147,7 @@ fn every_output_format_keeps_vertex_count_and_order() {
         (0..7).map(|i| DVec3::new(i as f64, (i * i) as f64 * 0.5, 1.0 / (i + 1) as f64)).collect();
     let mesh = Mesh::new(positions.clone(), vec![[1, 2, 4], [2, 5, 4]]).unwrap();
     for name in ["m.obj", "m.ply", "m.off", "m.msh"] {
-        let (_p, _t, back, _w) = write_read(&mesh, name);
+        let (_p, _t, back, _w) = write_read(&mesh, &Attributes::None, name);
         assert_eq!(back.mesh.positions, positions, "{name}");
         assert_eq!(back.mesh.triangles, mesh.triangles, "{name}");
     }

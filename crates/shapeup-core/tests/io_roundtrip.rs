@@ -9,9 +9,13 @@ use std::path::{Path, PathBuf};
 use glam::DVec3;
 use shapeup_core::Mesh;
 use shapeup_core::io::{
-    IoError, LoadedMesh, PlyEncoding, WriteFormat, obj, off, ply, read_mesh, stl, write_atomic, write_mesh,
+    Attributes, IoError, LoadedMesh, PlyEncoding, WriteFormat, obj, off, ply, read_mesh, stl, write_atomic, write_mesh,
     write_mesh_with,
 };
+
+#[path = "common/file_mesh.rs"]
+mod file_mesh;
+use file_mesh::FileMesh;
 
 const SPOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/spot.obj");
 const BUNNY: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/stanford-bunny.obj");
@@ -21,7 +25,7 @@ const SUZANNE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/suzanne.o
 // Helpers
 
 /// Five vertices, the last used by no triangle, with coordinates that stress exact round trips.
-fn small_mesh() -> Mesh {
+fn small_mesh() -> FileMesh {
     let positions = vec![
         DVec3::new(0.1, -1.0 / 3.0, 1e-300),
         DVec3::new(1.0, 0.0, -0.0),
@@ -29,11 +33,11 @@ fn small_mesh() -> Mesh {
         DVec3::new(-0.2, 0.7, 1.0 / 7.0),
         DVec3::new(9.0, 9.0, 9.0), // unreferenced
     ];
-    Mesh::new(positions, vec![[0, 1, 2], [0, 2, 3], [3, 2, 1]]).unwrap()
+    Mesh::new(positions, vec![[0, 1, 2], [0, 2, 3], [3, 2, 1]]).unwrap().into()
 }
 
-fn spot() -> Mesh {
-    read_mesh(Path::new(SPOT)).unwrap().mesh
+fn spot() -> FileMesh {
+    read_mesh(Path::new(SPOT)).unwrap().into()
 }
 
 fn assert_bitwise_equal(a: &Mesh, b: &Mesh) {
@@ -45,12 +49,12 @@ fn assert_bitwise_equal(a: &Mesh, b: &Mesh) {
 }
 
 /// Writes with `format` into a temp dir under `name` and reads back by extension.
-fn round_trip(mesh: &Mesh, name: &str, format: Option<WriteFormat>) -> LoadedMesh {
+fn round_trip(mesh: &FileMesh, name: &str, format: Option<WriteFormat>) -> LoadedMesh {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join(name);
     match format {
-        Some(format) => write_mesh_with(&path, mesh, format).unwrap(),
-        None => write_mesh(&path, mesh).unwrap(),
+        Some(format) => write_mesh_with(&path, mesh, &mesh.attributes, format).unwrap(),
+        None => write_mesh(&path, mesh, &mesh.attributes).unwrap(),
     };
     let loaded = read_mesh(&path).unwrap();
     assert_eq!(fs::read_dir(dir.path()).unwrap().count(), 1, "no temp file left behind");
@@ -127,7 +131,7 @@ fn ply_round_trips_are_exact_in_every_encoding() {
 fn default_ply_is_binary_little_endian_with_double_coordinates() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("m.PLY");
-    write_mesh(&path, &small_mesh()).unwrap();
+    write_mesh(&path, &small_mesh(), &Attributes::None).unwrap();
     let bytes = fs::read(&path).unwrap();
     let text = String::from_utf8_lossy(&bytes);
     assert!(text.starts_with("ply\nformat binary_little_endian 1.0\n"), "{text}");
@@ -583,7 +587,7 @@ fn every_truncation_of_every_format_is_an_error_not_a_panic() {
         ("t.stl", WriteFormat::StlBinary),
     ] {
         let path = dir.path().join(name);
-        write_mesh_with(&path, &mesh, format).unwrap();
+        write_mesh_with(&path, &mesh, &mesh.attributes, format).unwrap();
         let bytes = fs::read(&path).unwrap();
         let read = |prefix: &[u8]| match name {
             "t.obj" => obj::read_obj(prefix, Path::new(name)),
@@ -623,7 +627,7 @@ fn dir_entries(dir: &Path) -> Vec<PathBuf> {
 fn writing_into_a_missing_directory_fails_and_leaves_nothing() {
     let dir = tempfile::tempdir().unwrap();
     let target = dir.path().join("missing").join("out.obj");
-    let err = write_mesh(&target, &small_mesh()).unwrap_err();
+    let err = write_mesh(&target, &small_mesh(), &Attributes::None).unwrap_err();
     assert!(matches!(err, IoError::Write { .. }));
     assert!(err.to_string().contains("out.obj"), "{err}");
     assert!(dir_entries(dir.path()).is_empty());
@@ -661,9 +665,9 @@ fn invalid_mesh_is_not_written() {
     let mut mesh = Mesh::new(vec![DVec3::ZERO], vec![]).unwrap();
     mesh.triangles.push([0, 0, 5]);
     mesh.triangle_polygon.push(0);
-    let err = write_mesh(&target, &mesh).unwrap_err();
+    let err = write_mesh(&target, &mesh, &Attributes::None).unwrap_err();
     assert!(matches!(err, IoError::Mesh { .. }) && err.to_string().contains("bad.obj"), "{err}");
     assert!(dir_entries(dir.path()).is_empty());
-    let err = write_mesh(&dir.path().join("x.dae"), &small_mesh()).unwrap_err();
+    let err = write_mesh(&dir.path().join("x.dae"), &small_mesh(), &Attributes::None).unwrap_err();
     assert!(matches!(err, IoError::UnsupportedFormat { .. }));
 }

@@ -8,12 +8,16 @@ use std::path::Path;
 use glam::{DMat3, DVec3};
 use proptest::prelude::*;
 use shapeup_core::Mesh;
-use shapeup_core::attributes::{AttributeKind, Attributes, NO_INDEX};
 use shapeup_core::geometry::indexed_normals;
 use shapeup_core::io::obj::{ObjAttributes, ObjLine, read_obj, write_obj};
+use shapeup_core::io::{AttributeKind, Attributes, NO_INDEX};
 use shapeup_core::io::{IoError, read_mesh, write_mesh};
 use shapeup_core::mesh::Polygons;
 use shapeup_core::warnings::Warnings;
+
+#[path = "common/file_mesh.rs"]
+mod file_mesh;
+use file_mesh::FileMesh;
 
 const SPOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/spot.obj");
 const SUZANNE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/suzanne.obj");
@@ -22,19 +26,23 @@ const BEETLE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/beetle.obj
 // ---------------------------------------------------------------------------------------------
 // Helpers
 
-fn read(name: &str, bytes: &[u8]) -> Mesh {
-    read_obj(bytes, Path::new(name)).unwrap_or_else(|e| panic!("{e}")).mesh
+fn read(name: &str, bytes: &[u8]) -> FileMesh {
+    read_obj(bytes, Path::new(name)).unwrap_or_else(|e| panic!("{e}")).into()
 }
 
-fn write(mesh: &Mesh) -> (Vec<u8>, Warnings) {
+fn write(mesh: &FileMesh) -> (Vec<u8>, Warnings) {
     let mut out = Vec::new();
     let mut warnings = Warnings::new();
-    write_obj(&mut out, mesh, &mut warnings).unwrap();
+    write_obj(&mut out, mesh, &mesh.attributes, &mut warnings).unwrap();
     (out, warnings)
 }
 
-fn obj(mesh: &Mesh) -> &ObjAttributes {
-    match &mesh.attributes {
+fn obj(mesh: &FileMesh) -> &ObjAttributes {
+    obj_attributes(&mesh.attributes)
+}
+
+fn obj_attributes(attributes: &Attributes) -> &ObjAttributes {
+    match attributes {
         Attributes::Obj(a) => a,
         other => panic!("expected OBJ attributes, found {other:?}"),
     }
@@ -45,7 +53,7 @@ fn bits(p: DVec3) -> [u64; 3] {
 }
 
 /// Positions bitwise, polygons, texture coordinates, corner indices and colours equal.
-fn assert_same_mesh(a: &Mesh, b: &Mesh) {
+fn assert_same_mesh(a: &FileMesh, b: &FileMesh) {
     assert_eq!(a.positions.len(), b.positions.len(), "vertex count");
     for (i, (p, q)) in a.positions.iter().zip(&b.positions).enumerate() {
         assert_eq!(bits(*p), bits(*q), "vertex {i}: {p} vs {q}");
@@ -114,15 +122,15 @@ fn assert_same_lines(input: &[u8], output: &[u8]) {
 
 /// Reads `path`, writes it back unchanged (through [`write_mesh`]), checks the output line for
 /// line and the mesh read back; returns the mesh, the output bytes and the write's warnings.
-fn round_trip_file(path: &str) -> (Mesh, Vec<u8>, Warnings) {
+fn round_trip_file(path: &str) -> (FileMesh, Vec<u8>, Warnings) {
     let input = std::fs::read(path).unwrap();
-    let mesh = read_mesh(Path::new(path)).unwrap().mesh;
+    let mesh = FileMesh::from(read_mesh(Path::new(path)).unwrap());
     let dir = tempfile::tempdir().unwrap();
     let out_path = dir.path().join("out.obj");
-    let warnings = write_mesh(&out_path, &mesh).unwrap();
+    let warnings = write_mesh(&out_path, &mesh, &mesh.attributes).unwrap();
     let output = std::fs::read(&out_path).unwrap();
     assert_same_lines(&input, &output);
-    let back = read_mesh(&out_path).unwrap().mesh;
+    let back = FileMesh::from(read_mesh(&out_path).unwrap());
     assert_same_mesh(&mesh, &back);
     // Written again, the file does not change any more (recomputed normals are a fixed point).
     let (again, _) = write(&back);
@@ -139,7 +147,7 @@ fn used_normals(a: &ObjAttributes) -> usize {
 
 /// Largest angle (degrees) between the file's normals and those recomputed by the writer for an
 /// unchanged mesh.
-fn worst_normal_angle(mesh: &Mesh) -> f64 {
+fn worst_normal_angle(mesh: &FileMesh) -> f64 {
     let a = obj(mesh);
     let recomputed = indexed_normals(&mesh.positions, &mesh.polygons, &a.corner_normals, a.normals.len());
     a.normals
@@ -242,7 +250,7 @@ v 7 7 7 0 0 0\r\n";
 #[test]
 fn hand_written_file_is_read_completely() {
     let loaded = read_obj(HAND.as_bytes(), Path::new("hand.obj")).unwrap();
-    let mesh = &loaded.mesh;
+    let mesh = &FileMesh::from(loaded.clone());
     assert_eq!(mesh.num_vertices(), 9);
     assert_eq!(mesh.positions[0], DVec3::splat(9.0));
     assert_eq!(mesh.positions[8], DVec3::splat(7.0), "the v line after the faces");
@@ -380,7 +388,7 @@ fn rotation() -> DMat3 {
 
 /// Rotates the mesh, writes it and returns the normals read back from the output, with the
 /// number of normals the writer reported as recomputed.
-fn rotated_normals(mesh: &Mesh) -> (Vec<DVec3>, usize) {
+fn rotated_normals(mesh: &FileMesh) -> (Vec<DVec3>, usize) {
     let r = rotation();
     let moved = mesh.with_positions(mesh.positions.iter().map(|&p| r * p + DVec3::new(0.3, -2.0, 5.0)).collect());
     let (out, warnings) = write(&moved);
@@ -511,7 +519,7 @@ fn changed_faces_write_a_new_file_keeping_colours_and_normals() {
 fn generated_mesh_with_tetrahedra_writes_its_surface_polygons() {
     let positions = vec![DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z];
     let surface = vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]];
-    let mesh = Mesh::with_tetrahedra(positions, surface.clone(), vec![[0, 1, 2, 3]]).unwrap();
+    let mesh = FileMesh::from(Mesh::with_tetrahedra(positions, surface.clone(), vec![[0, 1, 2, 3]]).unwrap());
     let (out, warnings) = write(&mesh);
     assert!(warnings.is_empty(), "{warnings:?}");
     let text = String::from_utf8(out.clone()).unwrap();

@@ -104,6 +104,6 @@ fn off_vertex_lines_shorter_than_their_layout_are_refused() {
     // Enough values (an alpha included) still read, with s t the last two.
     let text = "STCOFF\n3 1 0\n0 0 0 1 0 0 1 0.25 0.75\n1 0 0 0 1 0 1 0 0\n0 1 0 0 0 1 1 1 1\n3 0 1 2\n";
     let loaded = off::read_off(text.as_bytes(), Path::new("ok.off")).unwrap();
-    let uv = loaded.mesh.attributes.texcoords(&loaded.mesh.polygons).unwrap();
+    let uv = loaded.attributes.texcoords(&loaded.mesh.polygons).unwrap();
     assert_eq!(uv.values[0], [0.25, 0.75]);
 }

@@ -9,11 +9,16 @@ use std::path::Path;
 use glam::{DQuat, DVec3};
 use proptest::prelude::*;
 use shapeup_core::Mesh;
-use shapeup_core::attributes::{AttributeKind, Attributes, NO_INDEX};
 use shapeup_core::io::ply::{self, PlyAttributes, PlyScalar, PlyType};
-use shapeup_core::io::{IoError, LoadedMesh, PlyEncoding, WriteFormat, read_mesh, write_mesh_with};
+use shapeup_core::io::{
+    AttributeKind, Attributes, IoError, NO_INDEX, PlyEncoding, WriteFormat, read_mesh, write_mesh_with,
+};
 use shapeup_core::mesh::Polygons;
 use shapeup_core::warnings::Warnings;
+
+#[path = "common/file_mesh.rs"]
+mod file_mesh;
+use file_mesh::FileMesh;
 
 const ENCODINGS: [PlyEncoding; 3] = [PlyEncoding::Ascii, PlyEncoding::BinaryLittleEndian, PlyEncoding::BinaryBigEndian];
 
@@ -132,11 +137,18 @@ fn encode(file: &File, encoding: PlyEncoding) -> Vec<u8> {
 // ---------------------------------------------------------------------------------------------
 // Helpers
 
-fn read(name: &str, bytes: &[u8]) -> LoadedMesh {
-    ply::read_ply(bytes, Path::new(name)).unwrap_or_else(|e| panic!("{e}"))
+/// What reading a file gave: the mesh with its attributes, and the warnings.
+struct Loaded {
+    mesh: FileMesh,
+    warnings: Warnings,
 }
 
-fn attributes(mesh: &Mesh) -> &PlyAttributes {
+fn read(name: &str, bytes: &[u8]) -> Loaded {
+    let loaded = ply::read_ply(bytes, Path::new(name)).unwrap_or_else(|e| panic!("{e}"));
+    Loaded { mesh: FileMesh { mesh: loaded.mesh, attributes: loaded.attributes }, warnings: loaded.warnings }
+}
+
+fn attributes(mesh: &FileMesh) -> &PlyAttributes {
     match &mesh.attributes {
         Attributes::Ply(a) => a,
         other => panic!("not PLY attributes: {other:?}"),
@@ -144,10 +156,10 @@ fn attributes(mesh: &Mesh) -> &PlyAttributes {
 }
 
 /// Writes through the public API (`write_mesh_with`, a real file) and returns the bytes.
-fn write(mesh: &Mesh, encoding: Option<PlyEncoding>) -> (Vec<u8>, Warnings) {
+fn write(mesh: &FileMesh, encoding: Option<PlyEncoding>) -> (Vec<u8>, Warnings) {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("out.ply");
-    let warnings = write_mesh_with(&path, mesh, WriteFormat::Ply(encoding)).unwrap();
+    let warnings = write_mesh_with(&path, mesh, &mesh.attributes, WriteFormat::Ply(encoding)).unwrap();
     (fs::read(&path).unwrap(), warnings)
 }
 
@@ -752,7 +764,7 @@ fn a_new_mesh_gets_double_coordinates_and_wider_counts_for_big_polygons() {
     let corners: Vec<u32> = (0..k as u32).collect();
     let (mesh, _) = Mesh::from_polygons(positions.clone(), [&corners[..]].into_iter().collect()).unwrap();
     for encoding in ENCODINGS {
-        let (written, warnings) = write(&mesh, Some(encoding));
+        let (written, warnings) = write(&mesh.clone().into(), Some(encoding));
         assert!(warnings.is_empty(), "{warnings:?}");
         let back = read("big.ply", &written);
         assert_eq!(bits(&back.mesh.positions), bits(&positions));
@@ -766,7 +778,7 @@ fn a_new_mesh_gets_double_coordinates_and_wider_counts_for_big_polygons() {
 }
 
 /// `mesh` with its polygons replaced by `triangles`, so that its PLY attributes no longer match.
-fn with_other_faces(mesh: &Mesh, triangles: &[[u32; 3]]) -> Mesh {
+fn with_other_faces(mesh: &FileMesh, triangles: &[[u32; 3]]) -> FileMesh {
     let mut other = mesh.clone();
     other.polygons = Polygons::from_triangles(triangles);
     other.triangles = triangles.to_vec();
@@ -967,17 +979,17 @@ proptest! {
     #[test]
     fn random_files_round_trip_exactly(file in random_file(), encoding in any_encoding(), other in any_encoding()) {
         let bytes = encode(&file, encoding);
-        let first = ply::read_ply(&bytes[..], Path::new("random.ply")).unwrap_or_else(|e| panic!("{e}"));
+        let first = read("random.ply", &bytes);
         assert_holds(attributes(&first.mesh), &file);
         // In its own encoding: the same bytes, so reading them again is the identity.
         let mut same = Vec::new();
-        ply::write_ply(&mut same, &first.mesh, None, &mut Warnings::new()).unwrap();
+        ply::write_ply(&mut same, &first.mesh, &first.mesh.attributes, None, &mut Warnings::new()).unwrap();
         prop_assert_eq!(&same, &bytes);
         // In another: the same content.
         let mut converted = Vec::new();
-        ply::write_ply(&mut converted, &first.mesh, Some(other), &mut Warnings::new()).unwrap();
+        ply::write_ply(&mut converted, &first.mesh, &first.mesh.attributes, Some(other), &mut Warnings::new()).unwrap();
         prop_assert_eq!(&converted, &encode(&file, other));
-        let back = ply::read_ply(&converted[..], Path::new("random.ply")).unwrap_or_else(|e| panic!("{e}"));
+        let back = read("random.ply", &converted);
         assert_same_content(attributes(&first.mesh), attributes(&back.mesh));
         prop_assert_eq!(bits(&back.mesh.positions), bits(&first.mesh.positions));
         prop_assert_eq!(&back.mesh.polygons, &first.mesh.polygons);
@@ -992,6 +1004,6 @@ fn read_mesh_on_a_written_rich_file_gives_the_same_mesh() {
     fs::write(&path, encode(&rich(), PlyEncoding::BinaryLittleEndian)).unwrap();
     let loaded = read_mesh(&path).unwrap();
     let again = dir.path().join("again.ply");
-    write_mesh_with(&again, &loaded.mesh, WriteFormat::Ply(None)).unwrap();
+    write_mesh_with(&again, &loaded.mesh, &loaded.attributes, WriteFormat::Ply(None)).unwrap();
     assert_eq!(fs::read(&again).unwrap(), fs::read(&path).unwrap());
 }

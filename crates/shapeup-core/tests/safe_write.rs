@@ -9,7 +9,7 @@ use std::fs;
 use std::path::{Path, PathBuf};
 
 use shapeup_core::Mesh;
-use shapeup_core::io::{check_output_folder, read_mesh, tetgen, write_atomic, write_mesh};
+use shapeup_core::io::{Attributes, check_output_folder, read_mesh, tetgen, write_atomic, write_mesh};
 
 /// The folder's entries, sorted.
 fn entries(dir: &Path) -> Vec<PathBuf> {
@@ -115,13 +115,13 @@ mod unix {
         // A mesh written through the link, and a TetGen pair whose .node is a link.
         let mesh_link = dir.path().join("mesh.obj");
         symlink(&victim, &mesh_link).unwrap();
-        write_mesh(&mesh_link, &tet()).unwrap();
+        write_mesh(&mesh_link, &tet(), &Attributes::None).unwrap();
         assert_eq!(fs::read_to_string(&victim).unwrap(), "precious");
         assert_eq!(read_mesh(&mesh_link).unwrap().mesh.num_vertices(), 4);
         let node = dir.path().join("pair.node");
         symlink(&victim, &node).unwrap();
         symlink(dir.path().join("nowhere.txt"), dir.path().join("pair.ele")).unwrap();
-        write_mesh(&dir.path().join("pair.ele"), &tet()).unwrap();
+        write_mesh(&dir.path().join("pair.ele"), &tet(), &Attributes::None).unwrap();
         assert_eq!(fs::read_to_string(&victim).unwrap(), "precious");
         assert!(!dir.path().join("nowhere.txt").exists(), "a dangling link's target is not created");
         assert!(fs::symlink_metadata(&node).unwrap().file_type().is_file());
@@ -143,7 +143,7 @@ mod unix {
             planted.push(link);
         }
         for _ in 0..5 {
-            write_mesh(&target, &tet()).unwrap();
+            write_mesh(&target, &tet(), &Attributes::None).unwrap();
             check_output_folder(&target).unwrap();
         }
         assert_eq!(fs::read_to_string(&victim).unwrap(), "precious");
@@ -164,17 +164,17 @@ mod unix {
         let usual = mode(&reference);
         assert_eq!(usual & 0o600, 0o600);
         let new = dir.path().join("new.ply");
-        write_mesh(&new, &tet()).unwrap();
+        write_mesh(&new, &tet(), &Attributes::None).unwrap();
         assert_eq!(mode(&new), usual, "not tempfile's private 0600");
         let pair = dir.path().join("pair.node");
-        write_mesh(&pair, &tet()).unwrap();
+        write_mesh(&pair, &tet(), &Attributes::None).unwrap();
         assert_eq!((mode(&pair), mode(&pair.with_extension("ele"))), (usual, usual));
         // Replacing a file keeps its mode, whatever the umask.
         for kept in [0o600, 0o640, 0o755, 0o444] {
             let path = dir.path().join(format!("kept{kept:o}.off"));
             fs::write(&path, "old").unwrap();
             fs::set_permissions(&path, fs::Permissions::from_mode(kept)).unwrap();
-            write_mesh(&path, &tet()).unwrap();
+            write_mesh(&path, &tet(), &Attributes::None).unwrap();
             assert_eq!(mode(&path), kept, "{path:?}");
             assert!(read_mesh(&path).is_ok());
         }

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 use glam::DVec3;
 use shapeup_core::Mesh;
-use shapeup_core::io::{IoError, LoadedMesh, MeshFormat, WriteFormat, msh, read_mesh, tetgen, write_mesh};
+use shapeup_core::io::{Attributes, IoError, LoadedMesh, MeshFormat, WriteFormat, msh, read_mesh, tetgen, write_mesh};
 use shapeup_core::topology::{tetrahedron_boundary, unique_edges};
 
 // ---------------------------------------------------------------------------------------------
@@ -170,7 +170,7 @@ fn msh_round_trip_is_exact() {
     for mesh in [grid(1, 1, 1), grid(3, 3, 3)] {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("m.msh");
-        write_mesh(&path, &mesh).unwrap();
+        write_mesh(&path, &mesh, &Attributes::None).unwrap();
         assert_eq!(dir_entries(dir.path()), vec![path.clone()], "no temp file left behind");
         let text = fs::read_to_string(&path).unwrap();
         assert!(text.starts_with("$MeshFormat\n4.1 0 8\n$EndMeshFormat\n"), "{}", &text[..40]);
@@ -182,7 +182,7 @@ fn msh_round_trip_is_exact() {
 fn tetgen_round_trip_is_exact_from_either_file() {
     for (mesh, written) in [(grid(1, 1, 1), "m.ele"), (grid(3, 3, 3), "m.node")] {
         let dir = tempfile::tempdir().unwrap();
-        write_mesh(&dir.path().join(written), &mesh).unwrap();
+        write_mesh(&dir.path().join(written), &mesh, &Attributes::None).unwrap();
         let (node, ele) = (dir.path().join("m.node"), dir.path().join("m.ele"));
         assert_eq!(dir_entries(dir.path()), vec![ele.clone(), node.clone()], "the pair and nothing else");
         assert_exact(&read_mesh(&node).unwrap().mesh, &mesh);
@@ -196,7 +196,7 @@ fn triangle_mesh_round_trips_through_msh() {
     let surface = Mesh::new(cube.positions.clone(), cube.triangles.clone()).unwrap();
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("s.msh");
-    write_mesh(&path, &surface).unwrap();
+    write_mesh(&path, &surface, &Attributes::None).unwrap();
     let loaded = read_mesh(&path).unwrap();
     assert_exact(&loaded.mesh, &surface);
     assert!(loaded.mesh.tetrahedra.is_empty());
@@ -466,7 +466,7 @@ fn tetgen_without_tetrahedra_writes_nothing() {
     let surface = Mesh::new(cube.positions, cube.triangles).unwrap();
     let dir = tempfile::tempdir().unwrap();
     for name in ["s.node", "s.ele"] {
-        let err = write_mesh(&dir.path().join(name), &surface).unwrap_err();
+        let err = write_mesh(&dir.path().join(name), &surface, &Attributes::None).unwrap_err();
         assert!(matches!(err, IoError::Invalid { .. }), "{err}");
         assert!(err.to_string().contains(name) && err.to_string().contains("no"), "{err}");
     }
@@ -479,12 +479,12 @@ fn invalid_mesh_or_missing_directory_writes_nothing() {
     let mut bad = grid(1, 1, 1);
     bad.tetrahedra.push([0, 1, 2, 99]);
     for name in ["b.msh", "b.node"] {
-        let err = write_mesh(&dir.path().join(name), &bad).unwrap_err();
+        let err = write_mesh(&dir.path().join(name), &bad, &Attributes::None).unwrap_err();
         assert!(matches!(err, IoError::Mesh { .. }) && err.to_string().contains(name), "{err}");
     }
     let missing = dir.path().join("missing");
     for name in ["m.msh", "m.ele"] {
-        let err = write_mesh(&missing.join(name), &grid(1, 1, 1)).unwrap_err();
+        let err = write_mesh(&missing.join(name), &grid(1, 1, 1), &Attributes::None).unwrap_err();
         assert!(matches!(err, IoError::Write { .. }), "{err}");
     }
     assert!(dir_entries(dir.path()).is_empty(), "no file and no temp file");

@@ -7,13 +7,16 @@ use base64::Engine;
 use glam::DVec3;
 use quick_xml::events::{BytesStart, Event};
 use shapeup_core::Mesh;
-use shapeup_core::attributes::AttributeKind;
 use shapeup_core::generate::tet_box;
 use shapeup_core::io::vtu::{PointVectors, write_pvd, write_vtu};
-use shapeup_core::io::{read_mesh, write_mesh};
+use shapeup_core::io::{AttributeKind, Attributes, read_mesh, write_mesh};
 use shapeup_core::mesh::Polygons;
 use shapeup_core::warnings::Warnings;
 use std::collections::HashMap;
+
+#[path = "common/file_mesh.rs"]
+mod file_mesh;
+use file_mesh::FileMesh;
 use std::io::ErrorKind;
 
 /// One `<DataArray>`: its attributes, the element it sits in and its text.
@@ -144,10 +147,10 @@ fn parse_vtu(xml: &str) -> Vtu {
     vtu
 }
 
-fn vtu_of(mesh: &Mesh, vectors: &[PointVectors<'_>]) -> (Vtu, Warnings) {
+fn vtu_of(mesh: &Mesh, attributes: &Attributes, vectors: &[PointVectors<'_>]) -> (Vtu, Warnings) {
     let mut out = Vec::new();
     let mut warnings = Warnings::new();
-    write_vtu(&mut out, mesh, vectors, &mut warnings).unwrap();
+    write_vtu(&mut out, mesh, attributes, vectors, &mut warnings).unwrap();
     (parse_vtu(&String::from_utf8(out).unwrap()), warnings)
 }
 
@@ -160,13 +163,13 @@ fn assert_same_bits(a: &[DVec3], b: &[DVec3]) {
 
 #[test]
 fn tet_box_is_written_as_tetrahedra_with_exact_points_and_vectors() {
-    let mut mesh = tet_box([2, 1, 1], DVec3::new(2.0, 1.0, 1.0));
+    let mut mesh = FileMesh::from(tet_box([2, 1, 1], DVec3::new(2.0, 1.0, 1.0)));
     // Coordinates that a short decimal would not keep.
     for p in &mut mesh.positions {
         *p = *p * (1.0 / 3.0) + DVec3::new(1e-17, -2.5e10, 0.1);
     }
     let velocity: Vec<DVec3> = (0..mesh.positions.len()).map(|i| DVec3::new(i as f64 / 7.0, -9.81, 1e300)).collect();
-    let (vtu, warnings) = vtu_of(&mesh, &[PointVectors { name: "velocity", values: &velocity }]);
+    let (vtu, warnings) = vtu_of(&mesh, &mesh.attributes, &[PointVectors { name: "velocity", values: &velocity }]);
     assert!(warnings.is_empty(), "{warnings:?}");
     assert!(vtu.grid, "an UnstructuredGrid");
     assert_eq!(vtu.file["type"], "UnstructuredGrid");
@@ -206,8 +209,8 @@ fn polygons_keep_their_corner_counts_and_unreferenced_points() {
         DVec3::new(0.1, 0.2, 1.0 / 3.0),
     ];
     let polygons: Polygons = [&[0u32, 1, 2][..], &[1, 3, 4, 2], &[3, 5, 6, 7, 4]].into_iter().collect();
-    let (mesh, _) = Mesh::from_polygons(positions.clone(), polygons).unwrap();
-    let (vtu, warnings) = vtu_of(&mesh, &[]);
+    let mesh = FileMesh::from(Mesh::from_polygons(positions.clone(), polygons).unwrap().0);
+    let (vtu, warnings) = vtu_of(&mesh, &mesh.attributes, &[]);
     assert!(warnings.is_empty(), "{warnings:?}");
     assert_eq!(vtu.count("NumberOfPoints"), 9, "the vertex in no face too");
     assert_eq!(vtu.count("NumberOfCells"), 3, "one cell per polygon, not per triangle");
@@ -223,7 +226,7 @@ fn write_mesh_writes_vtu_atomically_by_extension() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("box.vtu");
     let mesh = tet_box([1, 1, 1], DVec3::ONE);
-    let warnings = write_mesh(&path, &mesh).unwrap();
+    let warnings = write_mesh(&path, &mesh, &Attributes::None).unwrap();
     assert!(warnings.is_empty());
     let vtu = parse_vtu(&std::fs::read_to_string(&path).unwrap());
     assert_eq!((vtu.count("NumberOfPoints"), vtu.count("NumberOfCells")), (8, 6));
@@ -249,8 +252,8 @@ fn attributes_become_point_arrays_and_the_rest_is_reported() {
          4 0 1 2 3  1 0 0\n",
     )
     .unwrap();
-    let mesh = read_mesh(&off).unwrap().mesh;
-    let (vtu, warnings) = vtu_of(&mesh, &[]);
+    let mesh = FileMesh::from(read_mesh(&off).unwrap());
+    let (vtu, warnings) = vtu_of(&mesh, &mesh.attributes, &[]);
     assert_eq!(vtu.point_arrays(), ["normals", "color", "texcoords"]);
     assert_eq!(vtu.point_data.get("Normals").map(String::as_str), Some("normals"));
     assert_eq!(vtu.point_data.get("TCoords").map(String::as_str), Some("texcoords"));
@@ -286,8 +289,8 @@ fn ply_vertex_properties_become_scalar_arrays() {
          0 0 0 0.5\n1 0 0 0.25\n0 1 0 -2\n3 0 1 2\n",
     )
     .unwrap();
-    let mesh = read_mesh(&ply).unwrap().mesh;
-    let (vtu, warnings) = vtu_of(&mesh, &[]);
+    let mesh = FileMesh::from(read_mesh(&ply).unwrap());
+    let (vtu, warnings) = vtu_of(&mesh, &mesh.attributes, &[]);
     assert!(warnings.is_empty(), "{warnings:?}");
     assert_eq!(vtu.point_arrays(), ["confidence"]);
     assert_eq!(vtu.point_data.get("Scalars").map(String::as_str), Some("confidence"));
@@ -295,9 +298,9 @@ fn ply_vertex_properties_become_scalar_arrays() {
 
     // A property named like the caller's array gives way to it, with a warning.
     std::fs::write(&ply, std::fs::read_to_string(&ply).unwrap().replace("confidence", "velocity")).unwrap();
-    let mesh = read_mesh(&ply).unwrap().mesh;
+    let mesh = FileMesh::from(read_mesh(&ply).unwrap());
     let velocity = vec![DVec3::X; 3];
-    let (vtu, warnings) = vtu_of(&mesh, &[PointVectors { name: "velocity", values: &velocity }]);
+    let (vtu, warnings) = vtu_of(&mesh, &mesh.attributes, &[PointVectors { name: "velocity", values: &velocity }]);
     assert_eq!(vtu.point_arrays(), ["velocity"]);
     assert_eq!(vtu.array("PointData", "velocity").components(), 3);
     assert_eq!(warnings.count("point_data_dropped"), 1, "{warnings:?}");
@@ -308,13 +311,19 @@ fn bad_point_data_is_refused_before_anything_is_written() {
     let mesh = tet_box([1, 1, 1], DVec3::ONE);
     let short = vec![DVec3::ZERO; 3];
     let mut out = Vec::new();
-    let err = write_vtu(&mut out, &mesh, &[PointVectors { name: "velocity", values: &short }], &mut Warnings::new())
-        .unwrap_err();
+    let err = write_vtu(
+        &mut out,
+        &mesh,
+        &Attributes::None,
+        &[PointVectors { name: "velocity", values: &short }],
+        &mut Warnings::new(),
+    )
+    .unwrap_err();
     assert_eq!(err.kind(), ErrorKind::InvalidInput);
     assert!(err.to_string().contains("velocity"), "{err}");
     let full = vec![DVec3::ZERO; 8];
     let twice = [PointVectors { name: "v", values: &full }, PointVectors { name: "v", values: &full }];
-    let err = write_vtu(&mut out, &mesh, &twice, &mut Warnings::new()).unwrap_err();
+    let err = write_vtu(&mut out, &mesh, &Attributes::None, &twice, &mut Warnings::new()).unwrap_err();
     assert_eq!(err.kind(), ErrorKind::InvalidInput);
     assert!(out.is_empty());
 }
@@ -357,8 +366,8 @@ fn per_corner_texture_coordinates_and_groups_are_reported() {
          f 1/1 2/2 3/3\nf 1/4 3/3 4/4\n",
     )
     .unwrap();
-    let mesh = read_mesh(&obj).unwrap().mesh;
-    let (vtu, warnings) = vtu_of(&mesh, &[]);
+    let mesh = FileMesh::from(read_mesh(&obj).unwrap());
+    let (vtu, warnings) = vtu_of(&mesh, &mesh.attributes, &[]);
     assert!(vtu.point_arrays().is_empty(), "{:?}", vtu.point_arrays());
     assert_eq!(warnings.count("attributes_dropped"), 2, "{warnings:?}");
     let texture = AttributeKind::TexCoords.describe();

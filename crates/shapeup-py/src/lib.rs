@@ -15,7 +15,9 @@ use pyo3::prelude::*;
 use shapeup_core::constraints::held_vertices;
 use shapeup_core::dynamics::{DynamicsParams, Simulation as CoreSimulation};
 use shapeup_core::geometry::{RestGeometry, WorkingFrame};
-use shapeup_core::io::{IoError, MESH_OUTPUT_EXTENSIONS, OutputError, check_output_extension, check_output_folder};
+use shapeup_core::io::{
+    Attributes, IoError, MESH_OUTPUT_EXTENSIONS, OutputError, check_output_extension, check_output_folder,
+};
 use shapeup_core::mesh::{Mesh as CoreMesh, Polygons};
 use shapeup_core::scene::frames::{FrameFormat, FrameWriter};
 use shapeup_core::scene::{GroupSpec, Scene as CoreScene, SceneError, SceneFormat, StepTotals, lumped_masses};
@@ -123,6 +125,7 @@ fn warnings_list(warnings: &Warnings) -> Vec<String> {
 #[pyclass(name = "_Mesh", module = "shapeup._shapeup", frozen)]
 struct PyMesh {
     mesh: CoreMesh,
+    attributes: Attributes,
     warnings: Warnings,
 }
 
@@ -158,31 +161,28 @@ impl PyMesh {
     /// corner, -1 where a corner has none), or None.
     #[getter]
     fn texcoords(&self) -> Option<(Vec<[f64; 2]>, Vec<i64>)> {
-        let t = self.mesh.attributes.texcoords(&self.mesh.polygons)?;
-        let corners = t
-            .corners
-            .iter()
-            .map(|&c| if c == shapeup_core::attributes::NO_INDEX { -1 } else { i64::from(c) })
-            .collect();
+        let t = self.attributes.texcoords(&self.mesh.polygons)?;
+        let corners =
+            t.corners.iter().map(|&c| if c == shapeup_core::io::NO_INDEX { -1 } else { i64::from(c) }).collect();
         Some((t.values, corners))
     }
 
     /// Per-vertex colours (r, g, b in [0, 1]), or None.
     #[getter]
     fn vertex_colors(&self) -> Option<Vec<[f64; 3]>> {
-        self.mesh.attributes.vertex_colors()
+        self.attributes.vertex_colors()
     }
 
     /// Per-vertex scalar properties as {name: values}.
     #[getter]
     fn vertex_scalars(&self) -> Vec<(String, Vec<f64>)> {
-        self.mesh.attributes.vertex_scalars().into_iter().map(|s| (s.name, s.values)).collect()
+        self.attributes.vertex_scalars().into_iter().map(|s| (s.name, s.values)).collect()
     }
 
     /// What the file carries besides positions and faces, one description each.
     #[getter]
     fn attributes(&self) -> Vec<String> {
-        self.mesh.attributes.kinds().iter().map(|k| k.describe()).collect()
+        self.attributes.kinds().iter().map(|k| k.describe()).collect()
     }
 
     /// What reading or building the mesh changed or left out, one line each.
@@ -201,7 +201,11 @@ impl PyMesh {
                 self.mesh.num_vertices()
             )));
         }
-        Ok(PyMesh { mesh: self.mesh.with_positions(positions), warnings: Warnings::new() })
+        Ok(PyMesh {
+            mesh: self.mesh.with_positions(positions),
+            attributes: self.attributes.clone(),
+            warnings: Warnings::new(),
+        })
     }
 
     fn __len__(&self) -> usize {
@@ -213,13 +217,13 @@ impl PyMesh {
 #[pyfunction]
 fn read_mesh(py: Python<'_>, path: PathBuf) -> PyResult<PyMesh> {
     let loaded = py.detach(|| shapeup_core::io::read_mesh(&path)).map_err(io_error)?;
-    Ok(PyMesh { mesh: loaded.mesh, warnings: loaded.warnings })
+    Ok(PyMesh { mesh: loaded.mesh, attributes: loaded.attributes, warnings: loaded.warnings })
 }
 
 /// Writes a mesh (format from the extension), atomically; returns what writing it said.
 #[pyfunction]
 fn write_mesh(py: Python<'_>, path: PathBuf, mesh: &PyMesh) -> PyResult<Vec<String>> {
-    let warnings = py.detach(|| shapeup_core::io::write_mesh(&path, &mesh.mesh)).map_err(io_error)?;
+    let warnings = py.detach(|| shapeup_core::io::write_mesh(&path, &mesh.mesh, &mesh.attributes)).map_err(io_error)?;
     Ok(warnings_list(&warnings))
 }
 
@@ -261,7 +265,7 @@ fn mesh_from_arrays(
         }));
     }
     warnings = warnings.for_file(Path::new("<arrays>"));
-    Ok(PyMesh { mesh, warnings })
+    Ok(PyMesh { mesh, attributes: Attributes::None, warnings })
 }
 
 /// The registry as (name, acts on, default weight, summary, has targets, options as
@@ -704,7 +708,7 @@ impl PyScene {
         if let Some(path) = &report {
             shapeup_core::io::write_atomic(path, |w| w.write_all(text.as_bytes())).map_err(io_error)?;
         }
-        Ok((PyMesh { mesh, warnings }, text))
+        Ok((PyMesh { mesh, attributes: loaded.attributes.clone(), warnings }, text))
     }
 
     /// `shapeup simulate`: `frames` time steps from rest. Returns (positions of every

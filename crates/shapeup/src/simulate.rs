@@ -4,7 +4,7 @@
 use anyhow::{Context, Result, bail};
 use shapeup_core::io::write_atomic;
 use shapeup_core::scene::frames::{FrameFormat, FrameWriter};
-use shapeup_core::scene::{Scene, StepTotals};
+use shapeup_core::scene::{RunError, Scene};
 use std::io::Write;
 use std::path::Path;
 use std::time::Instant;
@@ -64,51 +64,37 @@ pub fn run(args: &SimulateArgs<'_>) -> Result<()> {
 
     let mut frames = FrameWriter::new(&loaded, output.as_path(), args.frames, format);
     let progress = crate::logging::bar(args.frames as u64, "{bar:40} {pos}/{len} frames  {per_sec}  ETA {eta}");
-    let mut totals = StepTotals { energies: Vec::with_capacity(args.frames.min(1 << 20)), ..StepTotals::default() };
-    let mut steps = || -> Result<()> {
-        frames.write(0, &run.simulation)?;
-        for k in 1..=args.frames {
-            // The cause in the same line: only the outermost message is printed. Overflowing
-            // velocities fail the step whether or not a report is asked for (StepError::Diverged).
-            let step = run
-                .step()
-                .map_err(|e| anyhow::anyhow!("{}: step {k} of {} failed: {e}", args.scene.display(), args.frames))?;
-            let simulation = &mut run.simulation;
-            if report.as_deref().is_some() {
-                // Only a report needs E: plain iterations skip it (one more local step per step).
-                let energy = match step.energy {
-                    Some(e) => e,
-                    None => {
-                        let t = Instant::now();
-                        let e = simulation
-                            .energy()
-                            .map_err(|e| anyhow::anyhow!("{}: energy after step {k}: {e}", args.scene.display()))?;
-                        totals.energy_seconds += t.elapsed().as_secs_f64();
-                        e
-                    }
-                };
-                totals.energies.push(energy);
-            }
-            totals.add(&step);
-            if k % args.every == 0 || k == args.frames {
-                frames.write(k, simulation)?;
-            }
+    // Only a report needs E: plain iterations skip it (one more local step per step).
+    let result = run.run(args.frames, args.every, report.is_some(), |k, simulation, keep| -> Result<()> {
+        if keep {
+            frames.write(k, simulation)?;
+        }
+        if k > 0 {
             progress.bar.inc(1);
         }
         Ok(())
-    };
-    let result = steps();
+    });
+    // The cause in the same line: only the outermost message is printed.
+    let result = result.map_err(|e| match e {
+        RunError::Step { step, source } => {
+            anyhow::anyhow!("{}: step {step} of {} failed: {source}", args.scene.display(), args.frames)
+        }
+        RunError::Energy { step, source } => {
+            anyhow::anyhow!("{}: energy after step {step}: {source}", args.scene.display())
+        }
+        RunError::Stopped(e) => e,
+    });
     drop(progress);
     if format == FrameFormat::Vtu && !frames.written.is_empty() {
         match &result {
-            Ok(()) => frames.write_pvd()?,
+            Ok(_) => frames.write_pvd()?,
             // The frames written before the error stay usable; the first error is the one to tell.
             Err(_) => {
                 let _ = frames.write_pvd();
             }
         }
     }
-    result?;
+    let totals = result?;
     let written = frames.written.len();
     let mut warnings = loaded.warnings.clone();
     warnings.extend(frames.warnings.take().unwrap_or_default());

@@ -30,6 +30,7 @@ impl Document {
         let loaded = scene.read_mesh().map_err(|e| EditorError::Load(LoadError::Scene(Cause::new(e))))?;
         let mut document = Document::from_scene_with_mesh(scene, loaded.mesh)?;
         document.source = scene.mesh.generate.is_none().then(|| scene.mesh_path());
+        document.attributes = loaded.attributes;
         Ok(document)
     }
 
@@ -185,7 +186,7 @@ impl Document {
                 let stem = scene_path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
                 let name = format!("{stem}.rest.{ext}");
                 let rest_path = scene_path.with_file_name(&name);
-                let warnings = shapeup_core::io::write_mesh(&rest_path, &self.state.rest.mesh)
+                let warnings = shapeup_core::io::write_mesh(&rest_path, &self.state.rest.mesh, &self.attributes)
                     .map_err(|e| EditorError::Save(Cause::new(e)))?;
                 (PathBuf::from(name), Some(rest_path), warnings.iter().map(ToString::to_string).collect())
             }
@@ -209,5 +210,5 @@ fn resolve_selection(spec: &SelectionSpec, mesh: &Mesh) -> Result<Option<Vec<u32
 /// rest rotated about its centre (default the centroid), then translated.
 fn position_targets(vertices: &[u32], targets: &Targets, mesh: &Mesh) -> Result<Vec<DVec3>, String> {
     let rest: Vec<DVec3> = vertices.iter().map(|&v| mesh.positions[v as usize]).collect();
-    targets.resolve(&rest)
+    targets.resolve(&rest).map_err(|e| e.to_string())
 }

@@ -555,15 +555,16 @@ impl EditorApp {
     }
 
     fn export_mesh(&mut self, path: PathBuf) {
-        self.view.status = match shapeup_core::io::write_mesh(&path, &self.document.current_mesh()) {
-            Ok(warnings) if warnings.is_empty() => format!("wrote {}", path.display()),
-            // What the format could not keep (or recomputed), said once each.
-            Ok(warnings) => {
-                let said: Vec<String> = warnings.iter().map(ToString::to_string).collect();
-                format!("wrote {}; {}", path.display(), said.join("; "))
-            }
-            Err(e) => e.to_string(),
-        };
+        self.view.status =
+            match shapeup_core::io::write_mesh(&path, &self.document.current_mesh(), self.document.attributes()) {
+                Ok(warnings) if warnings.is_empty() => format!("wrote {}", path.display()),
+                // What the format could not keep (or recomputed), said once each.
+                Ok(warnings) => {
+                    let said: Vec<String> = warnings.iter().map(ToString::to_string).collect();
+                    format!("wrote {}; {}", path.display(), said.join("; "))
+                }
+                Err(e) => e.to_string(),
+            };
         self.view.export_input = path.display().to_string();
     }
 

@@ -10,9 +10,9 @@
 //! attachments are not a scene type: [`degenerate_attachments`] finds them after the scene's
 //! (or the editor's) own groups are built, and the caller adds them as one more group.
 
-use super::{Constraint, RowSink};
+use super::contract::{Constraint, RowSink};
+use super::group::ConstraintGroup;
 use crate::geometry::{RestGeometry, is_degenerate_triangle};
-use crate::solver::{ConstraintGroup, SolveError, System};
 use glam::DVec3;
 
 /// Name of the group that holds the attachments.
@@ -124,26 +124,19 @@ impl DegenerateAttachments {
     }
 }
 
-/// Adds to `system`, after its own groups, the attachments of the vertices of `rest` that only
-/// degenerate triangles use ([`degenerate_attachments`] of every constraint it holds so far), as
-/// the group [`DEGENERATE_FACES_GROUP`]. Returns the attached vertices and the stranded ones
-/// (each sorted), for the caller to report. What scenes and the editor both do after building
-/// their groups.
-///
-/// # Errors
-/// As [`System::add_group`].
-pub fn attach_degenerate_vertices(
-    system: &mut System,
+/// The attachments of the vertices of `rest` that only degenerate triangles use
+/// ([`degenerate_attachments`] of every constraint of `groups`, a system's groups so far), as
+/// the group [`DEGENERATE_FACES_GROUP`] for the caller to add after them (`None` if there are
+/// none), with the attached vertices and the stranded ones (each sorted) for it to report. What
+/// scenes and the editor both do after building their groups.
+pub fn attach_degenerate_vertices<'a>(
     rest: &RestGeometry,
-) -> Result<(Vec<u32>, Vec<u32>), SolveError> {
-    let found =
-        degenerate_attachments(rest, system.groups().flat_map(|(_, g)| g.constraints.iter().map(|c| c.as_ref())));
+    groups: impl IntoIterator<Item = &'a ConstraintGroup>,
+) -> (Option<ConstraintGroup>, Vec<u32>, Vec<u32>) {
+    let found = degenerate_attachments(rest, groups.into_iter().flat_map(|g| g.constraints.iter().map(|c| c.as_ref())));
     let attached = found.attached_vertices();
     let stranded = found.stranded.clone();
-    if let Some(group) = found.into_group() {
-        system.add_group(group)?;
-    }
-    Ok((attached, stranded))
+    (found.into_group(), attached, stranded)
 }
 
 /// The attachments of the vertices that only degenerate triangles use, given the constraints

@@ -1,12 +1,79 @@
 //! The one route from a group description (type, selection, weight, options, targets) to a
 //! [`ConstraintGroup`]: scenes, the editor (static and dynamic) and library users all build
 //! groups with [`build_group`], so no layer outside a constraint's own file names a concrete
-//! type.
+//! type. [`ConstraintGroup`] itself lives here, below the solver that takes it.
 
-use super::{BuildContext, ConstraintError, Params, Selection, build_constraints, constraint_type};
+use super::contract::{BuildContext, Constraint};
+use super::error::ConstraintError;
+use super::params::Params;
+use super::registry::{build_constraints, constraint_type};
+use super::selection::Selection;
 use crate::geometry::{RestGeometry, WorkingFrame};
-use crate::solver::ConstraintGroup;
 use glam::DVec3;
+
+/// A named set of constraints of one type sharing a multiplier g (w_i = ω_i · g).
+#[derive(Debug)]
+pub struct ConstraintGroup {
+    /// Display name, unique by convention (`"shape"`, `"handle 1"`).
+    pub name: String,
+    /// Constraint type name (`"edge_spring"`, …).
+    pub kind: String,
+    /// The multiplier g ≥ 0.
+    pub multiplier: f64,
+    /// The constraints.
+    pub constraints: Vec<Box<dyn Constraint>>,
+    /// Hold the group's vertices exactly at their points instead of pulling them there
+    /// (default `false`): they leave the linear system, which then covers the other vertices
+    /// only, and moving the points changes only the right-hand side (libigl's
+    /// `min_quad_with_fixed`). Only for constraints with [`Constraint::held_points`] (position
+    /// groups); the multiplier then plays no part and the group adds nothing to E.
+    pub hard: bool,
+}
+
+impl ConstraintGroup {
+    /// A group of `constraints` named `name` with multiplier `multiplier`; its kind is that of
+    /// its first constraint.
+    pub fn new(name: impl Into<String>, multiplier: f64, constraints: Vec<Box<dyn Constraint>>) -> Self {
+        let kind = constraints.first().map(|c| c.kind()).unwrap_or("empty").to_string();
+        ConstraintGroup { name: name.into(), kind, multiplier, constraints, hard: false }
+    }
+
+    /// The group made hard (or soft again): see [`ConstraintGroup::hard`].
+    pub fn with_hard(mut self, hard: bool) -> Self {
+        self.hard = hard;
+        self
+    }
+
+    /// Total number of rows of its constraints.
+    pub fn num_rows(&self) -> usize {
+        self.constraints.iter().map(|c| c.num_rows()).sum()
+    }
+
+    /// How far q is from meeting the group: the largest [`Constraint::violation`] of
+    /// `C_i q` over its constraints (0 when every term is on its set; in the rows' units, a
+    /// length for the point-set types: plane, circle, sphere, line, rigid, …). 0 for a group
+    /// with no rows (a load).
+    pub fn max_violation(&self, q: &[DVec3]) -> f64 {
+        self.constraints.iter().filter(|c| c.num_rows() > 0).map(|c| c.violation(&c.apply(q))).fold(0.0, f64::max)
+    }
+}
+
+/// A handle to a group of a solver's `System`; stays valid until that group is removed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct GroupId(pub u32);
+
+/// A multiplier (or another weight: inertia, a load scale) that is negative or not finite.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+#[error("weight must be a finite number ≥ 0, found {0}")]
+pub struct WeightError(pub f64);
+
+/// The one test of a weight: finite and ≥ 0. Returns the weight.
+///
+/// # Errors
+/// [`WeightError`] with the value otherwise.
+pub fn check_weight(weight: f64) -> Result<f64, WeightError> {
+    if weight.is_finite() && weight >= 0.0 { Ok(weight) } else { Err(WeightError(weight)) }
+}
 
 /// A constraint group as users describe it.
 #[derive(Debug, Clone)]
@@ -99,16 +166,14 @@ pub fn build_group(
             }
         }
     }
-    let weight = description.weight.unwrap_or_else(|| ty.default_multiplier());
-    if !(weight.is_finite() && weight >= 0.0) {
-        return Err(invalid(format!("weight must be a finite number ≥ 0, found {weight}")));
-    }
+    let weight = check_weight(description.weight.unwrap_or_else(|| ty.default_multiplier()))
+        .map_err(|e| invalid(e.to_string()))?;
     Ok(ConstraintGroup::new(description.name.clone(), weight, constraints).with_hard(hard))
 }
 
 /// The points a group's constraints hold their vertices at, concatenated in constraint order
 /// ([`super::Constraint::held_points`]), with those vertices: what
-/// [`crate::solver::System::set_targets`] takes, in this order.
+/// the solver's `System::set_targets` takes, in this order.
 pub fn held_vertices(group: &ConstraintGroup) -> Vec<u32> {
     group.constraints.iter().filter_map(|c| c.held_points()).flat_map(|(v, _)| v.iter().copied()).collect()
 }

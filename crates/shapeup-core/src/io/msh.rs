@@ -73,7 +73,7 @@ pub fn read_msh(mut reader: impl BufRead, path: &Path) -> Result<LoadedMesh, IoE
     if r.text() != "$MeshFormat" {
         return Err(r.error(format!("not a Gmsh file: expected '$MeshFormat', found '{}'", shown(r.text()))));
     }
-    r.expect(|| "the version line 'version file-type data-size'".to_owned())?;
+    r.require_line(|| "the version line 'version file-type data-size'".to_owned())?;
     let fields: Vec<&str> = r.tokens().take(4).collect();
     let version_2 = match fields.first().copied().unwrap_or("") {
         "4.1" => false,
@@ -221,11 +221,11 @@ pub(super) fn parse_point(tokens: &[&str]) -> Result<DVec3, String> {
 /// MSH 2.2 `$Nodes`: a count, then `tag x y z` lines.
 fn read_nodes_2<R: BufRead>(r: &mut Records<'_, R>, nodes: &mut Nodes) -> Result<(), IoError> {
     let header = r.line;
-    r.expect(|| "the number of nodes".to_owned())?;
+    r.require_line(|| "the number of nodes".to_owned())?;
     let [count] = r.counts("the number of nodes")?;
     nodes.reserve(count as u64);
     for i in 0..count {
-        r.expect(|| format!("node {} of {count} ($Nodes of line {header})", i + 1))?;
+        r.require_line(|| format!("node {} of {count} ($Nodes of line {header})", i + 1))?;
         let fields: Vec<&str> = r.tokens().take(4).collect();
         let tag = nodes.add_text(r, fields.first().copied().unwrap_or(""), 0)?;
         let p = parse_point(fields.get(1..).unwrap_or(&[])).map_err(|m| r.error(format!("node {tag}: {m}")))?;
@@ -238,19 +238,19 @@ fn read_nodes_2<R: BufRead>(r: &mut Records<'_, R>, nodes: &mut Nodes) -> Result
 /// lines and `n` coordinate lines (parametric coordinates after `x y z` are ignored).
 fn read_nodes_41<R: BufRead>(r: &mut Records<'_, R>, nodes: &mut Nodes) -> Result<(), IoError> {
     let header = r.line;
-    r.expect(|| "'numEntityBlocks numNodes minNodeTag maxNodeTag'".to_owned())?;
+    r.require_line(|| "'numEntityBlocks numNodes minNodeTag maxNodeTag'".to_owned())?;
     let [blocks, count, _, _] = r.counts("'numEntityBlocks numNodes minNodeTag maxNodeTag'")?;
     nodes.reserve(count as u64);
     let mut total = 0usize;
     for b in 0..blocks {
-        r.expect(|| format!("node block {} of {blocks} ($Nodes of line {header})", b + 1))?;
+        r.require_line(|| format!("node block {} of {blocks} ($Nodes of line {header})", b + 1))?;
         let [_, _, parametric, n] = r.counts("'entityDim entityTag parametric numNodesInBlock'")?;
         if parametric > 1 {
             return Err(r.error(format!("parametric flag {parametric} is not 0 or 1")));
         }
         let mut tags = bounded_vec(n);
         for k in 0..n {
-            r.expect(|| format!("tag {} of {n} of node block {}", k + 1, b + 1))?;
+            r.require_line(|| format!("tag {} of {n} of node block {}", k + 1, b + 1))?;
             let mut fields = r.tokens();
             let (Some(tag), None) = (fields.next(), fields.next()) else {
                 return Err(r.error(format!("expected one node tag, found '{}'", shown(r.text()))));
@@ -259,7 +259,7 @@ fn read_nodes_41<R: BufRead>(r: &mut Records<'_, R>, nodes: &mut Nodes) -> Resul
             tags.push(nodes.add_text(r, &tag, k as u64)?);
         }
         for (k, tag) in tags.iter().enumerate() {
-            r.expect(|| format!("coordinates {} of {n} of node block {}", k + 1, b + 1))?;
+            r.require_line(|| format!("coordinates {} of {n} of node block {}", k + 1, b + 1))?;
             let fields: Vec<&str> = r.tokens().take(3).collect();
             nodes.positions.push(parse_point(&fields).map_err(|m| r.error(format!("node {tag}: {m}")))?);
         }
@@ -338,7 +338,7 @@ fn read_elements<R: BufRead>(
 ) -> Result<(), IoError> {
     let header = r.line;
     let what = if v2 { "the number of elements" } else { "'numEntityBlocks numElements minElementTag maxElementTag'" };
-    r.expect(|| what.to_owned())?;
+    r.require_line(|| what.to_owned())?;
     let (blocks, count) = if v2 {
         let [count] = r.counts(what)?;
         (1, count)
@@ -351,12 +351,12 @@ fn read_elements<R: BufRead>(
         let (kind, n) = if v2 {
             (None, count)
         } else {
-            r.expect(|| format!("element block {} of {blocks} ($Elements of line {header})", b + 1))?;
+            r.require_line(|| format!("element block {} of {blocks} ($Elements of line {header})", b + 1))?;
             let [_, _, kind, n] = r.counts("'entityDim entityTag elementType numElementsInBlock'")?;
             (Some(kind), n)
         };
         for k in 0..n {
-            r.expect(|| format!("element {} of {n} ($Elements of line {header})", k + 1))?;
+            r.require_line(|| format!("element {} of {n} ($Elements of line {header})", k + 1))?;
             let mut tokens = r.tokens();
             let tag = tokens.next().unwrap_or("");
             let kind = match kind {
@@ -453,7 +453,7 @@ fn tetrahedra_to_mesh(
     }
     let boundary = tetrahedron_boundary(&mesh.tetrahedra);
     mesh.set_triangles(boundary);
-    Ok(LoadedMesh { mesh, warnings: crate::warnings::Warnings::new() })
+    Ok(LoadedMesh { mesh, attributes: super::Attributes::None, warnings: crate::warnings::Warnings::new() })
 }
 
 /// Writes `mesh` as MSH 4.1 ASCII: node tags are vertex indices + 1; element tags number the
@@ -571,13 +571,13 @@ impl<'p, R: BufRead> Records<'p, R> {
     }
 
     /// Moves to the next non-blank line, which must exist: `what` names what was expected.
-    pub(super) fn expect(&mut self, what: impl FnOnce() -> String) -> Result<(), IoError> {
+    pub(super) fn require_line(&mut self, what: impl FnOnce() -> String) -> Result<(), IoError> {
         if self.advance()? { Ok(()) } else { Err(self.eof_error(what())) }
     }
 
     /// Moves to the next line, which must be exactly `keyword`; `context` is added to errors.
     fn expect_line(&mut self, keyword: &str, context: &str) -> Result<(), IoError> {
-        self.expect(|| format!("'{keyword}'{context}"))?;
+        self.require_line(|| format!("'{keyword}'{context}"))?;
         if self.text != keyword {
             return Err(self.error(format!("expected '{keyword}'{context}, found '{}'", shown(&self.text))));
         }

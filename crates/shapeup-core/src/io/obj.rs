@@ -40,11 +40,12 @@ use std::path::Path;
 
 use glam::DVec3;
 
+use super::Attributes;
+use super::attributes::{AttributeKind, NO_INDEX, TexCoords};
 use super::{
     IoError, LoadedMesh, UTF8_BOM, build_mesh, decode_text, parse_coordinate, read_error, report_dropped, shown,
     write_f64, write_xyz,
 };
-use crate::attributes::{AttributeKind, Attributes, NO_INDEX, TexCoords};
 use crate::geometry::indexed_normals;
 use crate::mesh::{Mesh, Polygons};
 use crate::warnings::Warnings;
@@ -223,7 +224,7 @@ pub fn read_obj(reader: impl BufRead, path: &Path) -> Result<LoadedMesh, IoError
     attributes.faces = face_lines.len();
     attributes.polygons_fingerprint = fingerprint(&polygons);
     let mut loaded = build_mesh(path, positions, polygons)?;
-    loaded.mesh.attributes = Attributes::Obj(Box::new(attributes));
+    loaded.attributes = Attributes::Obj(Box::new(attributes));
     Ok(loaded)
 }
 
@@ -455,7 +456,7 @@ pub enum ObjLine {
     Other(Vec<u8>),
 }
 
-/// Everything an OBJ file holds besides positions and faces (see [`crate::attributes`] and the
+/// Everything an OBJ file holds besides positions and faces (see [`super::Attributes`] and the
 /// [module docs](self)): its lines in order and the values parsed from them.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct ObjAttributes {
@@ -574,9 +575,9 @@ impl ObjAttributes {
 ///
 /// # Errors
 /// Any error of `w`.
-pub fn write_obj(w: &mut dyn Write, mesh: &Mesh, warnings: &mut Warnings) -> io::Result<()> {
+pub fn write_obj(w: &mut dyn Write, mesh: &Mesh, attributes: &Attributes, warnings: &mut Warnings) -> io::Result<()> {
     let mut same_faces = true;
-    if let Attributes::Obj(obj) = &mesh.attributes {
+    if let Attributes::Obj(obj) = attributes {
         match obj.mismatch(mesh) {
             None => return write_lines(w, mesh, obj, warnings),
             Some(reason) => warnings.add(
@@ -589,7 +590,7 @@ pub fn write_obj(w: &mut dyn Write, mesh: &Mesh, warnings: &mut Warnings) -> io:
         // Per-corner texture indices only mean something for the faces they were read with.
         same_faces = obj.polygons_fingerprint == fingerprint(&mesh.polygons);
     }
-    write_new(w, mesh, same_faces, warnings)
+    write_new(w, mesh, attributes, same_faces, warnings)
 }
 
 /// Writes a kept line's bytes, which may span physical lines (`\n` inside), with the file's line
@@ -656,11 +657,17 @@ fn write_lines(w: &mut dyn Write, mesh: &Mesh, obj: &ObjAttributes, warnings: &m
 
 /// A new OBJ file for a mesh without (matching) OBJ lines; texture coordinates only when its
 /// attributes belong to its faces (`same_faces`).
-fn write_new(w: &mut dyn Write, mesh: &Mesh, same_faces: bool, warnings: &mut Warnings) -> io::Result<()> {
+fn write_new(
+    w: &mut dyn Write,
+    mesh: &Mesh,
+    attributes: &Attributes,
+    same_faces: bool,
+    warnings: &mut Warnings,
+) -> io::Result<()> {
     let n = mesh.num_vertices();
     let polygons = &mesh.polygons;
     writeln!(w, "# written by shapeup: {n} vertices, {} faces", mesh.num_polygons())?;
-    let colors = mesh.attributes.vertex_colors().filter(|c| c.len() == n);
+    let colors = attributes.vertex_colors().filter(|c| c.len() == n);
     for (i, p) in mesh.positions.iter().enumerate() {
         w.write_all(b"v ")?;
         write_xyz(w, *p)?;
@@ -670,8 +677,7 @@ fn write_new(w: &mut dyn Write, mesh: &Mesh, same_faces: bool, warnings: &mut Wa
         }
         w.write_all(b"\n")?;
     }
-    let texcoords =
-        mesh.attributes.texcoords(polygons).filter(|t| same_faces && t.corners.len() == polygons.num_corners());
+    let texcoords = attributes.texcoords(polygons).filter(|t| same_faces && t.corners.len() == polygons.num_corners());
     if let Some(t) = &texcoords {
         for [u, v] in &t.values {
             w.write_all(b"vt ")?;
@@ -682,8 +688,8 @@ fn write_new(w: &mut dyn Write, mesh: &Mesh, same_faces: bool, warnings: &mut Wa
         }
     }
     // Smooth normals, one per vertex some polygon uses (`vn` k+1 for the vertex with index k).
-    let mut normal_of_vertex = vec![NO_INDEX; if mesh.attributes.has_normals() { n } else { 0 }];
-    if mesh.attributes.has_normals() {
+    let mut normal_of_vertex = vec![NO_INDEX; if attributes.has_normals() { n } else { 0 }];
+    if attributes.has_normals() {
         let mut written = 0u32;
         for (v, normal) in indexed_normals(&mesh.positions, polygons, polygons.indices(), n).iter().enumerate() {
             if let Some(normal) = normal {
@@ -732,10 +738,10 @@ fn write_new(w: &mut dyn Write, mesh: &Mesh, same_faces: bool, warnings: &mut Wa
     if colors.is_some() {
         kept.push(AttributeKind::VertexColors);
     }
-    if mesh.attributes.has_normals() {
+    if attributes.has_normals() {
         kept.push(AttributeKind::Normals);
     }
-    report_dropped(mesh, &kept, "OBJ", warnings);
+    report_dropped(attributes, &kept, "OBJ", warnings);
     Ok(())
 }
 
@@ -748,17 +754,17 @@ mod tests {
         read_obj(text.as_bytes(), Path::new("mem.obj"))
     }
 
-    fn obj(mesh: &Mesh) -> &ObjAttributes {
-        match &mesh.attributes {
+    fn obj(attributes: &Attributes) -> &ObjAttributes {
+        match attributes {
             Attributes::Obj(a) => a,
             other => panic!("not OBJ attributes: {other:?}"),
         }
     }
 
-    fn write(mesh: &Mesh) -> (String, Warnings) {
+    fn write(mesh: &Mesh, attributes: &Attributes) -> (String, Warnings) {
         let mut out = Vec::new();
         let mut warnings = Warnings::new();
-        write_obj(&mut out, mesh, &mut warnings).unwrap();
+        write_obj(&mut out, mesh, attributes, &mut warnings).unwrap();
         (String::from_utf8(out).unwrap(), warnings)
     }
 
@@ -810,7 +816,7 @@ mod tests {
         let loaded = read(text).unwrap();
         assert_eq!(loaded.mesh.positions[2], DVec3::Y);
         assert_eq!(loaded.mesh.triangles, vec![[0, 1, 2]]);
-        let a = obj(&loaded.mesh);
+        let a = obj(&loaded.attributes);
         assert_eq!(a.lines[1], ObjLine::Vertex { index: 0, rest: " # inline".into() });
         assert_eq!(a.lines[6], ObjLine::Other("f 1 2 \\\n3".into()));
         assert!(!a.crlf && a.final_newline && !a.bom);
@@ -827,15 +833,18 @@ mod tests {
         let text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3 \\";
         let loaded = read(text).unwrap();
         assert_eq!(loaded.mesh.triangles.len(), 1);
-        assert!(!obj(&loaded.mesh).final_newline);
-        assert_eq!(write(&loaded.mesh).0, "v 0.0 0.0 0.0\nv 1.0 0.0 0.0\nv 0.0 1.0 0.0\nf 1 2 3 \\");
+        assert!(!obj(&loaded.attributes).final_newline);
+        assert_eq!(
+            write(&loaded.mesh, &loaded.attributes).0,
+            "v 0.0 0.0 0.0\nv 1.0 0.0 0.0\nv 0.0 1.0 0.0\nf 1 2 3 \\"
+        );
     }
 
     #[test]
     fn w_and_colours_are_told_apart_by_count() {
         let colors = |rest: &str| {
             let text = format!("v 0 0 0{rest}\nv 1 0 0{rest}\nv 0 1 0{rest}\nf 1 2 3\n");
-            obj(&read(&text).unwrap().mesh).colors.clone()
+            obj(&read(&text).unwrap().attributes).colors.clone()
         };
         assert_eq!(colors(" 1"), None, "w");
         assert_eq!(colors(" 0.5 0.25"), None);
@@ -845,10 +854,10 @@ mod tests {
         assert_eq!(colors(" red green blue"), None);
         // Only when every vertex has one.
         let loaded = read("v 0 0 0 1 0 0\nv 1 0 0\nv 0 1 0 0 0 1\nf 1 2 3\n").unwrap();
-        assert_eq!(loaded.mesh.attributes.vertex_colors(), None);
+        assert_eq!(loaded.attributes.vertex_colors(), None);
         // 0–255 colours are scaled into [0, 1].
         let loaded = read("v 0 0 0 255 0 51\nv 1 0 0 0 255 0\nv 0 1 0 0 0 255\nf 1 2 3\n").unwrap();
-        assert_eq!(loaded.mesh.attributes.vertex_colors().unwrap()[0], [1.0, 0.0, 0.2]);
+        assert_eq!(loaded.attributes.vertex_colors().unwrap()[0], [1.0, 0.0, 0.2]);
     }
 
     #[test]
@@ -863,7 +872,7 @@ mod tests {
     #[test]
     fn writes_one_based_faces() {
         let mesh = Mesh::new(vec![DVec3::ZERO, DVec3::X, DVec3::Y], vec![[0, 1, 2]]).unwrap();
-        let (text, warnings) = write(&mesh);
+        let (text, warnings) = write(&mesh, &Attributes::None);
         assert!(text.contains("v 1.0 0.0 0.0\n") && text.ends_with("f 1 2 3\n"), "{text}");
         assert!(warnings.is_empty());
     }
@@ -875,7 +884,7 @@ mod tests {
         let loaded = read(text).unwrap();
         let mut moved = loaded.mesh.clone();
         moved.positions[1] = DVec3::new(2.0, 0.0, 0.0);
-        let (out, warnings) = write(&moved);
+        let (out, warnings) = write(&moved, &loaded.attributes);
         let expected = "\u{feff}# hi\r\nv 0.0 0.0 0.0 1 0 0 # red\r\nv 2.0 0.0 0.0 0 1 0\r\nv 0.0 1.0 0.0 0 0 1\r\n\
                         vt 0 0\r\n\r\nvn 0.0 0.0 1.0\r\nvn 1 0 0\r\ng a\r\nf 1/1/1 2/1/1 3/1/1\r\n";
         assert_eq!(out, expected, "the unused vn 2 keeps its line");
@@ -889,7 +898,7 @@ mod tests {
         let mut changed = loaded.mesh.clone();
         changed.polygons = Polygons::from_triangles(&[[1, 3, 2]]);
         changed.triangles = vec![[1, 3, 2]];
-        let (out, warnings) = write(&changed);
+        let (out, warnings) = write(&changed, &loaded.attributes);
         assert!(out.starts_with("# written by shapeup") && out.ends_with("f 2 4 3\n"), "{out}");
         assert_eq!(warnings.count("obj_lines_not_kept"), 1);
         // The texture coordinates belonged to the old faces; both they and the groups are dropped.

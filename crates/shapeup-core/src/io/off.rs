@@ -181,7 +181,7 @@ pub fn read_off(reader: impl BufRead, path: &Path) -> Result<LoadedMesh, IoError
     let mut loaded = build_mesh(path, positions, polygons)?;
     let attributes = OffAttributes { keyword, layout, vertex_extra, face_extra, comments };
     if !attributes.is_plain() {
-        loaded.mesh.attributes = crate::attributes::Attributes::Off(Box::new(attributes));
+        loaded.attributes = super::Attributes::Off(Box::new(attributes));
     }
     Ok(loaded)
 }
@@ -322,7 +322,7 @@ fn is_off_keyword(keyword: &str) -> bool {
     prefix.is_empty()
 }
 
-/// Everything an OFF file holds besides positions and faces (see [`crate::attributes`]): the
+/// Everything an OFF file holds besides positions and faces (see [`super::Attributes`]): the
 /// header keyword and, verbatim, the values after each vertex's x y z and after each face's
 /// indices (colours, normals, texture coordinates).
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -363,7 +363,7 @@ impl OffAttributes {
     }
 
     /// Texture coordinates per corner: each vertex's `s t` (`ST` prefix).
-    pub fn texcoords(&self, polygons: &crate::mesh::Polygons) -> Option<crate::attributes::TexCoords> {
+    pub fn texcoords(&self, polygons: &crate::mesh::Polygons) -> Option<super::attributes::TexCoords> {
         if !self.layout.texture {
             return None;
         }
@@ -373,7 +373,7 @@ impl OffAttributes {
                 (v.len() >= 2).then(|| [v[v.len() - 2], v[v.len() - 1]])
             })
             .collect();
-        Some(crate::attributes::TexCoords { values: values?, corners: polygons.indices().to_vec() })
+        Some(super::attributes::TexCoords { values: values?, corners: polygons.indices().to_vec() })
     }
 
     /// Per-vertex colours (`C` prefix), integers over 1 taken as 0–255.
@@ -399,8 +399,8 @@ impl OffAttributes {
     }
 
     /// Every kind of attribute held.
-    pub fn kinds(&self) -> Vec<crate::attributes::AttributeKind> {
-        use crate::attributes::AttributeKind;
+    pub fn kinds(&self) -> Vec<super::attributes::AttributeKind> {
+        use super::attributes::AttributeKind;
         let mut kinds = Vec::new();
         if self.layout.texture {
             kinds.push(AttributeKind::TexCoords);
@@ -423,15 +423,20 @@ impl OffAttributes {
 ///
 /// # Errors
 /// Any error of `w`.
-pub fn write_off(w: &mut dyn Write, mesh: &Mesh, warnings: &mut crate::warnings::Warnings) -> io::Result<()> {
-    let own = match &mesh.attributes {
-        crate::attributes::Attributes::Off(a)
+pub fn write_off(
+    w: &mut dyn Write,
+    mesh: &Mesh,
+    attributes: &super::Attributes,
+    warnings: &mut crate::warnings::Warnings,
+) -> io::Result<()> {
+    let own = match attributes {
+        super::Attributes::Off(a)
             if a.vertex_extra.len() == mesh.num_vertices() && a.face_extra.len() == mesh.num_polygons() =>
         {
             Some(a.as_ref())
         }
         _ => {
-            super::report_dropped(mesh, &[], "OFF", warnings);
+            super::report_dropped(attributes, &[], "OFF", warnings);
             None
         }
     };
@@ -522,7 +527,7 @@ mod tests {
         let coff = "COFF4 2 0\n0 0 0 1 0 0\n1 0 0 1 0 0\n1 1 0 1 0 0\n0 1 0 1 0 0\n3 0 1 2\n3 0 2 3\n";
         let loaded = read_off(coff.as_bytes(), Path::new("m.off")).unwrap();
         assert_eq!(loaded.mesh.triangles, expected.triangles);
-        assert_eq!(loaded.mesh.attributes.vertex_colors().unwrap()[2], [1.0, 0.0, 0.0]);
+        assert_eq!(loaded.attributes.vertex_colors().unwrap()[2], [1.0, 0.0, 0.0]);
     }
 
     #[test]
@@ -533,7 +538,7 @@ mod tests {
         assert_eq!(loaded.mesh.polygons.get(0), Some(&[0, 1, 2, 3, 4][..]));
         assert_eq!(loaded.mesh.positions[1], DVec3::X);
         assert_eq!(loaded.mesh.positions[3], DVec3::Y);
-        let crate::attributes::Attributes::Off(a) = &loaded.mesh.attributes else { panic!("no OFF attributes") };
+        let crate::io::Attributes::Off(a) = &loaded.attributes else { panic!("no OFF attributes") };
         assert_eq!(a.face_extra, ["0.2 0.3 0.4"]);
         assert_eq!(a.comments, 5);
         // Errors name the line of the token at fault.

@@ -39,11 +39,12 @@ use std::path::Path;
 
 use glam::DVec3;
 
+use super::Attributes;
+use super::attributes::{AttributeKind, NO_INDEX, TexCoords, VertexScalar};
 use super::{
     IoError, Lines, LoadedMesh, MAX_PREALLOCATION, build_mesh, decode_text, read_error, report_dropped, shown,
     utf16_encoding, write_f64,
 };
-use crate::attributes::{AttributeKind, Attributes, NO_INDEX, TexCoords, VertexScalar};
 use crate::mesh::{Mesh, Polygons};
 use crate::warnings::Warnings;
 
@@ -375,7 +376,7 @@ struct Plan {
 }
 
 /// Everything a PLY file holds: its encoding, header lines, and every element and property with
-/// its type and values (see the [module docs](self) and [`crate::attributes`]).
+/// its type and values (see the [module docs](self) and [`super::Attributes`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct PlyAttributes {
     encoding: PlyEncoding,
@@ -672,7 +673,7 @@ pub fn read_ply(mut reader: impl BufRead, path: &Path) -> Result<LoadedMesh, IoE
     }
     let mut loaded = build_mesh(path, positions, polygons)?;
     loaded.warnings.extend(warnings.for_file(path));
-    loaded.mesh.attributes = Attributes::Ply(Box::new(PlyAttributes { encoding, header, elements, plan }));
+    loaded.attributes = Attributes::Ply(Box::new(PlyAttributes { encoding, header, elements, plan }));
     Ok(loaded)
 }
 
@@ -1164,10 +1165,11 @@ fn read_binary_body<R: Read>(
 pub fn write_ply(
     w: &mut dyn Write,
     mesh: &Mesh,
+    attributes: &Attributes,
     encoding: Option<PlyEncoding>,
     warnings: &mut Warnings,
 ) -> io::Result<()> {
-    if let Attributes::Ply(own) = &mesh.attributes {
+    if let Attributes::Ply(own) = attributes {
         let encoding = encoding.unwrap_or(own.encoding);
         match own.mismatch(mesh) {
             None => return write_own(w, mesh, own, encoding, warnings),
@@ -1177,11 +1179,11 @@ pub fn write_ply(
                     "PLY inputs that no longer match the mesh, written with its positions, faces and common attributes only",
                     || why,
                 );
-                return write_generic(w, mesh, encoding, warnings);
+                return write_generic(w, mesh, attributes, encoding, warnings);
             }
         }
     }
-    write_generic(w, mesh, encoding.unwrap_or(PlyEncoding::BinaryLittleEndian), warnings)
+    write_generic(w, mesh, attributes, encoding.unwrap_or(PlyEncoding::BinaryLittleEndian), warnings)
 }
 
 /// Appends one value of type `ty` to an instance being encoded.
@@ -1299,12 +1301,17 @@ fn count_type(n: usize) -> PlyScalar {
 }
 
 /// Writes `mesh` in the layout shapeup chooses (see [`write_ply`]).
-fn write_generic(w: &mut dyn Write, mesh: &Mesh, encoding: PlyEncoding, warnings: &mut Warnings) -> io::Result<()> {
+fn write_generic(
+    w: &mut dyn Write,
+    mesh: &Mesh,
+    attributes: &Attributes,
+    encoding: PlyEncoding,
+    warnings: &mut Warnings,
+) -> io::Result<()> {
     let n = mesh.num_vertices();
     if i32::try_from(n).is_err() {
         return Err(io::Error::new(io::ErrorKind::InvalidInput, "PLY 'int' indices allow at most i32::MAX vertices"));
     }
-    let attributes = &mesh.attributes;
     let mut kept = Vec::new();
     if attributes.has_normals() {
         kept.push(AttributeKind::Normals);
@@ -1319,7 +1326,7 @@ fn write_generic(w: &mut dyn Write, mesh: &Mesh, encoding: PlyEncoding, warnings
     if texcoords.is_some() {
         kept.push(AttributeKind::TexCoords);
     }
-    report_dropped(mesh, &kept, "PLY", warnings);
+    report_dropped(attributes, &kept, "PLY", warnings);
     let normals = attributes.has_normals().then(|| super::recompute_vertex_normals(mesh, warnings));
     let colors: Option<Vec<[f64; 3]>> = colors.map(|colors| {
         let mut rounded = colors.iter().enumerate().filter(|(_, c)| {
@@ -1508,7 +1515,7 @@ mod tests {
             assert_eq!(loaded.mesh.positions, vec![DVec3::new(1.0, 2.0, 3.0)]);
             // And it is written back as it was: declared, without data.
             let mut out = Vec::new();
-            write_ply(&mut out, &loaded.mesh, None, &mut Warnings::new()).unwrap();
+            write_ply(&mut out, &loaded.mesh, &loaded.attributes, None, &mut Warnings::new()).unwrap();
             assert_eq!(out, bytes);
         }
     }
@@ -1527,7 +1534,7 @@ mod tests {
         let moved = loaded.mesh.with_positions(vec![DVec3::new(0.4, 0.0, 0.0), DVec3::new(7.0, 0.0, 0.0), DVec3::Y]);
         let mut out = Vec::new();
         let mut warnings = Warnings::new();
-        write_ply(&mut out, &moved, None, &mut warnings).unwrap();
+        write_ply(&mut out, &moved, &loaded.attributes, None, &mut warnings).unwrap();
         let back = read_ply(&out[..], Path::new("n.ply")).unwrap();
         assert_eq!(back.mesh.positions, vec![DVec3::ZERO, DVec3::new(7.0, 0.0, 0.0), DVec3::Y]);
         assert_eq!(warnings.count("coordinates_rounded"), 1);

@@ -263,8 +263,13 @@ fn parse_ascii(text: impl io::BufRead, path: &Path) -> Result<LoadedMesh, IoErro
 ///
 /// # Errors
 /// Any error of `w`; [`io::ErrorKind::InvalidInput`] for more than `u32::MAX` triangles.
-pub fn write_stl_binary(w: &mut dyn Write, mesh: &Mesh, warnings: &mut crate::warnings::Warnings) -> io::Result<()> {
-    super::report_dropped(mesh, &[], "STL", warnings);
+pub fn write_stl_binary(
+    w: &mut dyn Write,
+    mesh: &Mesh,
+    attributes: &super::Attributes,
+    warnings: &mut crate::warnings::Warnings,
+) -> io::Result<()> {
+    super::report_dropped(attributes, &[], "STL", warnings);
     super::report_polygons_split(mesh, "STL", warnings);
     warnings.add_many(
         "vertices_not_kept",
@@ -311,7 +316,7 @@ mod tests {
     fn written_header_is_not_ascii_and_sizes_match() {
         let mesh = Mesh::new(vec![DVec3::ZERO, DVec3::X, DVec3::Y], vec![[0, 1, 2]]).unwrap();
         let mut out = Vec::new();
-        write_stl_binary(&mut out, &mesh, &mut crate::warnings::Warnings::new()).unwrap();
+        write_stl_binary(&mut out, &mesh, &crate::io::Attributes::None, &mut crate::warnings::Warnings::new()).unwrap();
         assert_eq!(out.len(), 84 + 50);
         assert!(!out.starts_with(b"solid"));
         // The normal of a counter-clockwise triangle in the xy plane is +z.

@@ -105,7 +105,7 @@ fn read_pair(node: impl BufRead, node_path: &Path, ele: impl BufRead, ele_path: 
     let mut tets = bounded_vec(count);
     let mut origins = Vec::new();
     for k in 0..count {
-        r.expect(|| format!("tetrahedron {} of {count} (header line {header})", k + 1))?;
+        r.require_line(|| format!("tetrahedron {} of {count} (header line {header})", k + 1))?;
         let fields: Vec<&str> = r.tokens().collect();
         let id = fields[0]
             .parse::<u64>()
@@ -164,7 +164,7 @@ fn read_node(reader: impl BufRead, path: &Path) -> Result<(Vec<glam::DVec3>, u64
     let mut positions = bounded_vec(count);
     let mut base = 0;
     for i in 0..count as u64 {
-        r.expect(|| format!("point {} of {count} (header line {header})", i + 1))?;
+        r.require_line(|| format!("point {} of {count} (header line {header})", i + 1))?;
         let fields: Vec<&str> = r.tokens().collect();
         let index = fields[0].parse::<u64>().ok();
         if i == 0 {

@@ -20,11 +20,12 @@ use std::io::{self, Write};
 
 use glam::DVec3;
 use vtkio::model::{
-    Attribute, Attributes, ByteOrder, CellType, Cells, DataArray, DataSet, ElementType, IOBuffer,
+    Attribute, Attributes as VtkAttributes, ByteOrder, CellType, Cells, DataArray, DataSet, ElementType, IOBuffer,
     UnstructuredGridPiece, Version, VertexNumbers, Vtk,
 };
 
-use crate::attributes::{AttributeKind, NO_INDEX};
+use super::Attributes;
+use super::attributes::{AttributeKind, NO_INDEX};
 use crate::geometry::indexed_normals;
 use crate::mesh::Mesh;
 use crate::warnings::Warnings;
@@ -51,6 +52,7 @@ pub struct PointVectors<'a> {
 pub fn write_vtu(
     w: &mut dyn Write,
     mesh: &Mesh,
+    attributes: &Attributes,
     point_vectors: &[PointVectors<'_>],
     warnings: &mut Warnings,
 ) -> io::Result<()> {
@@ -85,7 +87,6 @@ pub fn write_vtu(
         }
     };
     let mut kept = Vec::new();
-    let attributes = &mesh.attributes;
     if attributes.has_normals() {
         // Smooth per-vertex normals of the geometry as written; zero for a vertex in no face.
         let normals: Vec<DVec3> = indexed_normals(&mesh.positions, &mesh.polygons, mesh.polygons.indices(), n)
@@ -100,7 +101,7 @@ pub fn write_vtu(
         add("color", ElementType::Generic(3), data.into());
         kept.push(AttributeKind::VertexColors);
     }
-    if let Some(uv) = per_vertex_texcoords(mesh) {
+    if let Some(uv) = per_vertex_texcoords(mesh, attributes) {
         add("texcoords", ElementType::TCoords(2), uv.into());
         kept.push(AttributeKind::TexCoords);
     }
@@ -111,7 +112,7 @@ pub fn write_vtu(
         }
         kept.push(AttributeKind::VertexScalars);
     }
-    report_dropped(mesh, &kept, "VTU", warnings);
+    report_dropped(attributes, &kept, "VTU", warnings);
 
     let vtk = Vtk {
         version: Version::new_xml(1, 0),
@@ -121,7 +122,7 @@ pub fn write_vtu(
         data: DataSet::inline(UnstructuredGridPiece {
             points: flatten(&mesh.positions),
             cells,
-            data: Attributes { point: point.arrays, cell: Vec::new() },
+            data: VtkAttributes { point: point.arrays, cell: Vec::new() },
         }),
     };
     // Encoded in memory first: vtkio's writer wraps `w` in a buffer whose final flush happens
@@ -189,8 +190,8 @@ fn flatten(values: &[DVec3]) -> IOBuffer {
 /// of a vertex names the same pair (vertices in no face get (0, 0)). `None` when there are
 /// none, or when some vertex has corners with different pairs (or without one), which a point
 /// array cannot hold.
-fn per_vertex_texcoords(mesh: &Mesh) -> Option<Vec<f64>> {
-    let tex = mesh.attributes.texcoords(&mesh.polygons)?;
+fn per_vertex_texcoords(mesh: &Mesh, attributes: &Attributes) -> Option<Vec<f64>> {
+    let tex = attributes.texcoords(&mesh.polygons)?;
     if tex.corners.len() != mesh.polygons.num_corners() {
         return None;
     }

@@ -1,6 +1,7 @@
 //! 3×3 SVD (one-sided Jacobi) and the nearest rotation (scaled Newton polar iteration with an
 //! SVD fallback).
 
+use super::jacobi_rotation;
 use glam::{DMat3, DVec3};
 
 /// Singular value decomposition `A = U diag(σ) Vᵀ` of a 3×3 matrix, from [`svd3`] or
@@ -76,14 +77,7 @@ pub fn svd3_rotations(a: DMat3) -> Svd3 {
                 continue;
             }
             rotated = true;
-            // c, s without ζ: with d = ‖bⱼ‖² − ‖bᵢ‖², r = √(d² + 4g²), w = r + |d|:
-            // t = 2g sgn(d)/w, c = 1/√(1 + t²) = w/√(2rw), s = tc (one division, no overflow).
-            let d = n[j] - n[i];
-            let r = (d * d + 4.0 * g * g).sqrt();
-            let w = r + d.abs();
-            let h = 1.0 / (2.0 * r * w).sqrt();
-            let c = w * h;
-            let s = if d < 0.0 { -2.0 * g * h } else { 2.0 * g * h };
+            let (c, s) = jacobi_rotation(n[i], n[j], g);
             let (bi, bj) = (b[i], b[j]);
             b[i] = c * bi - s * bj;
             b[j] = s * bi + c * bj;

@@ -1,16 +1,13 @@
 //! From a parsed [`Scene`] to a solvable system: load the mesh, map it to the working frame,
 //! resolve selections and build each group.
 
-use super::{GroupSpec, Scene, SceneError, SelectionSpec, Targets};
-use crate::constraints::{
-    GroupDescription, Params, Selection, attach_degenerate_vertices, build_group as build_described, constraint_type,
-    held_vertices,
-};
+use super::{Scene, SceneError};
+use crate::constraints::{attach_degenerate_vertices, held_vertices};
 use crate::dynamics::{DynamicsParams, Simulation};
 use crate::geometry::{RestGeometry, WorkingFrame, lumped_masses_surface, lumped_masses_volume};
-use crate::io::read_mesh;
+use crate::io::{Attributes, read_mesh};
 use crate::mesh::Mesh;
-use crate::solver::{ConstraintGroup, GroupId, SolveError, SolveReport, SolverParams, System};
+use crate::solver::{GroupId, SolveError, SolveReport, SolverParams, System};
 use crate::warnings::Warnings;
 use glam::DVec3;
 use std::time::Instant;
@@ -23,6 +20,9 @@ pub struct LoadedScene {
     /// The mesh as read (input frame); after `tetrahedralize`, with TetGen's points after the
     /// input's vertices.
     pub mesh: Mesh,
+    /// What the mesh file carried besides positions and faces, which outputs write back
+    /// ([`Attributes::None`] for a mesh [`Scene::build`] was given).
+    pub attributes: Attributes,
     /// Vertices of the input mesh (before tetrahedralization added points): what outputs write.
     pub input_vertices: usize,
     /// What loading changed (polygons triangulated, faces left out…), each naming the file.
@@ -50,7 +50,9 @@ impl Scene {
         let t = Instant::now();
         let loaded = self.read_mesh()?;
         let load_seconds = t.elapsed().as_secs_f64();
-        self.build(loaded.mesh, loaded.warnings, load_seconds)
+        let mut built = self.build(loaded.mesh, loaded.warnings, load_seconds)?;
+        built.attributes = loaded.attributes;
+        Ok(built)
     }
 
     /// The scene's mesh: read from its file, or generated.
@@ -63,12 +65,16 @@ impl Scene {
             Some(generated) => {
                 // Checked again here: a scene edited after parsing (the editor, overrides) may
                 // ask for more than the cap.
-                generated.validate().map_err(|message| SceneError::Invalid {
+                generated.validate().map_err(|e| SceneError::Invalid {
                     path: self.file.clone(),
                     entry: "[mesh]".into(),
-                    message,
+                    message: e.to_string(),
                 })?;
-                Ok(crate::io::LoadedMesh { mesh: generated.mesh(), warnings: Warnings::new() })
+                Ok(crate::io::LoadedMesh {
+                    mesh: generated.mesh(),
+                    attributes: Attributes::None,
+                    warnings: Warnings::new(),
+                })
             }
             None => read_mesh(&self.mesh_path()).map_err(|source| SceneError::Mesh { path: self.file.clone(), source }),
         }
@@ -87,7 +93,7 @@ impl Scene {
         };
         let input_vertices = mesh.num_vertices();
         let mesh = if self.mesh.tetrahedralize && mesh.tetrahedra.is_empty() {
-            fill_with_tetrahedra(&mesh).map_err(|m| invalid("[mesh]", m))?
+            fill_with_tetrahedra(&mesh).map_err(|e| invalid("[mesh]", e.to_string()))?
         } else {
             mesh
         };
@@ -100,24 +106,18 @@ impl Scene {
         let frame = if self.mesh.normalize { WorkingFrame::fit(&mesh.positions) } else { WorkingFrame::IDENTITY };
         let working: Vec<DVec3> = mesh.positions.iter().map(|&p| frame.to_working(p)).collect();
         let rest = RestGeometry::of_mesh(working, &mesh);
-        let params = SolverParams {
-            iterations: self.solver.iterations,
-            tolerance: self.solver.tolerance,
-            factorization: self.solver.factorization,
-            acceleration: self.solver.acceleration,
-            anderson_window: self.solver.anderson_window,
-            lbfgs_memory: self.solver.lbfgs_memory,
-        };
-        let mut system = System::new(mesh.num_vertices(), params);
+        let mut system = System::new(mesh.num_vertices(), self.solver.solver_params());
         let mut group_ids = Vec::with_capacity(self.groups.len());
         for (i, spec) in self.groups.iter().enumerate() {
             let entry = format!("constraints[{i}] (\"{}\")", spec.name);
-            let group = spec.build(&mesh, &rest, &frame).map_err(|m| invalid(&entry, m))?;
+            let group = spec.build(&mesh, &rest, &frame).map_err(|e| invalid(&entry, e.to_string()))?;
             group_ids.push(system.add_group(group).map_err(|e| invalid(&entry, e.to_string()))?);
         }
         // Vertices that only zero-area triangles use follow their edge (math reference, "Edge cases").
-        let (attached, stranded) =
-            attach_degenerate_vertices(&mut system, &rest).map_err(|e| invalid("[mesh]", e.to_string()))?;
+        let (group, attached, stranded) = attach_degenerate_vertices(&rest, system.groups().map(|(_, g)| g));
+        if let Some(group) = group {
+            system.add_group(group).map_err(|e| invalid("[mesh]", e.to_string()))?;
+        }
         warnings.add_many(
             "degenerate_vertices_attached",
             "vertices that only degenerate (zero-area) triangles use, attached to their edge",
@@ -136,6 +136,7 @@ impl Scene {
         Ok(LoadedScene {
             scene: self.clone(),
             mesh,
+            attributes: Attributes::None,
             input_vertices,
             warnings,
             frame,
@@ -148,17 +149,31 @@ impl Scene {
     }
 }
 
+/// Why `tetrahedralize = true` failed.
+#[derive(Debug, thiserror::Error)]
+enum FillError {
+    /// TetGen refused the surface.
+    #[cfg(feature = "tetgen")]
+    #[error(transparent)]
+    TetGen(#[from] crate::tetrahedralize::TetrahedralizeError),
+    /// This build has no TetGen.
+    #[cfg(not(feature = "tetgen"))]
+    #[error(
+        "tetrahedralize = true needs TetGen, which this build leaves out (it is AGPL-3.0): build shapeup with \
+         `--features tetgen`, or give a tetrahedral mesh (.msh, .node/.ele)"
+    )]
+    NoTetGen,
+}
+
 /// `tetrahedralize = true`: TetGen when built with the `tetgen` feature.
 #[cfg(feature = "tetgen")]
-fn fill_with_tetrahedra(mesh: &Mesh) -> Result<Mesh, String> {
-    crate::tetrahedralize::tetrahedralize(mesh, None).map_err(|e| e.to_string())
+fn fill_with_tetrahedra(mesh: &Mesh) -> Result<Mesh, FillError> {
+    Ok(crate::tetrahedralize::tetrahedralize(mesh, None)?)
 }
 
 #[cfg(not(feature = "tetgen"))]
-fn fill_with_tetrahedra(_mesh: &Mesh) -> Result<Mesh, String> {
-    Err("tetrahedralize = true needs TetGen, which this build leaves out (it is AGPL-3.0): build shapeup with \
-         `--features tetgen`, or give a tetrahedral mesh (.msh, .node/.ele)"
-        .into())
+fn fill_with_tetrahedra(_mesh: &Mesh) -> Result<Mesh, FillError> {
+    Err(FillError::NoTetGen)
 }
 
 /// Lumped masses m_i of `rest` (working frame): ρ Σ|V_T|/4 on a tetrahedral mesh, else
@@ -197,76 +212,6 @@ impl SpinningHandle {
         let turn = glam::DQuat::from_axis_angle(self.axis, (self.deg_per_s * t).to_radians());
         self.targets.iter().map(|&p| self.frame.to_working(self.center + turn * (p - self.center))).collect()
     }
-}
-
-impl GroupSpec {
-    /// The group on `mesh` (input frame; `rest` its rest geometry in the working frame), as the
-    /// library's one group route takes it ([`crate::constraints::build_group`]): its selection
-    /// resolved, its targets (for types with targets) mapped to the working frame.
-    ///
-    /// # Errors
-    /// A one-line message: a selection out of range, bad targets, a bad option (named).
-    pub fn build(&self, mesh: &Mesh, rest: &RestGeometry, frame: &WorkingFrame) -> Result<ConstraintGroup, String> {
-        build_group(self, mesh, rest, frame)
-    }
-}
-
-fn build_group(
-    spec: &GroupSpec,
-    mesh: &Mesh,
-    rest: &RestGeometry,
-    frame: &WorkingFrame,
-) -> Result<ConstraintGroup, String> {
-    let ty = constraint_type(&spec.kind).map_err(|e| e.to_string())?;
-    let selection = resolve_selection(&spec.selection, mesh, rest)?;
-    let targets = if ty.has_targets() {
-        let picked = spec.selection.resolve(&mesh.positions)?;
-        let targets = position_targets(&picked, &spec.targets, mesh)?;
-        Some(picked.iter().zip(targets).map(|(&v, t)| (v as u32, frame.to_working(t))).collect())
-    } else {
-        None
-    };
-    let description = GroupDescription {
-        kind: spec.kind.clone(),
-        name: spec.name.clone(),
-        weight: Some(spec.weight),
-        selection,
-        options: Params::new(spec.options.clone()),
-        targets,
-    };
-    build_described(&description, rest, frame).map_err(|e| e.to_string())
-}
-
-/// A scene selection as the constraint builders take it.
-///
-/// # Errors
-/// A vertex or face index out of range.
-pub fn resolve_selection(spec: &SelectionSpec, mesh: &Mesh, rest: &RestGeometry) -> Result<Selection, String> {
-    let n = mesh.num_vertices();
-    Ok(match spec {
-        SelectionSpec::All => Selection::All,
-        SelectionSpec::Faces(list) => {
-            let m = rest.faces.len();
-            if let Some(&f) = list.iter().find(|&&f| f >= m) {
-                return Err(format!("face {f} is out of range (the mesh has {m} faces: 0..{})", m.saturating_sub(1)));
-            }
-            Selection::from_faces(n, &rest.faces, list)
-        }
-        _ => Selection::from_indices(n, &spec.resolve(&mesh.positions)?),
-    })
-}
-
-/// Targets (input frame) of a position group's vertices: explicit, or rest rotated about the
-/// centre (default: the selection's centroid) then translated.
-fn position_targets(picked: &[usize], targets: &Targets, mesh: &Mesh) -> Result<Vec<DVec3>, String> {
-    let mut seen = vec![false; mesh.num_vertices()];
-    for &v in picked {
-        if std::mem::replace(&mut seen[v], true) {
-            return Err(format!("vertex {v} is listed twice"));
-        }
-    }
-    let rest: Vec<DVec3> = picked.iter().map(|&v| mesh.positions[v]).collect();
-    targets.resolve(&rest)
 }
 
 impl LoadedScene {
@@ -319,7 +264,7 @@ impl LoadedScene {
         positions.iter().map(|&p| self.frame.to_working(p)).collect()
     }
 
-    /// The input mesh (faces, attributes, tetrahedra) with its positions replaced by `q`
+    /// The input mesh (faces, tetrahedra) with its positions replaced by `q`
     /// (working frame) mapped back; vertices that no constraint touches keep their input
     /// positions bit for bit. [`LoadedScene::output_mesh`] for a volume format.
     pub fn mesh_at(&self, q: &[DVec3]) -> Mesh {
@@ -330,7 +275,7 @@ impl LoadedScene {
     /// whole mesh when `volume` (a format that stores tetrahedra: `.msh`, `.vtu`) or when the
     /// mesh was read with tetrahedra (a surface format then writes their boundary and says
     /// so); for a surface the scene tetrahedralized, that surface: every input vertex in file
-    /// order, its faces and attributes, without TetGen's points (which come after the input's
+    /// order, its faces, without TetGen's points (which come after the input's
     /// vertices), so outputs line up with the input file. Vertices `is_solved` says no
     /// constraint touches keep their input positions bit for bit (the round trip through the
     /// working frame may change the last bit).
@@ -360,15 +305,7 @@ impl LoadedScene {
     /// The scene's time-stepping settings in the working frame (gravity, an acceleration in
     /// input units per s², scales with lengths; time is not scaled).
     pub fn dynamics_params(&self) -> DynamicsParams {
-        let s = &self.scene.solver;
-        DynamicsParams {
-            time_step: s.time_step,
-            stiffness: s.stiffness,
-            damping: s.damping,
-            gravity: DVec3::from_array(s.gravity) * self.frame.scale,
-            iterations: s.iterations,
-            tolerance: s.tolerance,
-        }
+        self.scene.solver.dynamics_params(self.frame.scale)
     }
 
     /// Starts a Projective Dynamics simulation at rest from the rest shape. The constraint
@@ -384,7 +321,7 @@ impl LoadedScene {
             return Err(invalid(format!("density must be a finite number > 0, found {density}")));
         }
         let params = self.dynamics_params();
-        params.validate().map_err(invalid)?;
+        params.validate().map_err(|e| invalid(e.to_string()))?;
         let system =
             std::mem::replace(&mut self.system, System::new(self.mesh.num_vertices(), SolverParams::default()));
         Simulation::new(system, self.masses(), self.rest.positions.clone(), params).map_err(|e| invalid(e.to_string()))
@@ -400,14 +337,12 @@ impl LoadedScene {
         let mut out = Vec::new();
         for (i, (spec, &id)) in self.scene.groups.iter().zip(&self.group_ids).enumerate() {
             let Some(spin) = spec.targets.spin else { continue };
-            let invalid = |message: String| SceneError::Invalid {
+            let invalid = |e: super::SpecError| SceneError::Invalid {
                 path: self.scene.file.clone(),
                 entry: format!("constraints[{i}] (\"{}\")", spec.name),
-                message,
+                message: e.to_string(),
             };
-            let picked = spec.selection.resolve(&self.mesh.positions).map_err(invalid)?;
-            let rest: Vec<DVec3> = picked.iter().map(|&v| self.mesh.positions[v]).collect();
-            let targets = spec.targets.resolve(&rest).map_err(invalid)?;
+            let (picked, targets) = spec.input_targets(&self.mesh).map_err(invalid)?;
             let (axis, center) = spin.pivot(&targets).map_err(invalid)?;
             // In the order the group holds its vertices (what `set_targets` takes).
             let at: std::collections::HashMap<u32, DVec3> =

@@ -3,10 +3,10 @@
 //! `frames.pvd` time series.
 
 use super::LoadedScene;
-use crate::Mesh;
 use crate::dynamics::Simulation;
 use crate::io::vtu::{PointVectors, write_pvd, write_vtu};
 use crate::io::{IoError, write_atomic, write_mesh};
+use crate::mesh::Mesh;
 use crate::warnings::Warnings;
 use glam::DVec3;
 use std::path::{Path, PathBuf};
@@ -29,6 +29,14 @@ pub enum FrameFormat {
     Msh,
 }
 
+/// A `--format` name that no [`FrameFormat`] has.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("unsupported --format \"{name}\" (use one of: {})", FrameFormat::ALL.map(|(n, _)| n).join(", "))]
+pub struct UnknownFormat {
+    /// The name as given.
+    pub name: String,
+}
+
 impl FrameFormat {
     /// Every format with its `--format` name, which is also the files' extension.
     pub const ALL: [(&'static str, FrameFormat); 6] = [
@@ -44,13 +52,10 @@ impl FrameFormat {
     ///
     /// # Errors
     /// An unknown name, with the list of known ones.
-    pub fn parse(name: &str) -> Result<Self, String> {
+    pub fn parse(name: &str) -> Result<Self, UnknownFormat> {
         match Self::ALL.iter().find(|(n, _)| n.eq_ignore_ascii_case(name)) {
             Some(&(_, format)) => Ok(format),
-            None => {
-                let known: Vec<&str> = Self::ALL.iter().map(|(n, _)| *n).collect();
-                Err(format!("unsupported --format \"{name}\" (use one of: {})", known.join(", ")))
-            }
+            None => Err(UnknownFormat { name: name.into() }),
         }
     }
 
@@ -106,7 +111,7 @@ impl FrameWriter<'_> {
         let warnings = if self.format == FrameFormat::Vtu {
             self.write_vtu(&path, &mesh, simulation)?
         } else {
-            write_mesh(&path, &mesh)?
+            write_mesh(&path, &mesh, &self.loaded.attributes)?
         };
         if self.warnings.is_none() {
             self.warnings = Some(warnings);
@@ -130,7 +135,7 @@ impl FrameWriter<'_> {
             .collect();
         let mut warnings = Warnings::new();
         let vectors = [PointVectors { name: "velocity", values: &velocity }];
-        write_atomic(path, |w| write_vtu(w, mesh, &vectors, &mut warnings))?;
+        write_atomic(path, |w| write_vtu(w, mesh, &self.loaded.attributes, &vectors, &mut warnings))?;
         Ok(warnings.for_file(path))
     }
 

@@ -102,7 +102,7 @@ impl LoadedScene {
         };
         let volume = matches!(format, WriteFormat::Msh | WriteFormat::Vtu | WriteFormat::TetGen);
         let mesh = self.output_mesh(q, volume, |v| self.system.is_solved(v));
-        let warnings = write_mesh_with(path, &mesh, format)?;
+        let warnings = write_mesh_with(path, &mesh, &self.attributes, format)?;
         Ok((mesh, warnings))
     }
 
@@ -225,5 +225,71 @@ impl SceneSimulation {
             return Err(StepError::Diverged);
         }
         Ok(report)
+    }
+}
+
+/// Why [`SceneSimulation::run`] stopped before its last step.
+#[derive(Debug, thiserror::Error)]
+pub enum RunError<E> {
+    /// Time step `step` (from 1) failed.
+    #[error("step {step} failed: {source}")]
+    Step {
+        /// The step.
+        step: usize,
+        /// Why.
+        source: StepError,
+    },
+    /// E after step `step` could not be computed.
+    #[error("energy after step {step}: {source}")]
+    Energy {
+        /// The step.
+        step: usize,
+        /// Why.
+        source: SolveError,
+    },
+    /// The caller's `on_step` refused (a frame that cannot be written, an interrupt…).
+    #[error(transparent)]
+    Stopped(E),
+}
+
+impl SceneSimulation {
+    /// The run of `shapeup simulate` and `Scene.simulate`: `frames` time steps from the
+    /// current state. `on_step(k, simulation, keep)` is called for the state at rest (k = 0)
+    /// and after each step k, with `keep` true for frame 0, every `every`-th frame and the
+    /// last (the frames a run writes); an `Err` from it stops the run. With `energies`, E
+    /// after each step is recorded in [`StepTotals::energies`] (computed when the step did
+    /// not: plain iterations skip it; the seconds go to [`StepTotals::energy_seconds`]).
+    ///
+    /// # Errors
+    /// [`RunError`]: the step that failed, or what `on_step` returned.
+    pub fn run<E>(
+        &mut self,
+        frames: usize,
+        every: usize,
+        energies: bool,
+        mut on_step: impl FnMut(usize, &Simulation, bool) -> Result<(), E>,
+    ) -> Result<StepTotals, RunError<E>> {
+        let capacity = if energies { frames.min(1 << 20) } else { 0 };
+        let mut totals = StepTotals { energies: Vec::with_capacity(capacity), ..StepTotals::default() };
+        on_step(0, &self.simulation, true).map_err(RunError::Stopped)?;
+        for k in 1..=frames {
+            // Overflowing velocities fail the step whether or not E is recorded (StepError::Diverged).
+            let step = self.step().map_err(|source| RunError::Step { step: k, source })?;
+            if energies {
+                let energy = match step.energy {
+                    Some(e) => e,
+                    None => {
+                        let t = std::time::Instant::now();
+                        let e = self.simulation.energy().map_err(|source| RunError::Energy { step: k, source })?;
+                        totals.energy_seconds += t.elapsed().as_secs_f64();
+                        e
+                    }
+                };
+                totals.energies.push(energy);
+            }
+            totals.add(&step);
+            on_step(k, &self.simulation, k % every.max(1) == 0 || k == frames).map_err(RunError::Stopped)?;
+        }
+        Ok(totals)
     }
 }

@@ -1,9 +1,13 @@
 //! Helpers shared by integration tests (`mod common;`): distances between row lists, the wavy
 //! quad grid, a mesh's rest geometry, options turned by a rigid motion, and ([`random`]) the
-//! random small meshes of the property tests.
+//! random small meshes of the property tests, and the xorshift [`Rng`].
 #![allow(dead_code)]
 
 pub mod random;
+mod rng;
+
+#[allow(unused_imports)] // not every test binary that includes `common` draws numbers
+pub use rng::Rng;
 
 use glam::{DQuat, DVec3};
 use shapeup_core::constraints::{ConstraintType, OptionKind, Params};

@@ -1,0 +1,352 @@
+//! From scene text (TOML or JSON) to a validated [`Scene`].
+
+use super::strict::{Entry, StrictValue};
+use super::{GroupSpec, MeshSettings, OutputSettings, Scene, SceneError, SolverSettings};
+use crate::solver::{MAX_ANDERSON_WINDOW, MAX_LBFGS_MEMORY};
+use serde::Deserialize;
+use serde_json::{Map, Value};
+use std::path::{Path, PathBuf};
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawScene {
+    mesh: MeshSettings,
+    #[serde(default)]
+    solver: SolverSettings,
+    #[serde(default)]
+    constraints: Vec<Entry>,
+    #[serde(default)]
+    output: OutputSettings,
+}
+
+/// Scene file syntax.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SceneFormat {
+    /// TOML (`.toml`).
+    Toml,
+    /// JSON (`.json`).
+    Json,
+}
+
+impl Scene {
+    /// Reads and parses a scene file (`.toml` or `.json`).
+    ///
+    /// # Errors
+    /// [`SceneError`] naming the file, and the line or entry.
+    pub fn from_file(path: &Path) -> Result<Scene, SceneError> {
+        let (text, format, base_dir) = read_scene_file(path)?;
+        Scene::parse(&text, format, path, base_dir)
+    }
+
+    /// Reads a scene file as [`Scene::from_file`] does, with `overrides` applied to its entries
+    /// before they are checked (see [`Scene::parse_with_overrides`]): the scene a parameter
+    /// sweep runs.
+    ///
+    /// # Errors
+    /// As [`Scene::from_file`]; [`SceneError::Override`] for a key that names no entry.
+    pub fn from_file_with_overrides(path: &Path, overrides: &[(String, Value)]) -> Result<Scene, SceneError> {
+        let (text, format, base_dir) = read_scene_file(path)?;
+        Scene::parse_with_overrides(&text, format, path, base_dir, overrides)
+    }
+
+    /// This scene with `overrides` applied (see [`Scene::parse_with_overrides`]), checked again
+    /// as a scene file is: an override that makes the scene invalid is refused with the
+    /// message the same file would get.
+    ///
+    /// # Errors
+    /// [`SceneError::Override`] for a key that names no entry; [`SceneError::Parse`] or
+    /// [`SceneError::Invalid`] for a value the scene contract refuses.
+    pub fn with_overrides(&self, overrides: &[(String, Value)]) -> Result<Scene, SceneError> {
+        // The TOML text parses back to an equal scene (write.rs).
+        let text = self.to_toml_string();
+        Scene::parse_with_overrides(&text, SceneFormat::Toml, &self.file, self.base_dir.clone(), overrides)
+    }
+
+    /// Parses scene text with dotted overrides applied to its tree of tables before the scene is
+    /// checked: `"solver.iterations"`, `"constraints.2.weight"`, `"output.path"`, `"mesh.generate"`.
+    /// A table on the way that is missing is created; a list index must name an entry that
+    /// exists. The values replace what the text gives (a whole table or list for a table's or
+    /// list's key).
+    ///
+    /// # Errors
+    /// [`SceneError::Override`] for a key that names no entry; otherwise as [`Scene::parse`]
+    /// (messages name the key, without a line: the checked tree is no longer the text).
+    pub fn parse_with_overrides(
+        text: &str,
+        format: SceneFormat,
+        path: &Path,
+        base_dir: PathBuf,
+        overrides: &[(String, Value)],
+    ) -> Result<Scene, SceneError> {
+        let parse_error = |message: String| SceneError::Parse { path: path.into(), message };
+        let mut tree: Value = match format {
+            SceneFormat::Toml => toml::from_str(text).map_err(|e| parse_error(toml_message(text, &e)))?,
+            SceneFormat::Json => StrictValue::read_json(text).map_err(|e| parse_error(e.to_string()))?,
+        };
+        for (key, value) in overrides {
+            apply_override(&mut tree, key, value.clone())?;
+        }
+        let raw = RawScene::deserialize(tree).map_err(|e| parse_error(e.to_string()))?;
+        Scene::from_raw(raw, path, base_dir)
+    }
+
+    /// Parses scene text; `path` is only used in messages, `base_dir` resolves the mesh path.
+    ///
+    /// # Errors
+    /// [`SceneError::Parse`] or [`SceneError::Invalid`].
+    pub fn parse(text: &str, format: SceneFormat, path: &Path, base_dir: PathBuf) -> Result<Scene, SceneError> {
+        let parse_error = |message: String| SceneError::Parse { path: path.into(), message };
+        let raw: RawScene = match format {
+            SceneFormat::Toml => toml::from_str(text).map_err(|e| parse_error(toml_message(text, &e)))?,
+            SceneFormat::Json => serde_json::from_str(text).map_err(|e| parse_error(e.to_string()))?,
+        };
+        Scene::from_raw(raw, path, base_dir)
+    }
+
+    /// Checks a scene's tables and entries (the part of [`Scene::parse`] after the syntax).
+    fn from_raw(raw: RawScene, path: &Path, base_dir: PathBuf) -> Result<Scene, SceneError> {
+        let mesh_error = |message: String| SceneError::Invalid { path: path.into(), entry: "[mesh]".into(), message };
+        match (&raw.mesh.generate, raw.mesh.path.as_os_str().is_empty()) {
+            (Some(g), true) => g.validate().map_err(|e| mesh_error(e.to_string()))?,
+            (Some(_), false) => return Err(mesh_error("give either path or generate, not both".into())),
+            (None, true) => return Err(mesh_error("missing path (a mesh file), or generate".into())),
+            (None, false) => {}
+        }
+        validate_solver(&raw.solver).map_err(|e| SceneError::Invalid {
+            path: path.into(),
+            entry: "[solver]".into(),
+            message: e.0,
+        })?;
+        let groups = raw
+            .constraints
+            .into_iter()
+            .enumerate()
+            .map(|(i, Entry(entry))| {
+                let name = entry.get("name").and_then(Value::as_str).map(|n| format!(" (\"{n}\")")).unwrap_or_default();
+                GroupSpec::from_entry(entry).map_err(|e| SceneError::Invalid {
+                    path: path.into(),
+                    entry: format!("constraints[{i}]{name}"),
+                    message: e.to_string(),
+                })
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(Scene { mesh: raw.mesh, solver: raw.solver, groups, output: raw.output, base_dir, file: path.into() })
+    }
+}
+
+/// The text of a scene file, its syntax (from the extension) and the folder its paths start
+/// from.
+fn read_scene_file(path: &Path) -> Result<(String, SceneFormat, PathBuf), SceneError> {
+    let format = match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
+        Some("toml") => SceneFormat::Toml,
+        Some("json") => SceneFormat::Json,
+        _ => {
+            return Err(SceneError::Parse {
+                path: path.into(),
+                message: "a scene file must end in .toml or .json".into(),
+            });
+        }
+    };
+    // UTF-8 (a byte-order mark, which is not TOML or JSON, removed) or UTF-16 (Windows
+    // editors' "Unicode"), decoded; text that is neither is a format error with its offset.
+    let text = crate::io::read_text_file(path).map_err(|source| match crate::io::DecodeError::of(&source) {
+        Some(e) => SceneError::Parse { path: path.into(), message: e.to_string() },
+        None => SceneError::Read { path: path.into(), source },
+    })?;
+    let base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    Ok((text, format, base_dir))
+}
+
+/// Sets the dotted `key` of `tree` to `value`, as the Python package's `Scene.load(path,
+/// overrides)` always has: tables on the way are created when missing, list indices must exist.
+fn apply_override(tree: &mut Value, key: &str, value: Value) -> Result<(), SceneError> {
+    let fail = |problem: String| SceneError::Override { key: key.into(), problem };
+    let parts: Vec<&str> = key.split('.').collect();
+    let (last, path) = parts.split_last().ok_or_else(|| fail("no such entry".into()))?;
+    let index = |part: &str, len: usize| {
+        (!part.is_empty() && part.bytes().all(|b| b.is_ascii_digit()))
+            .then(|| part.parse::<usize>().ok())
+            .flatten()
+            .filter(|&i| i < len)
+    };
+    let mut node = tree;
+    for (i, part) in path.iter().enumerate() {
+        let not_an_entry = || fail(format!("{} is not an entry of the scene", parts[..=i].join(".")));
+        node = match node {
+            Value::Array(list) => {
+                let at = index(part, list.len()).ok_or_else(not_an_entry)?;
+                &mut list[at]
+            }
+            Value::Object(map) => map.entry(part.to_string()).or_insert_with(|| Value::Object(Map::new())),
+            _ => return Err(not_an_entry()),
+        };
+    }
+    match node {
+        Value::Array(list) => {
+            let at = index(last, list.len()).ok_or_else(|| fail("no such entry".into()))?;
+            list[at] = value;
+        }
+        Value::Object(map) => {
+            map.insert(last.to_string(), value);
+        }
+        _ => return Err(fail("no such entry".into())),
+    }
+    Ok(())
+}
+
+/// One line from a TOML error: its message with the line and column of its span.
+fn toml_message(text: &str, e: &toml::de::Error) -> String {
+    let message = e.message().trim().replace('\n', " ");
+    match e.span() {
+        Some(span) => {
+            let mut start = span.start.min(text.len());
+            while !text.is_char_boundary(start) {
+                start -= 1;
+            }
+            let before = &text[..start];
+            let line = before.matches('\n').count() + 1;
+            let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+            // Quote the line: a type error's message names the value but not the key.
+            let quoted = text.lines().nth(line - 1).map(str::trim).filter(|l| !l.is_empty() && l.len() <= 80);
+            match quoted {
+                Some(l) => format!("line {line}, column {column}: {message} (in `{l}`)"),
+                None => format!("line {line}, column {column}: {message}"),
+            }
+        }
+        // toml's deserializer stops past 128 levels without a span: point at the line whose
+        // keys and brackets nest deepest.
+        None if message.contains("recursion limit") => {
+            let depth =
+                |l: &str| l.split('=').next().map_or(0, |key| key.matches('.').count()) + l.matches(['[', '{']).count();
+            match text.lines().enumerate().max_by_key(|&(i, l)| (depth(l), std::cmp::Reverse(i))) {
+                Some((i, _)) => format!("line {}: nested too deep ({message})", i + 1),
+                None => message,
+            }
+        }
+        None => message,
+    }
+}
+
+/// A `[solver]` value out of range, described.
+struct BadSetting(String);
+
+impl From<String> for BadSetting {
+    fn from(message: String) -> Self {
+        BadSetting(message)
+    }
+}
+
+impl From<&str> for BadSetting {
+    fn from(message: &str) -> Self {
+        BadSetting(message.into())
+    }
+}
+
+fn validate_solver(s: &SolverSettings) -> Result<(), BadSetting> {
+    let positive = |name: &str, v: f64| -> Result<(), BadSetting> {
+        if v.is_finite() && v > 0.0 { Ok(()) } else { Err(format!("{name} must be a number > 0, found {v}").into()) }
+    };
+    if !(s.tolerance.is_finite() && s.tolerance >= 0.0) {
+        return Err(format!("tolerance must be ≥ 0, found {}", s.tolerance).into());
+    }
+    positive("time_step", s.time_step)?;
+    positive("stiffness", s.stiffness)?;
+    positive("density", s.density)?;
+    if !(0.0..1.0).contains(&s.damping) {
+        return Err(format!("damping must be in [0, 1), found {}", s.damping).into());
+    }
+    if !s.gravity.iter().all(|g| g.is_finite()) {
+        return Err("gravity must be three finite numbers".into());
+    }
+    if !(1..=MAX_ANDERSON_WINDOW).contains(&s.anderson_window) {
+        return Err(format!("anderson_window must be in 1..={MAX_ANDERSON_WINDOW}, found {}", s.anderson_window).into());
+    }
+    if !(1..=MAX_LBFGS_MEMORY).contains(&s.lbfgs_memory) {
+        return Err(format!("lbfgs_memory must be in 1..={MAX_LBFGS_MEMORY}, found {}", s.lbfgs_memory).into());
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::SelectionSpec;
+
+    fn parse(text: &str) -> Result<Scene, SceneError> {
+        Scene::parse(text, SceneFormat::Toml, Path::new("s.toml"), PathBuf::new())
+    }
+
+    #[test]
+    fn defaults_and_groups() {
+        let s = parse(
+            r#"
+            [mesh]
+            path = "m.obj"
+            [[constraints]]
+            type = "edge_spring"
+            [[constraints]]
+            type = "position"
+            name = "handle"
+            box = { min = [0, 0, 0], max = [1, 1, 1] }
+            translate = [0.1, 0, 0]
+            "#,
+        )
+        .unwrap();
+        assert!(s.mesh.normalize);
+        assert_eq!(s.solver, SolverSettings::default());
+        assert_eq!(s.groups[0].weight, 10.0, "default multiplier of edge springs");
+        assert_eq!(s.groups[0].name, "edge_spring");
+        assert_eq!(s.groups[1].targets.translate, [0.1, 0.0, 0.0]);
+        assert!(matches!(s.groups[1].selection, SelectionSpec::Box { .. }));
+    }
+
+    #[test]
+    fn unknown_keys_are_named() {
+        let e = parse("[mesh]\npath = \"m.obj\"\nnormalise = true\n").unwrap_err().to_string();
+        assert!(e.contains("normalise") && e.contains("line 3"), "{e}");
+        let e = parse("[mesh]\npath = \"m.obj\"\n[solver]\niteratons = 3\n").unwrap_err().to_string();
+        assert!(e.contains("iteratons"), "{e}");
+        let e = parse("[mesh]\npath = \"m.obj\"\n[[constraints]]\ntype = \"edge_sprin\"\n").unwrap_err().to_string();
+        assert!(e.contains("edge_sprin") && e.contains("constraints[0]"), "{e}");
+    }
+
+    #[test]
+    fn bad_values_are_rejected() {
+        for (body, needle) in [
+            ("[[constraints]]\ntype = \"edge_spring\"\nweight = -1\n", "weight"),
+            ("[[constraints]]\ntype = \"position\"\nvertices = [-1]\n", "vertices"),
+            (
+                "[[constraints]]\ntype = \"position\"\nvertices = [1]\nbox = { min = [0,0,0], max = [1,1,1] }\n",
+                "at most one",
+            ),
+            ("[solver]\ndamping = 1.0\n", "damping"),
+            ("[solver]\niterations = -3\n", "iterations"),
+            ("[[constraints]]\ntype = \"position\"\nvertices = [1]\ntranslate = [1, 2]\n", "translate"),
+        ] {
+            let e = parse(&format!("[mesh]\npath = \"m.obj\"\n{body}")).unwrap_err().to_string();
+            assert!(e.contains(needle), "{needle}: {e}");
+        }
+    }
+
+    #[test]
+    fn json_has_the_same_schema() {
+        let s = Scene::parse(
+            r#"{"mesh": {"path": "m.obj", "normalize": false}, "constraints": [{"type": "iso_one_ring", "weight": 5}]}"#,
+            SceneFormat::Json,
+            Path::new("s.json"),
+            PathBuf::new(),
+        );
+        let s = s.unwrap();
+        assert!(!s.mesh.normalize);
+        assert_eq!(s.groups[0].weight, 5.0);
+        let e = Scene::parse(
+            r#"{"mesh": {"path": "m.obj"}, "extra": 1}"#,
+            SceneFormat::Json,
+            Path::new("s.json"),
+            PathBuf::new(),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("extra"), "{e}");
+    }
+}

@@ -1,0 +1,110 @@
+//! A strict reader for `[[constraints]]` entries: JSON values without repeated keys or deep
+//! nesting.
+
+use serde::Deserialize;
+use serde_json::{Map, Value};
+
+/// How deep a constraint entry may nest (`box = { min = [..] }` is 3 levels).
+const MAX_ENTRY_DEPTH: usize = 32;
+
+/// A `[[constraints]]` entry as JSON values, read strictly: a key given twice is refused
+/// (serde_json's own map keeps the last one silently) and so is nesting deeper than
+/// [`MAX_ENTRY_DEPTH`] (building `serde_json::Value` recurses once per level, and TOML's dotted
+/// keys nest without its parser's limit).
+pub(super) struct Entry(pub(super) Map<String, Value>);
+
+impl<'de> Deserialize<'de> for Entry {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        match deserializer.deserialize_map(StrictValue { depth: 0 })? {
+            Value::Object(map) => Ok(Entry(map)),
+            _ => Err(serde::de::Error::custom("a constraint entry must be a table")),
+        }
+    }
+}
+
+/// Builds a `serde_json::Value` refusing repeated keys and deep nesting.
+#[derive(Clone, Copy)]
+pub(super) struct StrictValue {
+    depth: usize,
+}
+
+impl StrictValue {
+    /// A whole JSON text as a tree, read strictly (the nesting counted from its top).
+    pub(super) fn read_json(text: &str) -> Result<Value, serde_json::Error> {
+        use serde::de::DeserializeSeed;
+        let mut deserializer = serde_json::Deserializer::from_str(text);
+        let value = StrictValue { depth: 0 }.deserialize(&mut deserializer)?;
+        deserializer.end()?;
+        Ok(value)
+    }
+
+    fn deeper<E: serde::de::Error>(self) -> Result<StrictValue, E> {
+        if self.depth >= MAX_ENTRY_DEPTH {
+            return Err(E::custom(format!("nested deeper than {MAX_ENTRY_DEPTH} levels")));
+        }
+        Ok(StrictValue { depth: self.depth + 1 })
+    }
+}
+
+impl<'de> serde::de::DeserializeSeed<'de> for StrictValue {
+    type Value = Value;
+    fn deserialize<D: serde::Deserializer<'de>>(self, deserializer: D) -> Result<Value, D::Error> {
+        deserializer.deserialize_any(self)
+    }
+}
+
+impl<'de> serde::de::Visitor<'de> for StrictValue {
+    type Value = Value;
+    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        f.write_str("a value")
+    }
+    fn visit_bool<E>(self, v: bool) -> Result<Value, E> {
+        Ok(Value::Bool(v))
+    }
+    fn visit_i64<E>(self, v: i64) -> Result<Value, E> {
+        Ok(Value::from(v))
+    }
+    fn visit_u64<E>(self, v: u64) -> Result<Value, E> {
+        Ok(Value::from(v))
+    }
+    fn visit_f64<E>(self, v: f64) -> Result<Value, E> {
+        // inf and nan become null, as serde_json has them (the builders name the key).
+        Ok(serde_json::Number::from_f64(v).map_or(Value::Null, Value::Number))
+    }
+    fn visit_str<E>(self, v: &str) -> Result<Value, E> {
+        Ok(Value::String(v.to_owned()))
+    }
+    fn visit_string<E>(self, v: String) -> Result<Value, E> {
+        Ok(Value::String(v))
+    }
+    fn visit_unit<E>(self) -> Result<Value, E> {
+        Ok(Value::Null)
+    }
+    fn visit_none<E>(self) -> Result<Value, E> {
+        Ok(Value::Null)
+    }
+    fn visit_some<D: serde::Deserializer<'de>>(self, deserializer: D) -> Result<Value, D::Error> {
+        deserializer.deserialize_any(self)
+    }
+    fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut seq: A) -> Result<Value, A::Error> {
+        let inner = self.deeper()?;
+        // Not sized by the hint: it may claim more than the input holds.
+        let mut list = Vec::new();
+        while let Some(v) = seq.next_element_seed(inner)? {
+            list.push(v);
+        }
+        Ok(Value::Array(list))
+    }
+    fn visit_map<A: serde::de::MapAccess<'de>>(self, mut map: A) -> Result<Value, A::Error> {
+        let inner = self.deeper()?;
+        let mut out = Map::new();
+        while let Some(key) = map.next_key::<String>()? {
+            if out.contains_key(&key) {
+                return Err(serde::de::Error::custom(format!("duplicate key `{key}`")));
+            }
+            let value = map.next_value_seed(inner)?;
+            out.insert(key, value);
+        }
+        Ok(Value::Object(out))
+    }
+}
