@@ -165,9 +165,6 @@ impl Document {
             .collect()
     }
 
-    /// A document from a scene: reads its mesh and takes its groups. Shape types over all
-    /// vertices without options become the shape model (when they match one), position groups
-
     // ---- Reading the document ----
 
     /// The editable state (groups, shape model, rest shape, iterations).
