@@ -2,7 +2,7 @@
 //! app applies them after the UI pass with [`Document::apply`](crate::document::Document::apply),
 //! which also records undo steps.
 
-use crate::document::{GroupKey, ShapeModel};
+use crate::group::{GroupKey, ShapeModel};
 use glam::DVec3;
 
 /// How a selection combines with the current one.
@@ -21,7 +21,7 @@ pub enum SelectMode {
 ///
 /// Commands that change the constraints (handles, groups, weights, shape model, rest shape,
 /// iterations, tolerance) or the shape ([`Command::ResetShape`]) are undoable; selection
-/// changes, [`Command::Undo`] and [`Command::Redo`] are not ([`Command::is_undoable`]).
+/// changes, [`Command::Undo`] and [`Command::Redo`] are not ([`Command::effect`]).
 #[derive(Debug, Clone, PartialEq)]
 #[must_use]
 pub enum Command {
@@ -54,7 +54,7 @@ pub enum Command {
     /// A new handle (position group, g = 1) on the selected vertices, at their current
     /// positions; the selection is emptied.
     FixSelection,
-    /// One soft handle (g = [`FREE_PIECE_WEIGHT`](crate::document::FREE_PIECE_WEIGHT)) on
+    /// One soft handle (g = [`FREE_PIECE_WEIGHT`](crate::group::FREE_PIECE_WEIGHT)) on
     /// every vertex of the pieces no handle holds, at rest, listed as one group "free pieces".
     PinFreePieces,
     /// Translates a handle's targets by `delta` (input frame).
@@ -99,7 +99,7 @@ pub enum Command {
         /// Its options, as a scene would give them.
         options: serde_json::Map<String, serde_json::Value>,
     },
-    /// Sets a group's weight (multiplier g), clamped to [`WEIGHT_RANGE`](crate::document::WEIGHT_RANGE).
+    /// Sets a group's weight (multiplier g), clamped to [`WEIGHT_RANGE`](crate::group::WEIGHT_RANGE).
     SetWeight {
         /// The group.
         group: GroupKey,
@@ -125,32 +125,48 @@ pub enum Command {
     Redo,
 }
 
-impl Command {
-    /// Whether applying it records an undo step.
-    pub fn is_undoable(&self) -> bool {
-        !matches!(
-            self,
-            Command::Select { .. }
-                | Command::SelectFaces { .. }
-                | Command::ClearSelection
-                | Command::SelectBoundary(_)
-                | Command::SelectPiece { .. }
-                | Command::Undo
-                | Command::Redo
-        )
-    }
+/// What applying a command can change: the one classification the document and the app read.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Effect {
+    /// It records an undo step when it changes something (not selections, undo or redo).
+    pub undoable: bool,
+    /// It can change what the solver computes (constraints, targets, weights, rest shape, the
+    /// shape itself, convergence settings): the editor converges again after it.
+    pub changes_solve: bool,
+    /// It changes what is drawn before any solve returns (selection, groups, shape), so the
+    /// mesh's geometry and colours are uploaded again; moving targets or changing weights
+    /// changes nothing drawn until the solve returns.
+    pub redraws: bool,
+}
 
-    /// Whether applying it can change what the solver computes (constraints, targets, weights,
-    /// rest shape, the shape itself, convergence settings): the editor converges again after it.
-    pub fn changes_solve(&self) -> bool {
-        !matches!(
-            self,
+impl Command {
+    /// What applying it can change.
+    pub fn effect(&self) -> Effect {
+        let effect = |undoable, changes_solve, redraws| Effect { undoable, changes_solve, redraws };
+        match self {
             Command::Select { .. }
-                | Command::SelectFaces { .. }
-                | Command::ClearSelection
-                | Command::SelectBoundary(_)
-                | Command::SelectPiece { .. }
-                | Command::RenameHandle { .. }
-        )
+            | Command::SelectFaces { .. }
+            | Command::ClearSelection
+            | Command::SelectBoundary(_)
+            | Command::SelectPiece { .. } => effect(false, false, true),
+            Command::Undo | Command::Redo => effect(false, true, true),
+            Command::RenameHandle { .. } => effect(true, false, false),
+            Command::MoveHandle { .. }
+            | Command::RotateHandle { .. }
+            | Command::SetWeight { .. }
+            | Command::SetIterations(_)
+            | Command::SetTolerance(_)
+            | Command::SetAcceleration(_) => effect(true, true, false),
+            Command::FixSelection
+            | Command::PinFreePieces
+            | Command::DeleteHandle(_)
+            | Command::ClearHandles
+            | Command::SetShapeModel(_)
+            | Command::AddSmoothing
+            | Command::AddConstraint { .. }
+            | Command::RemoveGroup(_)
+            | Command::ResetShape
+            | Command::MakeRest => effect(true, true, true),
+        }
     }
 }

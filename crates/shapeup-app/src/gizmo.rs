@@ -212,11 +212,6 @@ impl GizmoController {
         self.dragging.is_some()
     }
 
-    /// The handle being dragged.
-    pub fn dragged_handle(&self) -> Option<GroupKey> {
-        self.dragging
-    }
-
     /// Whether the gizmo wants the pointer, as of the last update: it hovered a part or a drag
     /// is in progress. For viewport code that runs before this frame's update.
     pub fn claims_pointer(&self) -> bool {

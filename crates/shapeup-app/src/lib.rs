@@ -5,26 +5,38 @@
 //! without a window:
 //! - [`camera`]: the orbit camera (view, projection, pixel ↔ ray, drags in the view plane);
 //! - [`picking`]: occlusion-aware vertex picking and box selection on a CPU depth buffer;
+//! - [`group`]: what a constraint group is in the editor (key, role, shape models);
+//! - [`edit_state`]: the rest shape, the edit state undo snapshots, and the solver behind it;
+//! - [`pieces`]: the mesh's connected pieces;
 //! - [`document`]: the mesh, its constraint groups (shape model, handles, smoothing), the
 //!   selection, the current shape, undo/redo and scene round trips;
 //! - [`command`]: the [`command::Command`]s a panel or a drag emits, applied by
-//!   [`document::Document::apply`];
+//!   [`document::Document::apply`], and what each can change ([`command::Effect`]);
+//! - [`error`]: [`EditorError`], one line for the status bar, keeping its source;
+//! - [`gizmo`]: the handle gizmo's picking, drag math and tessellation, framework-agnostic;
 //! - [`worker`]: a background solver thread, so the UI never waits for a solve;
 //! - [`simulation`]: dynamic mode, a Projective Dynamics simulation of the document on its own
-//!   thread (run/pause, gravity, floor, tetrahedra, grab).
+//!   thread (run/pause, gravity, floor, tetrahedra, grab);
+//! - `gui` (feature `gui`): the window, its panels and viewport, and headless rendering.
 #![warn(missing_docs)]
 
 pub mod camera;
 pub mod command;
 pub mod document;
+pub mod edit_state;
+pub mod error;
 pub mod gizmo;
+pub mod group;
 pub mod picking;
+pub mod pieces;
 pub mod simulation;
 pub mod worker;
 
 pub use camera::OrbitCamera;
-pub use command::{Command, SelectMode};
-pub use document::{Document, EditorError, GroupKey, ShapeModel};
+pub use command::{Command, Effect, SelectMode};
+pub use document::Document;
+pub use error::EditorError;
+pub use group::{GroupKey, ShapeModel};
 pub use worker::{SolveResult, SolverWorker};
 
 /// The windowed editor and headless rendering.

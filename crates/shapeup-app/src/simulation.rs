@@ -9,10 +9,12 @@
 //! ([`SimulationRunner::update_settings`]); a change of the document's constraints, of the
 //! model, the floor or the tetrahedra means a new runner.
 
-use crate::document::{Document, EditorError, GroupRole};
+use crate::document::Document;
+use crate::error::{Cause, EditorError, SimulationError, TetrahedraError};
+use crate::group::GroupRole;
 use glam::DVec3;
 use serde_json::{Map, Value};
-use shapeup_core::dynamics::{DynamicsError, DynamicsParams, Simulation};
+use shapeup_core::dynamics::{DynamicsError, DynamicsParams, Simulation, StepReport};
 use shapeup_core::geometry::WorkingFrame;
 use shapeup_core::mesh::Mesh;
 use shapeup_core::scene::{GroupSpec, Mode, SelectionSpec, SolverSettings, Targets};
@@ -132,19 +134,24 @@ impl SimulationSettings {
 /// mesh already has tetrahedra, it has no triangles, or the surface is not closed (every edge
 /// must be shared by exactly two triangles).
 pub fn tetrahedralize_available(document: &Document) -> Result<(), String> {
+    why_not_tetrahedralize(document).map_err(|e| e.to_string())
+}
+
+/// [`tetrahedralize_available`], typed.
+fn why_not_tetrahedralize(document: &Document) -> Result<(), TetrahedraError> {
     if !cfg!(feature = "tetgen") {
-        return Err("this build has no TetGen (cargo feature `tetgen`, AGPL-3.0)".into());
+        return Err(TetrahedraError::NoTetGen);
     }
     if document.rest_mesh().num_tetrahedra() > 0 {
-        return Err("the mesh already has tetrahedra".into());
+        return Err(TetrahedraError::AlreadyTetrahedra);
     }
     closed_surface(document.triangles())
 }
 
 /// Ok when every edge of `triangles` is shared by exactly two of them.
-fn closed_surface(triangles: &[[u32; 3]]) -> Result<(), String> {
+fn closed_surface(triangles: &[[u32; 3]]) -> Result<(), TetrahedraError> {
     if triangles.is_empty() {
-        return Err("the mesh has no triangles".into());
+        return Err(TetrahedraError::NoTriangles);
     }
     let mut uses: HashMap<(u32, u32), u32> = HashMap::with_capacity(3 * triangles.len() / 2);
     for t in triangles {
@@ -161,12 +168,9 @@ fn closed_surface(triangles: &[[u32; 3]]) -> Result<(), String> {
     let border = bad.iter().filter(|&&(_, n)| n == 1).count();
     let ((a, b), _) = bad[0];
     Err(if border == bad.len() {
-        format!("the surface is open: {border} edges belong to one triangle only (e.g. vertices {a}–{b})")
+        TetrahedraError::Open { border, a, b }
     } else {
-        format!(
-            "the surface is not closed: {} edges are not shared by exactly two triangles (e.g. vertices {a}–{b})",
-            bad.len()
-        )
+        TetrahedraError::NotClosed { count: bad.len(), a, b }
     })
 }
 
@@ -239,115 +243,30 @@ impl SimulationRunner {
         settings: SimulationSettings,
         notify: impl Fn() + Send + 'static,
     ) -> Result<SimulationRunner, EditorError> {
-        let fail = EditorError::Simulation;
-        settings.validate().map_err(fail)?;
+        Self::try_start(document, settings, notify).map_err(EditorError::Simulation)
+    }
+
+    /// [`SimulationRunner::start`]: the mesh, its start shape, the dynamic scene, the
+    /// simulation at that shape, then its thread.
+    fn try_start(
+        document: &Document,
+        settings: SimulationSettings,
+        notify: impl Fn() + Send + 'static,
+    ) -> Result<SimulationRunner, SimulationError> {
+        settings.validate().map_err(SimulationError::Settings)?;
         let mesh = simulated_mesh(document, &settings)?;
-        let surface_vertices = document.num_vertices();
-        // The current shape; points TetGen added follow it.
-        let mut start = mesh.positions.clone();
-        start.iter_mut().zip(document.positions()).for_each(|(q, p)| *q = *p);
-        follow_surface(&mut start, &mesh.positions, surface_vertices, &mesh.tetrahedra);
+        let start = start_shape(document, &mesh);
         let (scene, floor) = dynamic_scene(document, &settings, &mesh, &start)?;
-        let mut loaded =
-            scene.build(mesh, shapeup_core::warnings::Warnings::new(), 0.0).map_err(|e| fail(scene_error(&e)))?;
-        let mut simulation = loaded.start_simulation().map_err(|e| fail(scene_error(&e)))?;
-        let frame = loaded.frame;
-        let floor = floor.map(|y| frame.to_working(DVec3::new(0.0, y, 0.0)).y);
-        let start: Vec<DVec3> = start.iter().map(|&p| frame.to_working(p)).collect();
-        let zero = vec![DVec3::ZERO; start.len()];
-        simulation.set_state(&start, &zero).map_err(|e| fail(e.to_string()))?;
-        let initial = (start, zero);
-        let base = *simulation.params();
+        let stepper = Stepper::new(scene, mesh, &start, floor, document.num_vertices())?;
+        let num_tetrahedra = stepper.num_tetrahedra;
         let channel = Arc::new(Channel::default());
         channel.state.lock().unwrap_or_else(PoisonError::into_inner).settings = settings;
         let thread_channel = Arc::clone(&channel);
         let thread = std::thread::Builder::new()
             .name("shapeup-simulation".into())
-            .spawn(move || {
-                loop {
-                    let (grab, settings, strength) = {
-                        let mut state = thread_channel.state.lock().unwrap_or_else(PoisonError::into_inner);
-                        while !state.shutdown && !state.running && !state.reset && !state.params_changed {
-                            state = thread_channel.wake.wait(state).unwrap_or_else(PoisonError::into_inner);
-                        }
-                        if state.shutdown {
-                            return;
-                        }
-                        if std::mem::take(&mut state.reset) {
-                            // Checked: same lengths as the simulation's.
-                            let _ = simulation.set_state(&initial.0, &initial.1);
-                            state.latest = Some(to_input(&frame, &initial.0[..surface_vertices]));
-                            state.recent.clear();
-                            state.stats = SimulationStats::default();
-                            drop(state);
-                            notify();
-                            continue;
-                        }
-                        let settings = std::mem::take(&mut state.params_changed).then_some(state.settings);
-                        let strength = state.settings.grab_strength;
-                        let grab = std::mem::take(&mut state.grab_changed).then(|| state.grab.clone());
-                        (grab, settings, strength)
-                    };
-                    let mut problem = None;
-                    if let Some(settings) = settings
-                        && let Err(e) = simulation.set_params(settings.params(&base, frame.scale))
-                    {
-                        problem = Some(e.to_string());
-                    }
-                    match grab {
-                        Some(Some((vertices, targets))) => {
-                            let working = targets.iter().map(|&t| frame.to_working(t)).collect();
-                            if let Err(e) = simulation.hold(vertices, working, strength) {
-                                problem = Some(e.to_string());
-                            }
-                        }
-                        Some(None) => simulation.release(),
-                        None => {}
-                    }
-                    let running = {
-                        let mut state = thread_channel.state.lock().unwrap_or_else(PoisonError::into_inner);
-                        if problem.is_some() {
-                            state.stats.error = problem;
-                        }
-                        state.running
-                    };
-                    if !running {
-                        // Only settings changed while paused.
-                        continue;
-                    }
-                    let outcome = simulation.step().map_err(|e| e.to_string()).and_then(|report| {
-                        if let Some(floor) = floor {
-                            collide(&mut simulation, floor).map_err(|e| e.to_string())?;
-                        }
-                        Ok(report)
-                    });
-                    let mut state = thread_channel.state.lock().unwrap_or_else(PoisonError::into_inner);
-                    match outcome {
-                        Ok(report) => {
-                            state.latest = Some(to_input(&frame, &simulation.positions()[..surface_vertices]));
-                            let now = Instant::now();
-                            state.recent.push_back(now);
-                            while state.recent.front().is_some_and(|&t| now.duration_since(t) > Duration::from_secs(1))
-                            {
-                                state.recent.pop_front();
-                            }
-                            let stats = &mut state.stats;
-                            stats.steps += 1;
-                            stats.step_ms = 1e3 * report.total_seconds;
-                            stats.local_ms = 1e3 * report.local_seconds;
-                            stats.global_ms = 1e3 * report.global_seconds;
-                        }
-                        Err(e) => {
-                            state.stats.error = Some(e);
-                            state.running = false;
-                        }
-                    }
-                    drop(state);
-                    notify();
-                }
-            })
-            .map_err(|e| fail(format!("cannot start the simulation thread: {e}")))?;
-        Ok(SimulationRunner { channel, thread: Some(thread), num_tetrahedra: loaded.mesh.num_tetrahedra() })
+            .spawn(move || stepper.run(&thread_channel, notify))
+            .map_err(|e| SimulationError::Thread(Cause::new(e)))?;
+        Ok(SimulationRunner { channel, thread: Some(thread), num_tetrahedra })
     }
 
     fn with_state<T>(&self, f: impl FnOnce(&mut Shared) -> T) -> T {
@@ -430,34 +349,195 @@ impl SimulationRunner {
     }
 }
 
+/// The current shape on `mesh` (input frame); points TetGen added follow it.
+fn start_shape(document: &Document, mesh: &Mesh) -> Vec<DVec3> {
+    let mut start = mesh.positions.clone();
+    start.iter_mut().zip(document.positions()).for_each(|(q, p)| *q = *p);
+    follow_surface(&mut start, &mesh.positions, document.num_vertices(), &mesh.tetrahedra);
+    start
+}
+
+/// What the simulation thread owns: the simulation and what a restart goes back to.
+struct Stepper {
+    simulation: Simulation,
+    frame: WorkingFrame,
+    /// The floor's height, working frame.
+    floor: Option<f64>,
+    /// Start positions and velocities, working frame.
+    initial: (Vec<DVec3>, Vec<DVec3>),
+    /// The parameters the scene built, before the live settings.
+    base: DynamicsParams,
+    /// The document's vertices (the first ones; TetGen's points follow).
+    surface_vertices: usize,
+    num_tetrahedra: usize,
+}
+
+/// A grab or release to pass on: `Some(None)` lets go.
+type GrabChange = Option<Option<(Vec<u32>, Vec<DVec3>)>>;
+
+/// What the UI asked for since the thread last looked.
+enum Work {
+    /// The runner is dropped.
+    Shutdown,
+    /// A restart, already done.
+    Reset,
+    /// New settings and a grab or release, if any, and the grab strength.
+    Changes { grab: GrabChange, settings: Option<SimulationSettings>, strength: f64 },
+}
+
+impl Stepper {
+    /// Builds the scene's simulation at `start` (input frame), at rest.
+    fn new(
+        scene: shapeup_core::scene::Scene,
+        mesh: Mesh,
+        start: &[DVec3],
+        floor: Option<f64>,
+        surface_vertices: usize,
+    ) -> Result<Stepper, SimulationError> {
+        let scene_error = |e| SimulationError::Scene(Cause::new(e));
+        let mut loaded = scene.build(mesh, shapeup_core::warnings::Warnings::new(), 0.0).map_err(scene_error)?;
+        let mut simulation = loaded.start_simulation().map_err(scene_error)?;
+        let frame = loaded.frame;
+        let floor = floor.map(|y| frame.to_working(DVec3::new(0.0, y, 0.0)).y);
+        let start: Vec<DVec3> = start.iter().map(|&p| frame.to_working(p)).collect();
+        let zero = vec![DVec3::ZERO; start.len()];
+        simulation.set_state(&start, &zero)?;
+        let base = *simulation.params();
+        let num_tetrahedra = loaded.mesh.num_tetrahedra();
+        Ok(Stepper { simulation, frame, floor, initial: (start, zero), base, surface_vertices, num_tetrahedra })
+    }
+
+    /// The thread's loop: waits for work, applies it, steps while running.
+    fn run(mut self, channel: &Channel, notify: impl Fn()) {
+        loop {
+            match self.wait(channel) {
+                Work::Shutdown => return,
+                Work::Reset => notify(),
+                Work::Changes { grab, settings, strength } => {
+                    let problem = self.apply(grab, settings, strength);
+                    let running = {
+                        let mut state = channel.state.lock().unwrap_or_else(PoisonError::into_inner);
+                        if problem.is_some() {
+                            state.stats.error = problem;
+                        }
+                        state.running
+                    };
+                    if !running {
+                        // Only settings changed while paused.
+                        continue;
+                    }
+                    let outcome = self.step();
+                    self.publish(channel, outcome);
+                    notify();
+                }
+            }
+        }
+    }
+
+    /// Waits until there is something to do; a restart is done here, under the lock.
+    fn wait(&mut self, channel: &Channel) -> Work {
+        let mut state = channel.state.lock().unwrap_or_else(PoisonError::into_inner);
+        while !state.shutdown && !state.running && !state.reset && !state.params_changed {
+            state = channel.wake.wait(state).unwrap_or_else(PoisonError::into_inner);
+        }
+        if state.shutdown {
+            return Work::Shutdown;
+        }
+        if std::mem::take(&mut state.reset) {
+            // Checked: same lengths as the simulation's.
+            let _ = self.simulation.set_state(&self.initial.0, &self.initial.1);
+            state.latest = Some(to_input(&self.frame, &self.initial.0[..self.surface_vertices]));
+            state.recent.clear();
+            state.stats = SimulationStats::default();
+            return Work::Reset;
+        }
+        let settings = std::mem::take(&mut state.params_changed).then_some(state.settings);
+        let strength = state.settings.grab_strength;
+        let grab = std::mem::take(&mut state.grab_changed).then(|| state.grab.clone());
+        Work::Changes { grab, settings, strength }
+    }
+
+    /// Applies new settings and a grab or release; the last problem, if any.
+    fn apply(&mut self, grab: GrabChange, settings: Option<SimulationSettings>, strength: f64) -> Option<String> {
+        let mut problem = None;
+        if let Some(settings) = settings
+            && let Err(e) = self.simulation.set_params(settings.params(&self.base, self.frame.scale))
+        {
+            problem = Some(e.to_string());
+        }
+        match grab {
+            Some(Some((vertices, targets))) => {
+                let working = targets.iter().map(|&t| self.frame.to_working(t)).collect();
+                if let Err(e) = self.simulation.hold(vertices, working, strength) {
+                    problem = Some(e.to_string());
+                }
+            }
+            Some(None) => self.simulation.release(),
+            None => {}
+        }
+        problem
+    }
+
+    /// One time step, then the floor's collision; the error as the panel shows it.
+    fn step(&mut self) -> Result<StepReport, String> {
+        let report = self.simulation.step().map_err(|e| e.to_string())?;
+        if let Some(floor) = self.floor {
+            collide(&mut self.simulation, floor).map_err(|e| e.to_string())?;
+        }
+        Ok(report)
+    }
+
+    /// Hands a step's positions and timings to the UI, or its error (which pauses).
+    fn publish(&self, channel: &Channel, outcome: Result<StepReport, String>) {
+        let mut state = channel.state.lock().unwrap_or_else(PoisonError::into_inner);
+        match outcome {
+            Ok(report) => {
+                state.latest = Some(to_input(&self.frame, &self.simulation.positions()[..self.surface_vertices]));
+                let now = Instant::now();
+                state.recent.push_back(now);
+                while state.recent.front().is_some_and(|&t| now.duration_since(t) > Duration::from_secs(1)) {
+                    state.recent.pop_front();
+                }
+                let stats = &mut state.stats;
+                stats.steps += 1;
+                stats.step_ms = 1e3 * report.total_seconds;
+                stats.local_ms = 1e3 * report.local_seconds;
+                stats.global_ms = 1e3 * report.global_seconds;
+            }
+            Err(e) => {
+                state.stats.error = Some(e);
+                state.running = false;
+            }
+        }
+    }
+}
+
 /// The document's rest mesh, filled with tetrahedra when asked.
-fn simulated_mesh(document: &Document, settings: &SimulationSettings) -> Result<Mesh, EditorError> {
+fn simulated_mesh(document: &Document, settings: &SimulationSettings) -> Result<Mesh, SimulationError> {
     let mesh = document.rest_mesh().clone();
     if !settings.tetrahedralize || mesh.num_tetrahedra() > 0 {
         return Ok(mesh);
     }
     let name = document.source().map_or_else(|| "the mesh".to_string(), |p| p.display().to_string());
-    let refuse = |why: String| EditorError::Simulation(format!("TetGen could not tetrahedralize {name}: {why}"));
+    let refuse = |why| SimulationError::Tetrahedralize { mesh: name.clone(), why };
     // TetGen's own message for an open surface is cryptic: check first.
     closed_surface(document.triangles()).map_err(refuse)?;
     tetrahedralize(&mesh).map_err(refuse)
 }
 
 #[cfg(feature = "tetgen")]
-fn tetrahedralize(mesh: &Mesh) -> Result<Mesh, String> {
+fn tetrahedralize(mesh: &Mesh) -> Result<Mesh, TetrahedraError> {
     use shapeup_core::tetrahedralize::TetrahedralizeError;
     shapeup_core::tetrahedralize::tetrahedralize(mesh, None).map_err(|e| match e {
         // Closed already (checked before): what is left is mostly a surface crossing itself.
-        TetrahedralizeError::TetGen(why) => {
-            format!("the surface may intersect itself or repeat faces (TetGen: {why})")
-        }
-        TetrahedralizeError::BadInput(why) => why,
+        TetrahedralizeError::TetGen(why) => TetrahedraError::TetGen(why),
+        TetrahedralizeError::BadInput(why) => TetrahedraError::BadInput(why),
     })
 }
 
 #[cfg(not(feature = "tetgen"))]
-fn tetrahedralize(_mesh: &Mesh) -> Result<Mesh, String> {
-    Err("this build has no TetGen (cargo feature `tetgen`)".into())
+fn tetrahedralize(_mesh: &Mesh) -> Result<Mesh, TetrahedraError> {
+    Err(TetrahedraError::NotBuilt)
 }
 
 /// The document as a dynamic scene on `mesh` (the rest mesh, maybe with tetrahedra) that
@@ -467,8 +547,7 @@ fn dynamic_scene(
     settings: &SimulationSettings,
     mesh: &Mesh,
     start: &[DVec3],
-) -> Result<(shapeup_core::scene::Scene, Option<f64>), EditorError> {
-    let fail = EditorError::Simulation;
+) -> Result<(shapeup_core::scene::Scene, Option<f64>), SimulationError> {
     let mut scene = document.to_scene("");
     let defaults = SolverSettings::default();
     scene.solver = SolverSettings {
@@ -488,11 +567,11 @@ fn dynamic_scene(
     let default_weight = |kind: &str| {
         shapeup_core::constraints::constraint_type(kind)
             .map(|t| t.default_multiplier())
-            .map_err(|e| fail(e.to_string()))
+            .map_err(SimulationError::Constraint)
     };
     if settings.model == DynamicsModel::TetStrain {
         if mesh.num_tetrahedra() == 0 {
-            return Err(fail("the tet strain model needs tetrahedra: tick Tetrahedralize".into()));
+            return Err(SimulationError::NeedsTetrahedra);
         }
         // `to_scene` writes the groups in the document's order.
         let roles = document.groups().iter().map(|g| g.role);
@@ -563,12 +642,6 @@ fn collide(simulation: &mut Simulation, floor: f64) -> Result<(), DynamicsError>
         }
     }
     simulation.set_state(&x, &v)
-}
-
-/// One line for a scene error: the editor's scene has no file, so drop the empty path in front.
-fn scene_error(e: &shapeup_core::scene::SceneError) -> String {
-    let text = e.to_string();
-    text.strip_prefix(": ").map(str::to_string).unwrap_or(text)
 }
 
 /// Moves the points TetGen added (after the first `surface` vertices) with the surface: the

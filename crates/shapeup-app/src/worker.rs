@@ -2,7 +2,7 @@
 //!
 //! The UI sends the newest [`SolveRequest`] (the document's editable state: handle targets,
 //! weights, groups, the iteration cap and the tolerance) with [`SolverWorker::request`]. The
-//! worker keeps its own [`Solver`] and iterates from its current positions in chunks, posting a
+//! worker keeps its own [`EditSolver`] and iterates from its current positions in chunks, posting a
 //! [`SolveResult`] after each, until
 //! - an iteration meets the request's tolerance (`shapeup_core::solver::is_converged`: its
 //!   relative energy change is at most the tolerance, or E is numerically zero),
@@ -22,7 +22,9 @@
 //! rather draw the answer to a drag than the shape before it can block briefly in
 //! [`SolverWorker::wait_for`].
 
-use crate::document::{Document, EditState, EditorError, Rest, Solver};
+use crate::document::Document;
+use crate::edit_state::{EditSolver, EditState, Rest};
+use crate::error::EditorError;
 use glam::DVec3;
 use shapeup_core::solver::{ENERGY_FLOOR, SolveError, SolveReport, is_converged};
 use std::fmt;
@@ -440,7 +442,7 @@ impl Job {
 /// The thread's solver and what it remembers between requests.
 struct Converger {
     params: WorkerParams,
-    solver: Solver,
+    solver: EditSolver,
     /// The epoch the solver's positions belong to.
     epoch: Option<u64>,
     /// Positions (input frame) after the last good chunk of `epoch`, restored after a failure.
@@ -455,7 +457,7 @@ impl Converger {
     fn new(params: WorkerParams) -> Self {
         Converger {
             params,
-            solver: Solver::new(),
+            solver: EditSolver::new(),
             epoch: None,
             last_good: Vec::new(),
             seconds_per_iteration: None,

@@ -7,6 +7,7 @@
 use super::dialogs::{DialogPurpose, FileDialogs};
 use super::dynamics_panel::{DynamicsAction, dynamics_panel};
 use super::gizmo::HandleGizmo;
+use super::metrics::{Metrics, SolveProgress, frame_busy, push_bounded};
 use super::renderer::{BASE_COLOR, FrameParams, MeshRenderer};
 use crate::camera::OrbitCamera;
 use crate::command::{Command, SelectMode};
@@ -41,17 +42,9 @@ fn count(n: usize, one: &str, many: &str) -> String {
     format!("{n} {}", if n == 1 { one } else { many })
 }
 
-/// How long the previous frame kept the renderer busy, from the gap between the starts of the
-/// last two frames: only when the previous frame asked for the next one at once (`back_to_back`,
-/// so the gap holds no idle time waiting for input) and less the time it spent waiting for the
-/// solver (not drawing).
-fn frame_busy(gap: Option<Duration>, waited: Duration, back_to_back: bool) -> Option<Duration> {
-    gap.filter(|_| back_to_back).map(|gap| gap.saturating_sub(waited))
-}
-
 /// The 3D view's resolution scale for this frame: reduced from the first slow frame of an
 /// interaction until it ends (not back and forth within one), full otherwise.
-fn render_scale(interacting: bool, reduced_so_far: bool, last_frame: Option<Duration>) -> (f32, bool) {
+pub(super) fn render_scale(interacting: bool, reduced_so_far: bool, last_frame: Option<Duration>) -> (f32, bool) {
     let reduced = interacting && (reduced_so_far || last_frame.is_some_and(|t| t > SLOW_FRAME));
     (if reduced { INTERACTIVE_SCALE } else { 1.0 }, reduced)
 }
@@ -123,17 +116,6 @@ enum Gesture {
     },
 }
 
-/// How far the background convergence is, from the worker's last result.
-#[derive(Debug, Clone, Default)]
-struct SolveProgress {
-    /// "converged: 153 iterations, E 1.2e-3", "solving… 40 iterations, E …", or empty.
-    line: String,
-    converged: bool,
-    local_ms: f64,
-    global_ms: f64,
-    ms_per_iteration: f64,
-}
-
 /// UI-only state (nothing here changes the solve).
 struct View {
     camera: OrbitCamera,
@@ -168,24 +150,8 @@ struct View {
     /// Whether Tetrahedralize can be ticked for this mesh (computed once per mesh).
     tetrahedralize: Result<(), String>,
     energy_history: VecDeque<f64>,
-    solves: VecDeque<Instant>,
-    solves_applied: u64,
-    frames: VecDeque<Instant>,
-    /// The oldest change not shown yet (its request's sequence number and time), a change shown
-    /// in this frame, and the latencies measured (milliseconds), for [`EditorApp::latencies`].
-    change_since: Option<(u64, Instant)>,
-    shown_change: Option<Instant>,
-    latencies: VecDeque<f64>,
-    /// A change shown by the previous frame: once the next frame starts, that one has been
-    /// painted and presented, giving `on_screen` latencies (upper bounds).
-    painted_change: Option<Instant>,
-    on_screen: VecDeque<f64>,
     /// The 3D view is drawn at [`INTERACTIVE_SCALE`] for the interaction under way.
     reduced_resolution: bool,
-    /// How long the previous frame took to draw, when known (see [`frame_busy`]), and how long
-    /// the current one has waited for the solver so far.
-    last_frame_busy: Option<Duration>,
-    waited: Duration,
 }
 
 /// Options of the editor window.
@@ -221,7 +187,7 @@ pub struct EditorApp {
     geometry_dirty: bool,
     last_render: Option<RenderKey>,
     options: WindowOptions,
-    last_stats_print: Instant,
+    metrics: Metrics,
     dialogs: FileDialogs,
     /// A drag (slider, gizmo) ended this frame: end the document's drag after this frame's
     /// commands, so that they still join its undo step.
@@ -279,17 +245,7 @@ impl EditorApp {
                 add_options: serde_json::Map::new(),
                 tetrahedralize: tetrahedralize_available(&document),
                 energy_history: VecDeque::new(),
-                solves: VecDeque::new(),
-                solves_applied: 0,
-                frames: VecDeque::new(),
-                change_since: None,
-                shown_change: None,
-                latencies: VecDeque::new(),
-                painted_change: None,
-                on_screen: VecDeque::new(),
                 reduced_resolution: false,
-                last_frame_busy: None,
-                waited: Duration::ZERO,
             },
             document,
             mesh_path: path,
@@ -300,7 +256,7 @@ impl EditorApp {
             geometry_dirty: true,
             last_render: None,
             options,
-            last_stats_print: Instant::now(),
+            metrics: Metrics::new(),
             dialogs: FileDialogs::default(),
             end_drag: false,
             dynamics: SimulationSettings::default(),
@@ -320,7 +276,7 @@ impl EditorApp {
 
     /// How many solver results the document has taken since the editor started.
     pub fn solves_applied(&self) -> u64 {
-        self.view.solves_applied
+        self.metrics.solves_applied
     }
 
     /// The convergence line the panel shows ("converged: …", "solving… …"; empty before any
@@ -353,14 +309,7 @@ impl EditorApp {
     /// end of the UI pass of the first frame that shows a solve of it (its rendering and presentation
     /// come after), most recent last (at most 1000).
     pub fn latencies(&self) -> impl Iterator<Item = f64> + '_ {
-        self.view.latencies.iter().copied()
-    }
-
-    /// Milliseconds from each change to the start of the frame after the one that shows it: by
-    /// then that frame has been painted and handed to the display, so these bound the time to
-    /// the screen from above (an idle pause before the next frame counts too).
-    pub fn on_screen_latencies(&self) -> impl Iterator<Item = f64> + '_ {
-        self.view.on_screen.iter().copied()
+        self.metrics.latencies.iter().copied()
     }
 
     /// Whether dynamic mode is on (a simulation exists, running or paused).
@@ -401,18 +350,10 @@ impl EditorApp {
     fn apply(&mut self, commands: Vec<Command>) {
         let mut changed = false;
         for command in commands {
+            let effect = command.effect();
             // Moving targets or changing weights changes nothing drawn until the solve returns.
-            self.geometry_dirty |= !matches!(
-                command,
-                Command::MoveHandle { .. }
-                    | Command::RotateHandle { .. }
-                    | Command::SetWeight { .. }
-                    | Command::SetIterations(_)
-                    | Command::SetTolerance(_)
-                    | Command::SetAcceleration(_)
-                    | Command::RenameHandle { .. }
-            );
-            let solve = command.changes_solve();
+            self.geometry_dirty |= effect.redraws;
+            let solve = effect.changes_solve;
             let fixes = matches!(command, Command::FixSelection | Command::PinFreePieces);
             match self.document.apply(command) {
                 Ok(changed_state) => {
@@ -454,7 +395,7 @@ impl EditorApp {
         match &mut self.worker {
             Some(worker) => {
                 let seq = worker.request(SolveRequest::from_document(&self.document));
-                self.view.change_since.get_or_insert((seq, Instant::now()));
+                self.metrics.change_since.get_or_insert((seq, Instant::now()));
                 self.view.progress.converged = false;
             }
             None => match self.document.converge() {
@@ -503,13 +444,13 @@ impl EditorApp {
         self.view.energy_history.extend(result.energy.iter().copied());
         let excess = self.view.energy_history.len().saturating_sub(ENERGY_HISTORY);
         self.view.energy_history.drain(..excess);
-        self.view.solves.push_back(Instant::now());
-        self.view.solves_applied += 1;
-        if let Some((seq, since)) = self.view.change_since
+        self.metrics.solves.push_back(Instant::now());
+        self.metrics.solves_applied += 1;
+        if let Some((seq, since)) = self.metrics.change_since
             && result.seq >= seq
         {
-            self.view.change_since = None;
-            self.view.shown_change = Some(since);
+            self.metrics.change_since = None;
+            self.metrics.shown_change = Some(since);
         }
     }
 
@@ -1044,7 +985,7 @@ impl EditorApp {
 
     fn stats(&mut self, ui: &mut egui::Ui) {
         let now = Instant::now();
-        for q in [&mut self.view.solves, &mut self.view.frames] {
+        for q in [&mut self.metrics.solves, &mut self.metrics.frames] {
             while q.front().is_some_and(|t| now.duration_since(*t).as_secs_f64() > 1.0) {
                 q.pop_front();
             }
@@ -1058,8 +999,8 @@ impl EditorApp {
             p.ms_per_iteration,
             p.local_ms,
             p.global_ms,
-            self.view.solves.len(),
-            self.view.frames.len(),
+            self.metrics.solves.len(),
+            self.metrics.frames.len(),
         ));
         // Energy over recent iterations, log scale.
         let (rect, _) = ui.allocate_exact_size(egui::vec2(ui.available_width(), 60.0), Sense::hover());
@@ -1329,11 +1270,11 @@ impl EditorApp {
     /// for the newest change is there, so the frame about to be drawn shows it: without this the
     /// frame shows the shape before the change and the answer waits a whole frame more.
     fn await_first_update(&mut self) {
-        let (Some(worker), Some((seq, since))) = (&self.worker, self.view.change_since) else { return };
+        let (Some(worker), Some((seq, since))) = (&self.worker, self.metrics.change_since) else { return };
         if let Some(left) = FIRST_UPDATE_WAIT.checked_sub(since.elapsed()) {
             let start = Instant::now();
             worker.wait_for(seq, left);
-            self.view.waited += start.elapsed();
+            self.metrics.waited += start.elapsed();
         }
     }
 
@@ -1425,7 +1366,7 @@ impl EditorApp {
         // Handle and gizmo drags, orbit and pan redraw the mesh every frame (box select does not).
         let interacting = self.document.is_dragging()
             || matches!(self.view.gesture, Some(Gesture::Orbit | Gesture::Pan | Gesture::Grab { .. }));
-        let (scale, reduced) = render_scale(interacting, self.view.reduced_resolution, self.view.last_frame_busy);
+        let (scale, reduced) = render_scale(interacting, self.view.reduced_resolution, self.metrics.last_frame_busy);
         self.view.reduced_resolution = reduced;
         let pixels = slot.painter.ctx().pixels_per_point() * scale;
         let size = ((viewport.x * pixels) as u32, (viewport.y * pixels) as u32);
@@ -1489,22 +1430,6 @@ impl EditorApp {
             ui.label(&self.view.status);
         });
     }
-
-    /// One latency per change that has now been drawn (see [`EditorApp::latencies`]).
-    fn record_latency(&mut self) {
-        if let Some(since) = self.view.shown_change.take() {
-            push_bounded(&mut self.view.latencies, since.elapsed().as_secs_f64() * 1e3);
-            self.view.painted_change = Some(since);
-        }
-    }
-}
-
-/// Appends a latency, keeping the last 1000.
-fn push_bounded(latencies: &mut VecDeque<f64>, ms: f64) {
-    latencies.push_back(ms);
-    if latencies.len() > 1000 {
-        latencies.pop_front();
-    }
 }
 
 /// Whether `path` names a scene file (.toml or .json).
@@ -1542,16 +1467,16 @@ fn spawn_worker(ctx: &egui::Context) -> Option<SolverWorker> {
 
 impl eframe::App for EditorApp {
     fn ui(&mut self, ui: &mut egui::Ui, frame: &mut eframe::Frame) {
-        self.view.frames.push_back(Instant::now());
-        let mut starts = self.view.frames.iter().rev();
+        self.metrics.frames.push_back(Instant::now());
+        let mut starts = self.metrics.frames.iter().rev();
         let gap = match (starts.next(), starts.next()) {
             (Some(now), Some(before)) => Some(now.duration_since(*before)),
             _ => None,
         };
-        let waited = std::mem::take(&mut self.view.waited);
-        self.view.last_frame_busy = frame_busy(gap, waited, ui.ctx().requested_repaint_last_pass());
-        if let Some(since) = self.view.painted_change.take() {
-            push_bounded(&mut self.view.on_screen, since.elapsed().as_secs_f64() * 1e3);
+        let waited = std::mem::take(&mut self.metrics.waited);
+        self.metrics.last_frame_busy = frame_busy(gap, waited, ui.ctx().requested_repaint_last_pass());
+        if let Some(since) = self.metrics.painted_change.take() {
+            push_bounded(&mut self.metrics.on_screen, since.elapsed().as_secs_f64() * 1e3);
         }
         self.poll_worker();
         self.poll_simulation();
@@ -1584,51 +1509,10 @@ impl eframe::App for EditorApp {
         self.paint(frame, &slot);
         self.confirm_open_modal(ui.ctx());
         self.confirm_close(ui.ctx());
-        self.record_latency();
+        self.metrics.record_latency();
         if self.options.print_stats {
-            self.print_stats(ui.ctx());
+            self.metrics.print_stats(ui.ctx(), self.view.reduced_resolution, &self.view.progress);
         }
-    }
-}
-
-impl EditorApp {
-    /// One line per second on stderr: frames/s, updates/s, solve times, change-to-screen latency.
-    fn print_stats(&mut self, ctx: &egui::Context) {
-        use std::io::Write as _;
-        let now = Instant::now();
-        if now.duration_since(self.last_stats_print).as_secs_f64() >= 1.0 {
-            self.last_stats_print = now;
-            let count =
-                |q: &VecDeque<Instant>| q.iter().filter(|t| now.duration_since(**t).as_secs_f64() <= 1.0).count();
-            let summary = |q: &VecDeque<f64>| {
-                let mut sorted: Vec<f64> = q.iter().copied().collect();
-                sorted.sort_by(f64::total_cmp);
-                let at = |p: f64| sorted.get(((sorted.len() as f64 - 1.0) * p).round() as usize);
-                match (at(0.5), at(0.9)) {
-                    (Some(m), Some(p90)) => format!("median {m:.0} ms, p90 {p90:.0} ms"),
-                    _ => "—".into(),
-                }
-            };
-            // Best effort: a closed stderr must not stop the editor.
-            let _ = writeln!(
-                std::io::stderr().lock(),
-                "stats: {} frames/s{}, {} updates/s, {:.1} ms per iteration; change to the UI pass showing it: {}, to the screen: {} ({} changes); {}",
-                count(&self.view.frames),
-                if self.view.reduced_resolution { " (3D view at half resolution)" } else { "" },
-                count(&self.view.solves),
-                self.view.progress.ms_per_iteration,
-                summary(&self.view.latencies),
-                summary(&self.view.on_screen),
-                self.view.latencies.len(),
-                self.view.progress.line,
-            );
-        }
-        if self.view.painted_change.is_some() {
-            // The next frame's start closes the on-screen measurement: no idle gap in it.
-            ctx.request_repaint();
-        }
-        // Only while measuring: keep printing when idle (otherwise nothing redraws when idle).
-        ctx.request_repaint_after(Duration::from_millis(250));
     }
 }
 
@@ -1748,21 +1632,5 @@ mod tests {
         assert_eq!(render_scale(true, false, slow), (INTERACTIVE_SCALE, true));
         assert_eq!(render_scale(true, true, fast), (INTERACTIVE_SCALE, true), "no flicker within a drag");
         assert_eq!(render_scale(false, true, slow), (1.0, false), "full again once it ends");
-    }
-
-    #[test]
-    fn a_frame_counts_as_slow_only_for_its_own_drawing() {
-        let ms = Duration::from_millis;
-        // Idle before the press (no repaint was pending): not the renderer's time.
-        assert_eq!(frame_busy(Some(ms(2000)), ms(0), false), None);
-        assert_eq!(frame_busy(None, ms(0), true), None);
-        // Frames back to back: the gap is the frame's.
-        assert_eq!(frame_busy(Some(ms(55)), ms(0), true), Some(ms(55)));
-        // Waiting up to 50 ms for the solver's first answer is not drawing: a fast renderer
-        // that waited 45 ms of a 50 ms frame drew for 5 ms.
-        let busy = frame_busy(Some(ms(50)), ms(45), true);
-        assert_eq!(busy, Some(ms(5)));
-        assert_eq!(render_scale(true, false, busy), (1.0, false));
-        assert_eq!(frame_busy(Some(ms(40)), ms(45), true), Some(ms(0)));
     }
 }

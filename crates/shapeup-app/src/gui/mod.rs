@@ -5,6 +5,7 @@ pub mod dialogs;
 pub mod dynamics_panel;
 pub mod gizmo;
 pub mod headless;
+mod metrics;
 pub mod renderer;
 
 /// The first view of a mesh: a three-quarter view from the +z side, slightly from above.

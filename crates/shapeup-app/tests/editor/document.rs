@@ -1,6 +1,5 @@
 //! The editor model driven by commands, as the GUI will: select → fix → drag → solve, undo,
 //! and the scene round trip through `shapeup deform`'s code path.
-#![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use glam::DVec3;
 use shapeup_app::document::{GroupRole, WEIGHT_RANGE};

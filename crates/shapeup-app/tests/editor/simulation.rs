@@ -1,6 +1,5 @@
 //! Dynamic mode of the editor: the document falls, lands on a floor, stands as a tet-strain
 //! solid, follows a grab, pauses and resets, all on the simulation thread.
-#![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use glam::DVec3;
 use shapeup_app::simulation::{

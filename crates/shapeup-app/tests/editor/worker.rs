@@ -1,6 +1,5 @@
 //! The background solver: it converges each request in chunks and then stops, the newest
 //! request wins, a failure keeps the last good shape, results never block, drop joins.
-#![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use glam::DVec3;
 use shapeup_app::worker::{SolveRequest, WorkerParams};

@@ -1,7 +1,5 @@
 //! The editor's UI driven without a window (egui_kittest, rendering on any wgpu adapter,
 //! lavapipe included): buttons, sliders, radio buttons and shortcuts reach the document.
-#![cfg(feature = "gui")]
-#![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use eframe::egui;
 use egui::accesskit::Role;

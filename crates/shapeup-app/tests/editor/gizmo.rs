@@ -3,7 +3,6 @@
 //! plane, rings turn about their axis in the sense the cursor turns, there-and-back drags are
 //! the identity, modifiers leave presses to the viewport, and a document takes a gizmo drag
 //! as one undo step.
-#![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use glam::{DVec3, Vec2, Vec3};
 use shapeup_app::gizmo::{

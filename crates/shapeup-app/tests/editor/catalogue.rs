@@ -1,6 +1,5 @@
 //! The editor builds groups of any registered type on the selection, vertices or polygon faces,
 //! through the library's one route, and saves them so that `shapeup deform` replays them.
-#![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use shapeup_app::document::GroupRole;
 use shapeup_app::{Command, Document, EditorError, SelectMode, ShapeModel};

@@ -1,6 +1,5 @@
 //! The front view of a mesh ([`FrontView`], [`OrbitCamera::frame_front`]) on the bundled meshes,
 //! rotated meshes and boxes.
-#![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use glam::{DQuat, DVec3, Vec2, Vec3};
 use shapeup_app::OrbitCamera;

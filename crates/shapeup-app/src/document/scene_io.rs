@@ -1,0 +1,214 @@
+//! Scene round trips: a document from a scene (its groups become editor groups) and back.
+
+use super::Document;
+use crate::edit_state::Rest;
+use crate::error::{Cause, EditorError, LoadError};
+use crate::group::{Group, GroupRole, ShapeModel};
+use glam::DVec3;
+use shapeup_core::mesh::Mesh;
+use shapeup_core::scene::{GroupSpec, MeshSettings, Scene, SelectionSpec, SolverSettings, Targets};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// What [`Document::save_scene_with_mesh`] wrote besides the scene.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SavedScene {
+    /// The rest mesh written beside the scene, if the rest shape had to be saved.
+    pub rest_mesh: Option<PathBuf>,
+    /// What the rest mesh's format could not keep, said once each.
+    pub warnings: Vec<String>,
+}
+
+impl Document {
+    /// become handles (box and sphere selections resolved to vertices, targets made explicit),
+    /// smoothing groups stay smoothing, anything else is kept as an "other" group.
+    ///
+    /// # Errors
+    /// [`EditorError::Load`] for an unreadable mesh, a bad selection or target, or a
+    /// tetrahedralized scene; [`EditorError::Constraint`] for a group that cannot be built.
+    pub fn from_scene(scene: &Scene) -> Result<Document, EditorError> {
+        let loaded = scene.read_mesh().map_err(|e| EditorError::Load(LoadError::Scene(Cause::new(e))))?;
+        let mut document = Document::from_scene_with_mesh(scene, loaded.mesh)?;
+        document.source = scene.mesh.generate.is_none().then(|| scene.mesh_path());
+        document.attributes = loaded.attributes;
+        Ok(document)
+    }
+
+    /// [`Document::from_scene`] on an already loaded mesh.
+    ///
+    /// # Errors
+    /// As [`Document::from_scene`].
+    pub fn from_scene_with_mesh(scene: &Scene, mesh: Mesh) -> Result<Document, EditorError> {
+        if scene.mesh.tetrahedralize {
+            return Err(EditorError::Load(LoadError::Tetrahedralize));
+        }
+        if mesh.triangles.is_empty() {
+            return Err(EditorError::Load(LoadError::NoTriangles));
+        }
+        let rest = Arc::new(Rest::new(mesh, scene.mesh.normalize));
+        let mut document = Document::empty(Arc::clone(&rest), scene.solver);
+        let mut groups = Vec::with_capacity(scene.groups.len());
+        for (i, spec) in scene.groups.iter().enumerate() {
+            let entry = |cause: Cause| EditorError::Load(LoadError::Entry { index: i, name: spec.name.clone(), cause });
+            let ty = shapeup_core::constraints::constraint_type(&spec.kind).map_err(|e| entry(Cause::new(e)))?;
+            let (faces, picked) = match &spec.selection {
+                SelectionSpec::Faces(list) => {
+                    let m = rest.geometry.faces.len();
+                    if let Some(&f) = list.iter().find(|&&f| f >= m) {
+                        return Err(entry(Cause::text(format!("face {f} is out of range (the mesh has {m} faces)"))));
+                    }
+                    let mut list: Vec<u32> = list.iter().map(|&f| f as u32).collect();
+                    list.sort_unstable();
+                    list.dedup();
+                    (Some(list), None)
+                }
+                other => (None, resolve_selection(other, &rest.mesh).map_err(|m| entry(Cause::text(m)))?),
+            };
+            let shape_kind = ShapeModel::ALL.iter().any(|m| m.groups().iter().any(|(k, _)| *k == spec.kind));
+            let plain = spec.options.is_empty();
+            let (role, targets, picked) = if ty.has_targets() {
+                let vertices = picked.unwrap_or_else(|| (0..rest.mesh.num_vertices() as u32).collect());
+                let targets =
+                    position_targets(&vertices, &spec.targets, &rest.mesh).map_err(|m| entry(Cause::text(m)))?;
+                // Ascending, as the editor keeps every selection (targets follow their vertex).
+                let mut pairs: Vec<(u32, DVec3)> = vertices.into_iter().zip(targets).collect();
+                pairs.sort_unstable_by_key(|&(v, _)| v);
+                let (vertices, targets) = pairs.into_iter().unzip();
+                (GroupRole::Handle, targets, Some(vertices))
+            } else if shape_kind && plain && picked.is_none() && faces.is_none() {
+                (GroupRole::Shape, Vec::new(), picked)
+            } else if spec.kind == "smoothing" && plain {
+                (GroupRole::Smoothing, Vec::new(), picked)
+            } else {
+                (GroupRole::Other, Vec::new(), picked)
+            };
+            let vertices = picked;
+            groups.push(Group {
+                key: document.new_key(),
+                name: spec.name.clone(),
+                role,
+                kind: spec.kind.clone(),
+                weight: spec.weight,
+                vertices,
+                targets,
+                faces,
+                options: Arc::new(spec.options.clone()),
+            });
+        }
+        let kinds: Vec<&str> = groups.iter().filter(|g| g.role == GroupRole::Shape).map(|g| g.kind.as_str()).collect();
+        document.state.shape_model = ShapeModel::from_kinds(&kinds);
+        document.state.groups = groups;
+        document.solver.sync(&document.state)?;
+        Ok(document)
+    }
+
+    /// The document as a scene whose `[mesh] path` is `mesh_path` (as it should appear in the
+    /// file: relative to the scene's directory, or absolute). Handles are written with explicit
+    /// targets, editor groups with explicit vertex lists. After [`Command::MakeRest`], save
+    /// [`Document::rest_mesh`] to that path too.
+    pub fn to_scene(&self, mesh_path: impl Into<PathBuf>) -> Scene {
+        let groups = self
+            .state
+            .groups
+            .iter()
+            .map(|g| GroupSpec {
+                kind: g.kind.clone(),
+                name: g.name.clone(),
+                weight: g.weight,
+                selection: match (&g.faces, &g.vertices) {
+                    (Some(faces), _) => SelectionSpec::Faces(faces.iter().map(|&f| f as usize).collect()),
+                    (None, None) => SelectionSpec::All,
+                    (None, Some(list)) => SelectionSpec::Vertices(list.iter().map(|&v| v as usize).collect()),
+                },
+                targets: if g.role == GroupRole::Handle {
+                    Targets { explicit: Some(g.targets.iter().map(|t| t.to_array()).collect()), ..Targets::default() }
+                } else {
+                    Targets::default()
+                },
+                options: (*g.options).clone(),
+            })
+            .collect();
+        Scene {
+            mesh: MeshSettings {
+                path: mesh_path.into(),
+                generate: None,
+                normalize: self.state.rest.normalize,
+                tetrahedralize: false,
+            },
+            // One run of up to `iterations` to the tolerance: what the editor converges with.
+            solver: SolverSettings {
+                iterations: self.state.iterations,
+                steps: 1,
+                tolerance: self.state.tolerance,
+                acceleration: self.state.acceleration,
+                anderson_window: self.state.anderson_window,
+                lbfgs_memory: self.state.lbfgs_memory,
+                ..self.solver_settings
+            },
+            groups,
+            output: Default::default(),
+            base_dir: PathBuf::new(),
+            file: PathBuf::new(),
+        }
+    }
+
+    /// Writes [`Document::to_scene`] as TOML to `scene_path` (atomically).
+    ///
+    /// # Errors
+    /// [`EditorError::Save`] naming the file.
+    pub fn save_scene(&self, scene_path: &Path, mesh_path: impl Into<PathBuf>) -> Result<(), EditorError> {
+        let text = self.to_scene(mesh_path).to_toml_string();
+        shapeup_core::io::write_atomic(scene_path, |w| w.write_all(text.as_bytes()))
+            .map_err(|e| EditorError::Save(Cause::new(e)))
+    }
+
+    /// Saves what replays the shape on screen: a scene at `scene_path` whose mesh is the file
+    /// the document was opened from (absolute path) or, when the rest shape changed (Make rest
+    /// shape) or the mesh has no file, the rest mesh written beside the scene as
+    /// `STEM.rest.EXT` (the opened format when it is OBJ, PLY or OFF, else OBJ). Clears
+    /// [`Document::is_modified`].
+    ///
+    /// # Errors
+    /// [`EditorError::Save`] naming the file that cannot be written.
+    pub fn save_scene_with_mesh(&mut self, scene_path: &Path) -> Result<SavedScene, EditorError> {
+        let source = self.source.as_ref().filter(|_| Arc::ptr_eq(&self.state.rest, &self.opened_rest));
+        let (mesh_path, rest_mesh, warnings) = match source {
+            Some(source) => (std::fs::canonicalize(source).unwrap_or_else(|_| source.clone()), None, Vec::new()),
+            None => {
+                let ext = self
+                    .source
+                    .as_ref()
+                    .and_then(|p| p.extension())
+                    .and_then(|e| e.to_str())
+                    .map(str::to_ascii_lowercase)
+                    .filter(|e| matches!(e.as_str(), "obj" | "ply" | "off"))
+                    .unwrap_or_else(|| "obj".into());
+                let stem = scene_path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+                let name = format!("{stem}.rest.{ext}");
+                let rest_path = scene_path.with_file_name(&name);
+                let warnings = shapeup_core::io::write_mesh(&rest_path, &self.state.rest.mesh, &self.attributes)
+                    .map_err(|e| EditorError::Save(Cause::new(e)))?;
+                (PathBuf::from(name), Some(rest_path), warnings.iter().map(ToString::to_string).collect())
+            }
+        };
+        self.save_scene(scene_path, mesh_path)?;
+        self.modified = false;
+        Ok(SavedScene { rest_mesh, warnings })
+    }
+}
+
+/// The vertices a scene selection picks (input frame): `None` for all, else in listed order or
+/// ascending (as the scene loader does).
+fn resolve_selection(spec: &SelectionSpec, mesh: &Mesh) -> Result<Option<Vec<u32>>, String> {
+    match spec {
+        SelectionSpec::All => Ok(None),
+        _ => Ok(Some(spec.resolve(&mesh.positions)?.into_iter().map(|v| v as u32).collect())),
+    }
+}
+
+/// A position group's targets (input frame), as the scene loader computes them: explicit, or
+/// rest rotated about its centre (default the centroid), then translated.
+fn position_targets(vertices: &[u32], targets: &Targets, mesh: &Mesh) -> Result<Vec<DVec3>, String> {
+    let rest: Vec<DVec3> = vertices.iter().map(|&v| mesh.positions[v as usize]).collect();
+    targets.resolve(&rest).map_err(|e| e.to_string())
+}
