@@ -22,52 +22,9 @@ impl fmt::Display for GroupKey {
     }
 }
 
-/// The constraints that keep the shape, over the whole mesh (math reference, "Notes": the
-/// editor's default multipliers).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, serde::Serialize, serde::Deserialize)]
-pub enum ShapeModel {
-    /// Edge springs, g = 10.
-    EdgeSprings,
-    /// Triangle strain (g = 10) and bending (g = 10).
-    #[default]
-    StrainBending,
-    /// Isometric one-rings, g = 100.
-    IsoOneRing,
-}
-
-impl ShapeModel {
-    /// Every model, in menu order.
-    pub const ALL: [ShapeModel; 3] = [ShapeModel::EdgeSprings, ShapeModel::StrainBending, ShapeModel::IsoOneRing];
-
-    /// Its groups: (constraint type, default multiplier g).
-    pub fn groups(self) -> &'static [(&'static str, f64)] {
-        match self {
-            ShapeModel::EdgeSprings => &[("edge_spring", 10.0)],
-            ShapeModel::StrainBending => &[("triangle_strain", 10.0), ("bending", 10.0)],
-            ShapeModel::IsoOneRing => &[("iso_one_ring", 100.0)],
-        }
-    }
-
-    /// Name for menus.
-    pub fn label(self) -> &'static str {
-        match self {
-            ShapeModel::EdgeSprings => "Edge springs",
-            ShapeModel::StrainBending => "Strain + bending",
-            ShapeModel::IsoOneRing => "Iso 1-ring",
-        }
-    }
-
-    /// The model whose groups have exactly these types (in any order), if any.
-    pub(crate) fn from_kinds(kinds: &[&str]) -> Option<ShapeModel> {
-        let mut kinds = kinds.to_vec();
-        kinds.sort_unstable();
-        ShapeModel::ALL.into_iter().find(|m| {
-            let mut own: Vec<&str> = m.groups().iter().map(|(k, _)| *k).collect();
-            own.sort_unstable();
-            own == kinds
-        })
-    }
-}
+/// The shape-model presets live in the core (one place for the editor, the benchmarks and the
+/// tests).
+pub use shapeup_core::constraints::ShapeModel;
 
 /// What a group is for in the editor.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

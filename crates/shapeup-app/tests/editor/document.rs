@@ -331,7 +331,7 @@ fn switching_the_model_keeps_handles() {
             doc.groups().iter().filter(|g| g.role == GroupRole::Shape).map(|g| g.kind.as_str()).collect();
         let expected: Vec<&str> = model.groups().iter().map(|(k, _)| *k).collect();
         assert_eq!(kinds, expected);
-        for (g, (_, w)) in doc.groups().iter().zip(model.groups()) {
+        for (g, (_, w)) in doc.groups().iter().zip(model.groups().iter()) {
             assert_eq!(g.weight, *w, "default weight of {}", g.kind);
         }
         assert_eq!(doc.handles().cloned().collect::<Vec<_>>(), handles_before);
