@@ -22,7 +22,7 @@ pub use generated::{GeneratedMesh, MAX_GENERATED_BYTES};
 pub use parse::SceneFormat;
 pub use run::{RunError, SceneSimulation, StepError, StepTotals, relative_changes};
 pub use settings::{MeshSettings, Mode, OutputSettings, SolverSettings};
-pub use spec::{GroupSpec, Rotate, SelectionSpec, SpecError, Spin, Targets, resolve_selection};
+pub use spec::{GroupSpec, Rotate, SelectionSpec, SpecError, Spin, Targets, resolve_selection, unique_group_name};
 
 use std::path::PathBuf;
 

@@ -117,19 +117,17 @@ impl Scene {
             entry: "[solver]".into(),
             message: e.0,
         })?;
-        let groups = raw
-            .constraints
-            .into_iter()
-            .enumerate()
-            .map(|(i, Entry(entry))| {
-                let name = entry.get("name").and_then(Value::as_str).map(|n| format!(" (\"{n}\")")).unwrap_or_default();
-                GroupSpec::from_entry(entry).map_err(|e| SceneError::Invalid {
-                    path: path.into(),
-                    entry: format!("constraints[{i}]{name}"),
-                    message: e.to_string(),
-                })
-            })
-            .collect::<Result<Vec<_>, _>>()?;
+        let mut groups: Vec<GroupSpec> = Vec::with_capacity(raw.constraints.len());
+        for (i, Entry(entry)) in raw.constraints.into_iter().enumerate() {
+            let name = entry.get("name").and_then(Value::as_str).map(|n| format!(" (\"{n}\")")).unwrap_or_default();
+            let existing: Vec<&str> = groups.iter().map(|g| g.name.as_str()).collect();
+            let group = GroupSpec::from_entry_among(entry, &existing).map_err(|e| SceneError::Invalid {
+                path: path.into(),
+                entry: format!("constraints[{i}]{name}"),
+                message: e.to_string(),
+            })?;
+            groups.push(group);
+        }
         Ok(Scene { mesh: raw.mesh, solver: raw.solver, groups, output: raw.output, base_dir, file: path.into() })
     }
 }
@@ -298,6 +296,47 @@ mod tests {
         assert_eq!(s.groups[0].name, "edge_spring");
         assert_eq!(s.groups[1].targets.translate, [0.1, 0.0, 0.0]);
         assert!(matches!(s.groups[1].selection, SelectionSpec::Box { .. }));
+    }
+
+    #[test]
+    fn unnamed_groups_follow_one_rule_and_names_are_unique() {
+        let s = parse(
+            r#"
+            [mesh]
+            path = "m.obj"
+            [[constraints]]
+            type = "edge_spring"
+            [[constraints]]
+            type = "edge_spring"
+            [[constraints]]
+            type = "edge_spring"
+            name = "edge_spring_3"
+            [[constraints]]
+            type = "edge_spring"
+            "#,
+        )
+        .unwrap();
+        let names: Vec<&str> = s.groups.iter().map(|g| g.name.as_str()).collect();
+        assert_eq!(names, ["edge_spring", "edge_spring_2", "edge_spring_3", "edge_spring_4"]);
+
+        let e = parse(
+            r#"
+            [mesh]
+            path = "m.obj"
+            [[constraints]]
+            type = "edge_spring"
+            name = "shape"
+            [[constraints]]
+            type = "bending"
+            name = "shape"
+            "#,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("constraints[1] (\"shape\")") && e.contains("a group named \"shape\" exists already"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -201,7 +201,7 @@ impl Targets {
 pub struct GroupSpec {
     /// Constraint type name.
     pub kind: String,
-    /// Group name (default: the type).
+    /// Group name (default: the type; `type_2`, `type_3`… when taken, see [`unique_group_name`]).
     pub name: String,
     /// Group multiplier g (default: the type's default).
     pub weight: f64,
@@ -222,6 +222,29 @@ impl GroupSpec {
     /// # Errors
     /// A one-line message naming the bad key.
     pub fn from_entry(entry: Map<String, Value>) -> Result<GroupSpec, SpecError> {
+        parse_group(entry)
+    }
+
+    /// [`GroupSpec::from_entry`] for a group joining groups named `existing`: a given name must
+    /// be new, and an unnamed group is named by [`unique_group_name`] after its type. Scene
+    /// files (each entry among the ones before it), the editor and the Python package all name
+    /// groups through here.
+    ///
+    /// # Errors
+    /// As [`GroupSpec::from_entry`], and a given name that a group in `existing` has.
+    pub fn from_entry_among(mut entry: Map<String, Value>, existing: &[&str]) -> Result<GroupSpec, SpecError> {
+        match entry.get("name") {
+            Some(Value::String(name)) if existing.contains(&name.as_str()) => {
+                return Err(SpecError::Invalid(format!("a group named \"{name}\" exists already")));
+            }
+            None => {
+                if let Some(Value::String(kind)) = entry.get("type") {
+                    let name = unique_group_name(kind, existing);
+                    entry.insert("name".into(), Value::String(name));
+                }
+            }
+            Some(_) => {}
+        }
         parse_group(entry)
     }
 
@@ -282,6 +305,19 @@ impl GroupSpec {
         let targets = self.targets.resolve(&rest)?;
         Ok((picked, targets))
     }
+}
+
+/// The one rule for naming an unnamed group: `base` (its type's name, or the editor's word for
+/// what it made: "handle", "smoothing") when no name in `existing` is `base`, else `base_2`,
+/// `base_3`, … the first that is free.
+pub fn unique_group_name(base: &str, existing: &[&str]) -> String {
+    if !existing.contains(&base) {
+        return base.to_string();
+    }
+    (2..)
+        .map(|k| format!("{base}_{k}"))
+        .find(|name| !existing.contains(&name.as_str()))
+        .unwrap_or_else(|| base.to_string())
 }
 
 /// A scene selection as the constraint builders take it.
