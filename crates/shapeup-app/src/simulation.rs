@@ -119,11 +119,11 @@ impl SimulationSettings {
     }
 
     /// The time-stepping settings in the working frame of scale `scale` (gravity scales with
-    /// lengths), keeping `base`'s iterations and tolerance.
-    fn params(&self, base: &DynamicsParams, scale: f64) -> DynamicsParams {
+    /// lengths); iterations per step and the tolerance are the solver's.
+    fn params(&self, scale: f64) -> DynamicsParams {
         let gravity =
             if self.gravity { DVec3::from_array(SolverSettings::default().gravity) * scale } else { DVec3::ZERO };
-        DynamicsParams { time_step: self.time_step, stiffness: self.stiffness, damping: self.damping, gravity, ..*base }
+        DynamicsParams { time_step: self.time_step, stiffness: self.stiffness, damping: self.damping, gravity }
     }
 }
 
@@ -365,8 +365,6 @@ struct Stepper {
     floor: Option<f64>,
     /// Start positions and velocities, working frame.
     initial: (Vec<DVec3>, Vec<DVec3>),
-    /// The parameters the scene built, before the live settings.
-    base: DynamicsParams,
     /// The document's vertices (the first ones; TetGen's points follow).
     surface_vertices: usize,
     num_tetrahedra: usize,
@@ -402,9 +400,8 @@ impl Stepper {
         let start: Vec<DVec3> = start.iter().map(|&p| frame.to_working(p)).collect();
         let zero = vec![DVec3::ZERO; start.len()];
         simulation.set_state(&start, &zero)?;
-        let base = *simulation.params();
         let num_tetrahedra = loaded.mesh.num_tetrahedra();
-        Ok(Stepper { simulation, frame, floor, initial: (start, zero), base, surface_vertices, num_tetrahedra })
+        Ok(Stepper { simulation, frame, floor, initial: (start, zero), surface_vertices, num_tetrahedra })
     }
 
     /// The thread's loop: waits for work, applies it, steps while running.
@@ -461,7 +458,7 @@ impl Stepper {
     fn apply(&mut self, grab: GrabChange, settings: Option<SimulationSettings>, strength: f64) -> Option<String> {
         let mut problem = None;
         if let Some(settings) = settings
-            && let Err(e) = self.simulation.set_params(settings.params(&self.base, self.frame.scale))
+            && let Err(e) = self.simulation.set_params(settings.params(self.frame.scale))
         {
             problem = Some(e.to_string());
         }

@@ -12,11 +12,12 @@
 //! converts gravity and forces from input units.
 
 use crate::constraints::RowSink;
-use crate::solver::{SolveError, System};
+use crate::solver::{SolveError, SolverParams, System};
 use glam::DVec3;
 use std::time::Instant;
 
-/// Time-stepping settings; the defaults are the math reference's.
+/// Time-stepping settings; the defaults are the math reference's. Iterations per step and the
+/// tolerance are the system's [`SolverParams`] (one home for both, in static and dynamic mode).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DynamicsParams {
     /// Time step h in seconds (default 1/60).
@@ -27,22 +28,11 @@ pub struct DynamicsParams {
     pub damping: f64,
     /// Gravity, an acceleration in working-frame units per s² (default (0, −9.81, 0)).
     pub gravity: DVec3,
-    /// Local-global iterations per step (default 10).
-    pub iterations: usize,
-    /// Stop a step's iterations early below this relative energy change (default 0: off).
-    pub tolerance: f64,
 }
 
 impl Default for DynamicsParams {
     fn default() -> Self {
-        DynamicsParams {
-            time_step: 1.0 / 60.0,
-            stiffness: 100.0,
-            damping: 0.0,
-            gravity: DVec3::new(0.0, -9.81, 0.0),
-            iterations: 10,
-            tolerance: 0.0,
-        }
+        DynamicsParams { time_step: 1.0 / 60.0, stiffness: 100.0, damping: 0.0, gravity: DVec3::new(0.0, -9.81, 0.0) }
     }
 }
 
@@ -52,7 +42,7 @@ impl DynamicsParams {
     /// # Errors
     /// [`ParamError`]: which setting, its value and the allowed range.
     pub fn validate(&self) -> Result<(), ParamError> {
-        let DynamicsParams { time_step, stiffness, damping, gravity, iterations, tolerance } = *self;
+        let DynamicsParams { time_step, stiffness, damping, gravity } = *self;
         if !(time_step.is_finite() && time_step > 0.0) {
             return Err(ParamError::TimeStep(time_step));
         }
@@ -65,11 +55,20 @@ impl DynamicsParams {
         if !gravity.is_finite() {
             return Err(ParamError::Gravity(gravity));
         }
-        if iterations == 0 {
+        Ok(())
+    }
+
+    /// Checks the solver settings a time step runs with ([`SolverParams::iterations`] per step,
+    /// [`SolverParams::tolerance`]), naming the first bad one.
+    ///
+    /// # Errors
+    /// [`ParamError::NoIterations`] or [`ParamError::Tolerance`].
+    pub fn validate_solver(solver: &SolverParams) -> Result<(), ParamError> {
+        if solver.iterations == 0 {
             return Err(ParamError::NoIterations);
         }
-        if !(tolerance.is_finite() && tolerance >= 0.0) {
-            return Err(ParamError::Tolerance(tolerance));
+        if !(solver.tolerance.is_finite() && solver.tolerance >= 0.0) {
+            return Err(ParamError::Tolerance(solver.tolerance));
         }
         Ok(())
     }
@@ -201,6 +200,7 @@ impl Simulation {
         params: DynamicsParams,
     ) -> Result<Self, DynamicsError> {
         params.validate()?;
+        DynamicsParams::validate_solver(system.params())?;
         let n = system.num_vertices();
         if masses.len() != n || positions.len() != n {
             return Err(DynamicsError::BadState(format!(
@@ -279,11 +279,12 @@ impl Simulation {
         self.system.set_inertial_target(&self.target)?;
         self.next.copy_from_slice(&self.target);
         // 2. Local-global iterations on the inertia + constraint energy; E only if they need it.
-        let needs_energy = self.params.tolerance > 0.0 || self.system.params().is_accelerated();
+        let solver = *self.system.params();
+        let needs_energy = solver.needs_energy();
         let report = if needs_energy {
-            self.system.solve(&mut self.next, self.params.iterations, self.params.tolerance)?
+            self.system.solve(&mut self.next, solver.iterations, solver.tolerance)?
         } else {
-            self.system.iterate(&mut self.next, self.params.iterations)?
+            self.system.iterate(&mut self.next, solver.iterations)?
         };
         // 3. Velocity update with damping, then the new positions.
         let keep = (1.0 - self.params.damping) / h;
@@ -294,7 +295,7 @@ impl Simulation {
         self.steps += 1;
         Ok(StepReport {
             energy: report.energies.last().copied(),
-            iterations: if needs_energy { report.energies.len() } else { self.params.iterations },
+            iterations: if needs_energy { report.energies.len() } else { solver.iterations },
             rejected: report.rejected,
             local_seconds: report.local_seconds,
             global_seconds: report.global_seconds,

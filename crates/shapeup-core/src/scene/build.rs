@@ -322,6 +322,7 @@ impl LoadedScene {
         }
         let params = self.dynamics_params();
         params.validate().map_err(|e| invalid(e.to_string()))?;
+        DynamicsParams::validate_solver(self.system.params()).map_err(|e| invalid(e.to_string()))?;
         let system =
             std::mem::replace(&mut self.system, System::new(self.mesh.num_vertices(), SolverParams::default()));
         Simulation::new(system, self.masses(), self.rest.positions.clone(), params).map_err(|e| invalid(e.to_string()))

@@ -95,8 +95,6 @@ impl SolverSettings {
             stiffness: self.stiffness,
             damping: self.damping,
             gravity: DVec3::from_array(self.gravity) * scale,
-            iterations: self.iterations,
-            tolerance: self.tolerance,
         }
     }
 }

@@ -36,8 +36,18 @@ fn simulation_with(
     params: DynamicsParams,
     acceleration: Acceleration,
 ) -> (Simulation, RestGeometry) {
+    simulation_solved(mesh, kinds, params, SolverParams { acceleration, ..SolverParams::default() })
+}
+
+/// [`simulation`] with chosen solver settings (iterations per step, tolerance, acceleration).
+fn simulation_solved(
+    mesh: &Mesh,
+    kinds: &[(&str, f64)],
+    params: DynamicsParams,
+    solver: SolverParams,
+) -> (Simulation, RestGeometry) {
     let rest = RestGeometry::new(mesh.positions.clone(), mesh.triangles.clone(), mesh.tetrahedra.clone());
-    let mut system = System::new(mesh.num_vertices(), SolverParams { acceleration, ..SolverParams::default() });
+    let mut system = System::new(mesh.num_vertices(), solver);
     for &(kind, w) in kinds {
         system.add_group(group(kind, w, &rest, Params::default())).unwrap();
     }
@@ -200,8 +210,9 @@ fn smaller_time_steps_converge_to_one_trajectory() {
     // to the next finer trajectory.
     let mesh = generate::cloth_grid(7, 7, 1.0, 1.0);
     let run = |h: f64| {
-        let params = DynamicsParams { time_step: h, iterations: 200, tolerance: 1e-13, ..DynamicsParams::default() };
-        let (mut sim, _) = simulation(&mesh, &[("edge_spring", 10.0)], params);
+        let params = DynamicsParams { time_step: h, ..DynamicsParams::default() };
+        let solver = SolverParams { iterations: 200, tolerance: 1e-13, ..SolverParams::default() };
+        let (mut sim, _) = simulation_solved(&mesh, &[("edge_spring", 10.0)], params, solver);
         let pins = Position::new(vec![0, 6], vec![mesh.positions[0], mesh.positions[6]]).unwrap();
         sim.system_mut().add_group(ConstraintGroup::new("pins", 100.0, vec![Box::new(pins)])).unwrap();
         let steps = (0.5 / h).round() as usize;
@@ -247,10 +258,20 @@ fn bad_settings_are_refused() {
         DynamicsParams { stiffness: -1.0, ..DynamicsParams::default() },
         DynamicsParams { damping: 1.0, ..DynamicsParams::default() },
         DynamicsParams { gravity: DVec3::new(f64::NAN, 0.0, 0.0), ..DynamicsParams::default() },
-        DynamicsParams { iterations: 0, ..DynamicsParams::default() },
     ] {
         let system = System::new(mesh.num_vertices(), SolverParams::default());
         assert!(Simulation::new(system, m.clone(), mesh.positions.clone(), bad).is_err(), "{bad:?}");
+    }
+    // Iterations per step are the system's: none is as bad as a bad time step.
+    for bad in [
+        SolverParams { iterations: 0, ..SolverParams::default() },
+        SolverParams { tolerance: f64::NAN, ..SolverParams::default() },
+    ] {
+        let system = System::new(mesh.num_vertices(), bad);
+        assert!(
+            Simulation::new(system, m.clone(), mesh.positions.clone(), DynamicsParams::default()).is_err(),
+            "{bad:?}"
+        );
     }
     let system = System::new(mesh.num_vertices(), SolverParams::default());
     let mut negative = m.clone();
@@ -266,11 +287,11 @@ fn bad_settings_are_refused() {
 fn a_plain_step_skips_the_energy_and_moves_the_same() {
     let mesh = generate::cloth_grid(12, 10, 1.0, 0.8);
     let kinds = [("triangle_strain", 10.0), ("bending", 10.0)];
-    let plain = DynamicsParams::default();
+    let plain = SolverParams { acceleration: Acceleration::None, ..SolverParams::default() };
     // A tolerance no iteration meets: the same iterations, with E after each.
-    let measured = DynamicsParams { tolerance: 1e-300, ..plain };
-    let (mut fast, _) = simulation_with(&mesh, &kinds, plain, Acceleration::None);
-    let (mut full, _) = simulation_with(&mesh, &kinds, measured, Acceleration::None);
+    let measured = SolverParams { tolerance: 1e-300, ..plain };
+    let (mut fast, _) = simulation_solved(&mesh, &kinds, DynamicsParams::default(), plain);
+    let (mut full, _) = simulation_solved(&mesh, &kinds, DynamicsParams::default(), measured);
     for sim in [&mut fast, &mut full] {
         sim.set_state(&mesh.positions, &swirl(&mesh.positions)).unwrap();
     }
@@ -286,7 +307,7 @@ fn a_plain_step_skips_the_energy_and_moves_the_same() {
         assert!((e - reported).abs() <= 1e-12 * reported, "E {e} vs {reported}");
     }
     // Anderson acceleration needs E for its safeguard: reported.
-    let (mut accelerated, _) = simulation_with(&mesh, &kinds, plain, Acceleration::Anderson);
+    let (mut accelerated, _) = simulation_with(&mesh, &kinds, DynamicsParams::default(), Acceleration::Anderson);
     assert!(accelerated.step().unwrap().energy.is_some());
 }
 
@@ -403,8 +424,8 @@ fn a_step_tolerance_is_on_the_objective() {
     };
     for acceleration in [Acceleration::Anderson, Acceleration::Lbfgs] {
         let run = |iterations: usize, tolerance: f64| {
-            let params = DynamicsParams { iterations, tolerance, ..DynamicsParams::default() };
-            let (mut sim, _) = simulation_with(&mesh, &kinds, params, acceleration);
+            let solver = SolverParams { iterations, tolerance, acceleration, ..SolverParams::default() };
+            let (mut sim, _) = simulation_solved(&mesh, &kinds, DynamicsParams::default(), solver);
             sim.system_mut().add_group(pins()).unwrap();
             let mut counts = Vec::new();
             for _ in 0..8 {
