@@ -6,7 +6,7 @@
 //! part of it: readers return it beside the mesh ([`crate::io::LoadedMesh`]). Every constructor
 //! validates indices, so code that receives a `Mesh` may index positions with them without checks.
 //!
-//! Polygons get their triangles from [`triangulate_polygon`] (ear clipping, in [`triangulate`]).
+//! Polygons get their triangles from [`triangulate_polygon`] (ear clipping, in `triangulate.rs`).
 
 mod triangulate;
 

@@ -30,8 +30,8 @@
 //! nodes aborts), reports errors as a parser backtrace into the byte slice rather than a byte
 //! offset, needs the whole file in memory, and reads neither version 2.2 nor parametric nodes.
 //!
-//! Laid out by phase: [`model`] holds what is read (nodes, elements) and makes the mesh,
-//! [`ascii`] and [`binary`] read the sections, [`write`] writes.
+//! Laid out by phase: `model.rs` holds what is read (nodes, elements) and makes the mesh,
+//! `ascii.rs` and `binary.rs` read the sections, `write.rs` writes.
 
 mod ascii;
 mod binary;

@@ -54,9 +54,9 @@ pub struct ObjAttributes {
     /// The `vn` lines' vectors in order, as read (not normalized).
     pub normals: Vec<DVec3>,
     /// Per polygon corner (see [`crate::mesh::Polygons`]): its index into
-    /// [`ObjAttributes::texcoords`], or [`NO_INDEX`].
+    /// [`ObjAttributes::texcoords`], or [`NO_INDEX`](crate::io::NO_INDEX).
     pub corner_texcoords: Vec<u32>,
-    /// Per polygon corner: its index into [`ObjAttributes::normals`], or [`NO_INDEX`].
+    /// Per polygon corner: its index into [`ObjAttributes::normals`], or [`NO_INDEX`](crate::io::NO_INDEX).
     pub corner_normals: Vec<u32>,
     /// The colour of every vertex, as written (`r g b` after x y z), when every `v` line has one.
     pub colors: Option<Vec<[f64; 3]>>,

@@ -7,7 +7,7 @@
 //! **Read.** `v x y z [w | r g b [a]]`; `vt u [v [w]]`; `vn x y z`; `f` with `i`, `i/t`, `i//n`
 //! or `i/t/n` corners (all corners of a face of one form), 1-based or negative (relative to the
 //! last `v`, `vt` or `vn` read so far), any number of corners (triangulated by
-//! [`Mesh::from_polygons`]); `#` comments, `\` line continuations, `\r\n` endings, a UTF-8
+//! [`Mesh::from_polygons`](crate::mesh::Mesh::from_polygons)); `#` comments, `\` line continuations, `\r\n` endings, a UTF-8
 //! byte-order mark; UTF-16 files (byte-order mark) are decoded and read as their UTF-8 copy (and
 //! written back as UTF-8). Values after a vertex's x y z are a colour when there are 3 or 4 of them,
 //! all numbers (`r g b` or `r g b a`: colours come first, as MeshLab and tinyobjloader write and
@@ -28,7 +28,7 @@
 //! line becomes `v x y z` (the new position, shortest exact decimals) followed by its original
 //! rest, and each normal some face corner uses is recomputed from the new geometry with the
 //! file's own corner→normal indexing (so hard edges and smoothing groups stay), angle-weighted
-//! ([`indexed_normals`]); a `\` continuation inside a vertex's (or a recomputed normal's)
+//! ([`indexed_normals`](crate::geometry::indexed_normals)); a `\` continuation inside a vertex's (or a recomputed normal's)
 //! coordinates is joined. Material (`.mtl`) files are never touched. A mesh without OBJ lines (or
 //! whose vertices or faces no longer match them) is written as a new file: a header comment, `v`
 //! (with colours), `vt`, per-vertex `vn` and one `f` line per polygon.
