@@ -28,6 +28,7 @@ pub use attachment::{
 pub use contract::{BuildContext, Constraint, ConstraintType, Load, RowEntry, RowSink, TypeInfo};
 pub use error::ConstraintError;
 pub use group::{ConstraintGroup, GroupDescription, GroupId, WeightError, build_group, check_weight, held_vertices};
+pub use kit::point_set::{PointSet, Primitive};
 pub use options::{OptionKind, OptionSpec, option_markdown};
 pub use params::Params;
 pub use registry::{build_constraints, catalogue_markdown, constraint_type, registry, type_names};

@@ -278,9 +278,23 @@ impl<R: BufRead> Lines<R> {
     }
 }
 
-/// Parses one coordinate, naming it in the error.
-pub(crate) fn parse_coordinate(token: &str, what: &str) -> Result<f64, String> {
-    token.parse::<f64>().map_err(|_| format!("{what} '{}' is not a number", shown(token)))
+/// A token that should be a number and is not: `{what} '{token}' is not a number`, the token
+/// cut short ([`shown`]). Readers place it at its line or byte offset in an [`IoError`].
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{what} '{token}' is not a number")]
+pub(crate) struct NotANumber {
+    /// What the token was meant to be (`vertex 3 x coordinate`, …).
+    what: String,
+    /// The token, cut short.
+    token: String,
+}
+
+/// Parses one coordinate, naming it (`what`) in the error.
+///
+/// # Errors
+/// [`NotANumber`] when `token` is not an `f64`.
+pub(crate) fn parse_coordinate(token: &str, what: &str) -> Result<f64, NotANumber> {
+    token.parse::<f64>().map_err(|_| NotANumber { what: what.to_owned(), token: shown(token).into_owned() })
 }
 
 /// Most bytes [`bounded_vec`] reserves up front: a few such vectors for a header's claim stay

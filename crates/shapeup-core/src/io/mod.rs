@@ -41,6 +41,7 @@ pub mod msh;
 pub mod obj;
 pub mod off;
 pub mod ply;
+mod records;
 pub mod stl;
 pub mod tetgen;
 pub mod vtu;
@@ -58,7 +59,7 @@ pub use atomic::{MESH_OUTPUT_EXTENSIONS, OutputError, check_output_extension, ch
 pub use attributes::{AttributeKind, NO_INDEX, TexCoords, VertexScalar};
 pub use decode::UTF8_BOM;
 pub(crate) use decode::{
-    DecodeError, Lines, TextReader, bounded_vec, decode_text, parse_coordinate, read_error, read_text_file,
+    DecodeError, Lines, NotANumber, TextReader, bounded_vec, decode_text, parse_coordinate, read_error, read_text_file,
     utf16_encoding, with_decode_errors,
 };
 pub use ply::PlyEncoding;

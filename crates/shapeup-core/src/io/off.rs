@@ -111,8 +111,8 @@ pub fn read_off(reader: impl BufRead, path: &Path) -> Result<LoadedMesh, IoError
                 };
                 return Err(truncated(tokens.end_line(), found));
             };
-            *slot =
-                parse_coordinate(token, &format!("vertex {i} {axis} coordinate")).map_err(|m| parse_error(line, m))?;
+            *slot = parse_coordinate(token, &format!("vertex {i} {axis} coordinate"))
+                .map_err(|e| parse_error(line, e.to_string()))?;
         }
         positions.push(DVec3::from_array(xyz));
         let line = tokens.line();

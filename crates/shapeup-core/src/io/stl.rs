@@ -220,7 +220,7 @@ fn parse_ascii(text: impl io::BufRead, path: &Path) -> Result<LoadedMesh, IoErro
                         )
                     })?;
                     *slot = parse_coordinate(token, &format!("facet {facet}: vertex {axis} coordinate"))
-                        .map_err(|m| parse_error(line, m))?;
+                        .map_err(|e| parse_error(line, e.to_string()))?;
                 }
                 corners.push(merger.insert(DVec3::from_array(xyz)).ok_or_else(|| too_many_vertices(path))?);
                 State::Loop

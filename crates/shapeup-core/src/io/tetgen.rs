@@ -17,7 +17,8 @@ use std::fs::File;
 use std::io::{self, BufRead, BufReader, Write};
 use std::path::{Path, PathBuf};
 
-use super::msh::{Records, parse_point, tetrahedral_mesh};
+use super::msh::{parse_point, tetrahedral_mesh};
+use super::records::Records;
 use super::{
     IoError, LoadedMesh, bounded_vec, decode_text, read_error, shown, with_decode_errors, write_atomic, write_point,
 };

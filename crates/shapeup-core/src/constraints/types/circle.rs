@@ -13,13 +13,13 @@
 //! The formulas, the starts, the schedule, the sources (ShapeUp, ShapeOp `CircleConstraint`)
 //! and the choices left open are in the math reference, docs/math.md, "circle".
 
-use crate::constraints::contract::{TypeInfo, BuildContext, Constraint, ConstraintType, RowSink};
+use crate::constraints::contract::{BuildContext, Constraint, ConstraintType, TypeInfo};
 use crate::constraints::error::ConstraintError;
 use crate::constraints::kit::sets;
-use crate::constraints::kit::build::non_empty;
-use crate::constraints::kit::faces::{WHOLE_SELECTION, selected_faces};
-use crate::constraints::kit::fit::{Model, best_fit, distance, distance_in, from_algebraic, rms_radius};
-use crate::constraints::kit::vertex_set::{centred, centred_rows, centred_view, recentre, to_row_frame, vertex_set};
+use crate::constraints::kit::faces::WHOLE_SELECTION;
+use crate::constraints::kit::fit::{Model, best_fit, distance, distance_in, from_algebraic};
+use crate::constraints::kit::point_set::{PointSet, Primitive, faces_or_set, project_at_unit_scale};
+use crate::constraints::kit::vertex_set::centred_view;
 use crate::constraints::params::Params;
 use crate::constraints::selection::Element;
 use crate::linalg::jet::{Scalar, V3};
@@ -141,57 +141,30 @@ fn fit_circle(points: &[DVec3]) -> (CircleFit, f64) {
     best_fit(starts, points).unwrap_or((line, f64::INFINITY))
 }
 
-/// The circle constraint on a face's corners or a vertex set.
-#[derive(Debug, Clone)]
-pub struct Circle {
-    vertices: Box<[u32]>,
-}
+/// The circle constraint on a face's corners or a vertex set (k ≥ 3, distinct):
+/// [`PointSet::new`] keeps them on one circle, `None` with fewer than 3.
+pub type Circle = PointSet<Concyclic>;
 
-impl Circle {
-    /// Keeps `vertices` (k ≥ 3, distinct) on one circle; `None` with fewer than 3.
-    pub fn new(vertices: Vec<u32>) -> Option<Self> {
-        (vertices.len() >= 3).then(|| Circle { vertices: vertices.into() })
-    }
-}
+/// The circle's primitive: centred concyclic configurations (and collinear ones, their
+/// closure), projected onto the geometric best-fit circle.
+#[derive(Debug, Clone, Copy)]
+pub struct Concyclic;
 
-impl Constraint for Circle {
-    fn kind(&self) -> &'static str {
-        KIND
-    }
-    fn vertices(&self) -> &[u32] {
-        &self.vertices
-    }
-    fn element_weight(&self) -> f64 {
-        1.0
-    }
-    fn num_rows(&self) -> usize {
-        self.vertices.len()
-    }
-    fn rows(&self, sink: &mut RowSink) {
-        centred_rows(&self.vertices, sink);
-    }
-    fn project(&self, q: &[DVec3], out: &mut [DVec3]) {
-        let d = centred(&self.vertices, q);
-        let (mean, scale) = rms_radius(&d);
-        if !(scale > 0.0 && scale.is_finite()) {
-            // Coincident points are on every circle through them (non-finite input: as given).
-            for (o, &x) in out.iter_mut().zip(&d) {
-                *o = x - mean;
+impl Primitive for Concyclic {
+    const KIND: &'static str = KIND;
+    const MIN_VERTICES: usize = 3;
+
+    fn project(d: &[DVec3], out: &mut [DVec3]) {
+        project_at_unit_scale(d, out, |points, out| {
+            let (fit, _) = fit_circle(points);
+            for (o, &x) in out.iter_mut().zip(points) {
+                *o = fit.nearest(x);
             }
-            to_row_frame(&self.vertices, q, out);
-            return;
-        }
-        let points: Vec<DVec3> = d.iter().map(|&x| (x - mean) / scale).collect();
-        let (fit, _) = fit_circle(&points);
-        for (o, &x) in out.iter_mut().zip(&points) {
-            *o = fit.nearest(x) * scale;
-        }
-        recentre(out);
-        to_row_frame(&self.vertices, q, out);
+        });
     }
     /// √(‖Σ p_i‖²/k + σ₄²), σ₄ the fourth singular value of the lifted rows
     /// (‖y_i‖²/L, y_i, L): zero exactly on one circle (or line), centred.
-    fn set_residual(&self, p: &[DVec3]) -> f64 {
+    fn set_residual(p: &[DVec3]) -> f64 {
         let p = centred_view(p);
         let sigma = sets::lifted_singular_values(&p);
         (sets::centroid_offset(&p).powi(2) + sigma[3] * sigma[3]).sqrt()
@@ -219,13 +192,12 @@ impl ConstraintType for CircleType {
         &INFO
     }
     fn build(&self, ctx: &BuildContext, params: &mut Params) -> Result<Vec<Box<dyn Constraint>>, ConstraintError> {
-        let sets: Vec<Vec<u32>> = if params.flag(KIND, &WHOLE_SELECTION)? {
-            vec![vertex_set(ctx, KIND, 3, "three points always lie on a circle or a line")?]
-        } else {
-            selected_faces(ctx, KIND, "which always lie on a circle")?
-        };
-        let built = sets.into_iter().filter_map(Circle::new).map(|c| Box::new(c) as Box<dyn Constraint>).collect();
-        non_empty(built, KIND, "faces of 4 or more corners")
+        faces_or_set::<Concyclic>(
+            ctx,
+            params,
+            "three points always lie on a circle or a line",
+            "which always lie on a circle",
+        )
     }
 }
 
@@ -233,16 +205,11 @@ impl ConstraintType for CircleType {
 mod tests {
     #![allow(clippy::unwrap_used, clippy::expect_used)]
     use super::*;
-    use crate::constraints::kit::test_util::{Rng, dist2};
+    use crate::constraints::kit::fit::rms_radius;
+    use crate::constraints::kit::test_util::{Rng, dist2, project};
     use crate::constraints::{Selection, build_constraints};
     use crate::geometry::{RestGeometry, WorkingFrame};
     use crate::mesh::{Mesh, Polygons};
-
-    fn project(c: &dyn Constraint, q: &[DVec3]) -> Vec<DVec3> {
-        let mut out = vec![DVec3::ZERO; c.num_rows()];
-        c.project(q, &mut out);
-        out
-    }
 
     /// Σ_i dist(x_i, circle)² for the circle of centre c, unit axis a, radius r, by the
     /// textbook formula (out-of-plane offset, radial offset).

@@ -24,62 +24,44 @@
 //! the condition number and blur the small singular values the residual reads. Left open by
 //! both and decided here: a set of coincident points (D = 0) projects to itself.
 //!
-//! This file also holds the mean-centred rows and the vertex-set checks that line, plane,
-//! circle and sphere share ([`centred_rows`], [`centred`], [`vertex_set`]).
+//! What line, plane, circle and sphere share (the mean-centred rows, the projection's frame,
+//! the builds) is [`PointSet`](crate::constraints::kit::point_set::PointSet).
 
-use crate::constraints::contract::{TypeInfo, BuildContext, Constraint, ConstraintType, RowSink};
+use crate::constraints::contract::{BuildContext, Constraint, ConstraintType, TypeInfo};
 use crate::constraints::error::ConstraintError;
 use crate::constraints::kit::sets;
 use crate::constraints::params::Params;
 use crate::constraints::selection::Element;
 use glam::DVec3;
-use crate::constraints::kit::vertex_set::{centred, centred_rows, centred_view, to_row_frame, vertex_set};
+use crate::constraints::kit::point_set::{PointSet, Primitive, one_set};
+use crate::constraints::kit::vertex_set::centred_view;
 
 /// Name in scene files.
 const KIND: &str = "line";
 
 
-/// The line constraint on a set of vertices.
-#[derive(Debug, Clone)]
-pub struct Line {
-    vertices: Box<[u32]>,
-}
+/// The line constraint on a set of vertices (k ≥ 2, distinct): [`PointSet::new`] keeps them
+/// collinear, `None` with fewer than 2.
+pub type Line = PointSet<Collinear>;
 
-impl Line {
-    /// Keeps `vertices` (k ≥ 2, distinct) collinear; `None` with fewer than 2.
-    pub fn new(vertices: Vec<u32>) -> Option<Self> {
-        (vertices.len() >= 2).then(|| Line { vertices: vertices.into() })
-    }
-}
+/// The line's primitive: centred collinear configurations, projected by PCA.
+#[derive(Debug, Clone, Copy)]
+pub struct Collinear;
 
-impl Constraint for Line {
-    fn kind(&self) -> &'static str {
-        KIND
-    }
-    fn vertices(&self) -> &[u32] {
-        &self.vertices
-    }
-    fn element_weight(&self) -> f64 {
-        1.0
-    }
-    fn num_rows(&self) -> usize {
-        self.vertices.len()
-    }
-    fn rows(&self, sink: &mut RowSink) {
-        centred_rows(&self.vertices, sink);
-    }
-    fn project(&self, q: &[DVec3], out: &mut [DVec3]) {
-        let d = centred(&self.vertices, q);
-        let (mean, _, axes) = sets::principal_axes(&d);
+impl Primitive for Collinear {
+    const KIND: &'static str = KIND;
+    const MIN_VERTICES: usize = 2;
+
+    fn project(d: &[DVec3], out: &mut [DVec3]) {
+        let (mean, _, axes) = sets::principal_axes(d);
         let u = axes[0];
-        for (o, &x) in out.iter_mut().zip(&d) {
+        for (o, &x) in out.iter_mut().zip(d) {
             *o = (x - mean).dot(u) * u;
         }
-        to_row_frame(&self.vertices, q, out);
     }
     /// √(‖Σ p_i‖²/k + σ₂² + σ₃²), σ the singular values of p about its centroid: the exact
     /// distance of p from the centred collinear configurations.
-    fn set_residual(&self, p: &[DVec3]) -> f64 {
+    fn set_residual(p: &[DVec3]) -> f64 {
         let p = centred_view(p);
         let (_, sigma, _) = sets::principal_axes(&p);
         (sets::centroid_offset(&p).powi(2) + sigma[1] * sigma[1] + sigma[2] * sigma[2]).sqrt()
@@ -107,10 +89,7 @@ impl ConstraintType for LineType {
         &INFO
     }
     fn build(&self, ctx: &BuildContext, _params: &mut Params) -> Result<Vec<Box<dyn Constraint>>, ConstraintError> {
-        let vertices = vertex_set(ctx, KIND, 2, "a line needs two points")?;
-        let line = Line::new(vertices)
-            .ok_or_else(|| ConstraintError::Invalid { kind: KIND, problem: "needs at least 2 vertices".into() })?;
-        Ok(vec![Box::new(line)])
+        one_set::<Collinear>(ctx, "a line needs two points")
     }
 }
 
@@ -118,16 +97,11 @@ impl ConstraintType for LineType {
 mod tests {
     #![allow(clippy::unwrap_used, clippy::expect_used)]
     use super::*;
+    use crate::constraints::contract::RowSink;
     use crate::constraints::kit::vertex_set::DENSE_SET_MAX;
-    use crate::constraints::kit::test_util::{Rng, dist2};
+    use crate::constraints::kit::test_util::{Rng, dist2, project};
     use crate::constraints::{Selection, build_constraints};
     use crate::geometry::{RestGeometry, WorkingFrame};
-
-    fn project(c: &dyn Constraint, q: &[DVec3]) -> Vec<DVec3> {
-        let mut out = vec![DVec3::ZERO; c.num_rows()];
-        c.project(q, &mut out);
-        out
-    }
 
     /// Singular values of the centred points by nalgebra (descending).
     fn nalgebra_sigma(p: &[DVec3]) -> Vec<f64> {

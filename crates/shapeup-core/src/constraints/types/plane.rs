@@ -25,62 +25,43 @@
 //! read (its quads and n-gons, not their triangles, which are always planar; faces that are
 //! triangles are skipped), or one over the whole selection.
 
-use crate::constraints::contract::{TypeInfo, BuildContext, Constraint, ConstraintType, RowSink};
+use crate::constraints::contract::{BuildContext, Constraint, ConstraintType, TypeInfo};
 use crate::constraints::error::ConstraintError;
 use crate::constraints::kit::sets;
-use crate::constraints::kit::build::non_empty;
-use crate::constraints::kit::vertex_set::{centred, centred_rows, centred_view, to_row_frame, vertex_set};
+use crate::constraints::kit::point_set::{PointSet, Primitive, faces_or_set};
+use crate::constraints::kit::vertex_set::centred_view;
 use crate::constraints::params::Params;
 use crate::constraints::selection::Element;
 use glam::DVec3;
-use crate::constraints::kit::faces::{WHOLE_SELECTION, selected_faces};
+use crate::constraints::kit::faces::WHOLE_SELECTION;
 
 /// Name in scene files.
 const KIND: &str = "plane";
 
 
-/// The plane constraint on a face's corners or a vertex set.
-#[derive(Debug, Clone)]
-pub struct Plane {
-    vertices: Box<[u32]>,
-}
+/// The plane constraint on a face's corners or a vertex set (k ≥ 3, distinct):
+/// [`PointSet::new`] keeps them coplanar, `None` with fewer than 3.
+pub type Plane = PointSet<Coplanar>;
 
-impl Plane {
-    /// Keeps `vertices` (k ≥ 3, distinct) coplanar; `None` with fewer than 3.
-    pub fn new(vertices: Vec<u32>) -> Option<Self> {
-        (vertices.len() >= 3).then(|| Plane { vertices: vertices.into() })
-    }
-}
+/// The plane's primitive: centred coplanar configurations, projected by PCA.
+#[derive(Debug, Clone, Copy)]
+pub struct Coplanar;
 
-impl Constraint for Plane {
-    fn kind(&self) -> &'static str {
-        KIND
-    }
-    fn vertices(&self) -> &[u32] {
-        &self.vertices
-    }
-    fn element_weight(&self) -> f64 {
-        1.0
-    }
-    fn num_rows(&self) -> usize {
-        self.vertices.len()
-    }
-    fn rows(&self, sink: &mut RowSink) {
-        centred_rows(&self.vertices, sink);
-    }
-    fn project(&self, q: &[DVec3], out: &mut [DVec3]) {
-        let d = centred(&self.vertices, q);
-        let (mean, _, axes) = sets::principal_axes(&d);
+impl Primitive for Coplanar {
+    const KIND: &'static str = KIND;
+    const MIN_VERTICES: usize = 3;
+
+    fn project(d: &[DVec3], out: &mut [DVec3]) {
+        let (mean, _, axes) = sets::principal_axes(d);
         let n = axes[2];
-        for (o, &x) in out.iter_mut().zip(&d) {
+        for (o, &x) in out.iter_mut().zip(d) {
             let y = x - mean;
             *o = y - y.dot(n) * n;
         }
-        to_row_frame(&self.vertices, q, out);
     }
     /// √(‖Σ p_i‖²/k + σ₃²), σ₃ the smallest singular value of p about its centroid: the exact
     /// distance of p from the centred coplanar configurations.
-    fn set_residual(&self, p: &[DVec3]) -> f64 {
+    fn set_residual(p: &[DVec3]) -> f64 {
         let p = centred_view(p);
         let (_, sigma, _) = sets::principal_axes(&p);
         (sets::centroid_offset(&p).powi(2) + sigma[2] * sigma[2]).sqrt()
@@ -88,7 +69,7 @@ impl Constraint for Plane {
     /// The planarity error: the largest distance of a corner of C q from the best-fit plane,
     /// max_i |(d_i − d̄)·n| (ShapeUp §6 and the architectural literature report this, over the
     /// mean edge length).
-    fn violation(&self, cq: &[DVec3]) -> f64 {
+    fn violation(cq: &[DVec3]) -> f64 {
         let (mean, _, axes) = sets::principal_axes(cq);
         cq.iter().map(|&d| (d - mean).dot(axes[2]).abs()).fold(0.0, f64::max)
     }
@@ -115,13 +96,7 @@ impl ConstraintType for PlaneType {
         &INFO
     }
     fn build(&self, ctx: &BuildContext, params: &mut Params) -> Result<Vec<Box<dyn Constraint>>, ConstraintError> {
-        let sets: Vec<Vec<u32>> = if params.flag(KIND, &WHOLE_SELECTION)? {
-            vec![vertex_set(ctx, KIND, 3, "three points always lie on a plane")?]
-        } else {
-            selected_faces(ctx, KIND, "which are always planar")?
-        };
-        let built = sets.into_iter().filter_map(Plane::new).map(|c| Box::new(c) as Box<dyn Constraint>).collect();
-        non_empty(built, KIND, "faces of 4 or more corners")
+        faces_or_set::<Coplanar>(ctx, params, "three points always lie on a plane", "which are always planar")
     }
 }
 
@@ -129,16 +104,10 @@ impl ConstraintType for PlaneType {
 mod tests {
     #![allow(clippy::unwrap_used, clippy::expect_used)]
     use super::*;
-    use crate::constraints::kit::test_util::{Rng, dist2};
+    use crate::constraints::kit::test_util::{Rng, dist2, project};
     use crate::constraints::{Selection, build_constraints};
     use crate::geometry::{RestGeometry, WorkingFrame};
     use crate::mesh::{Mesh, Polygons};
-
-    fn project(c: &dyn Constraint, q: &[DVec3]) -> Vec<DVec3> {
-        let mut out = vec![DVec3::ZERO; c.num_rows()];
-        c.project(q, &mut out);
-        out
-    }
 
     /// Smallest singular value of the centred points, by nalgebra.
     fn nalgebra_smallest(p: &[DVec3]) -> f64 {

@@ -12,14 +12,15 @@
 //! The formulas, the starts, the schedule, the sources (ShapeUp §4, ShapeOp `SphereConstraint`)
 //! and the choices left open are in the math reference, docs/math.md, "sphere".
 
-use crate::constraints::contract::{TypeInfo, BuildContext, Constraint, ConstraintType, RowSink};
+use crate::constraints::contract::{BuildContext, Constraint, ConstraintType, TypeInfo};
 use crate::constraints::error::ConstraintError;
 use crate::constraints::kit::sets;
-use crate::constraints::kit::vertex_set::{centred, centred_rows, centred_view, recentre, to_row_frame, vertex_set};
+use crate::constraints::kit::point_set::{PointSet, Primitive, one_set, project_at_unit_scale};
+use crate::constraints::kit::vertex_set::centred_view;
 use crate::constraints::params::Params;
 use crate::constraints::selection::Element;
 use glam::{DQuat, DVec3};
-use crate::constraints::kit::fit::{Model, best_fit, distance, distance_in, from_algebraic, rms_radius};
+use crate::constraints::kit::fit::{Model, best_fit, distance, distance_in, from_algebraic};
 use crate::linalg::jet::{Scalar, V3};
 use crate::linalg::small::linear_least_squares;
 
@@ -73,58 +74,31 @@ fn fit_sphere(points: &[DVec3]) -> (SphereFit, f64) {
     best_fit(starts, points).unwrap_or((plane, f64::INFINITY))
 }
 
-/// The sphere constraint on a vertex set.
-#[derive(Debug, Clone)]
-pub struct Sphere {
-    vertices: Box<[u32]>,
-}
+/// The sphere constraint on a vertex set (k ≥ 4, distinct): [`PointSet::new`] keeps them on one
+/// sphere, `None` with fewer than 4.
+pub type Sphere = PointSet<Cospherical>;
 
-impl Sphere {
-    /// Keeps `vertices` (k ≥ 4, distinct) on one sphere; `None` with fewer than 4.
-    pub fn new(vertices: Vec<u32>) -> Option<Self> {
-        (vertices.len() >= 4).then(|| Sphere { vertices: vertices.into() })
-    }
-}
+/// The sphere's primitive: centred cospherical configurations (and coplanar ones, their
+/// closure), projected onto the geometric best-fit sphere.
+#[derive(Debug, Clone, Copy)]
+pub struct Cospherical;
 
-impl Constraint for Sphere {
-    fn kind(&self) -> &'static str {
-        KIND
-    }
-    fn vertices(&self) -> &[u32] {
-        &self.vertices
-    }
-    fn element_weight(&self) -> f64 {
-        1.0
-    }
-    fn num_rows(&self) -> usize {
-        self.vertices.len()
-    }
-    fn rows(&self, sink: &mut RowSink) {
-        centred_rows(&self.vertices, sink);
-    }
-    fn project(&self, q: &[DVec3], out: &mut [DVec3]) {
-        let d = centred(&self.vertices, q);
-        let (mean, scale) = rms_radius(&d);
-        if !(scale > 0.0 && scale.is_finite()) {
-            // Coincident points are on every sphere through them (non-finite input: as given).
-            for (o, &x) in out.iter_mut().zip(&d) {
-                *o = x - mean;
+impl Primitive for Cospherical {
+    const KIND: &'static str = KIND;
+    const MIN_VERTICES: usize = 4;
+
+    fn project(d: &[DVec3], out: &mut [DVec3]) {
+        project_at_unit_scale(d, out, |points, out| {
+            let (fit, _) = fit_sphere(points);
+            for (o, &x) in out.iter_mut().zip(points) {
+                let dist = distance(x - fit.s, fit.n, fit.kappa);
+                *o = x - dist.d * dist.direction(fit.n);
             }
-            to_row_frame(&self.vertices, q, out);
-            return;
-        }
-        let points: Vec<DVec3> = d.iter().map(|&x| (x - mean) / scale).collect();
-        let (fit, _) = fit_sphere(&points);
-        for (o, &x) in out.iter_mut().zip(&points) {
-            let dist = distance(x - fit.s, fit.n, fit.kappa);
-            *o = (x - dist.d * dist.direction(fit.n)) * scale;
-        }
-        recentre(out);
-        to_row_frame(&self.vertices, q, out);
+        });
     }
     /// √(‖Σ p_i‖²/k + σ₅²), σ₅ the smallest singular value of the lifted rows
     /// (‖y_i‖²/L, y_i, L): zero exactly on one sphere (or plane), centred.
-    fn set_residual(&self, p: &[DVec3]) -> f64 {
+    fn set_residual(p: &[DVec3]) -> f64 {
         let p = centred_view(p);
         let sigma = sets::lifted_singular_values(&p);
         (sets::centroid_offset(&p).powi(2) + sigma[4] * sigma[4]).sqrt()
@@ -152,10 +126,7 @@ impl ConstraintType for SphereType {
         &INFO
     }
     fn build(&self, ctx: &BuildContext, _params: &mut Params) -> Result<Vec<Box<dyn Constraint>>, ConstraintError> {
-        let vertices = vertex_set(ctx, KIND, 4, "four points always lie on a sphere or a plane")?;
-        let sphere = Sphere::new(vertices)
-            .ok_or_else(|| ConstraintError::Invalid { kind: KIND, problem: "needs at least 4 vertices".into() })?;
-        Ok(vec![Box::new(sphere)])
+        one_set::<Cospherical>(ctx, "four points always lie on a sphere or a plane")
     }
 }
 
@@ -164,15 +135,10 @@ pub(crate) mod tests {
     #![allow(clippy::unwrap_used, clippy::expect_used)]
     use super::*;
     use crate::constraints::kit::fit::tests::check_derivatives;
-    use crate::constraints::kit::test_util::{Rng, dist2};
+    use crate::constraints::kit::fit::rms_radius;
+    use crate::constraints::kit::test_util::{Rng, dist2, project};
     use crate::constraints::{Selection, build_constraints};
     use crate::geometry::{RestGeometry, WorkingFrame};
-
-    fn project(c: &dyn Constraint, q: &[DVec3]) -> Vec<DVec3> {
-        let mut out = vec![DVec3::ZERO; c.num_rows()];
-        c.project(q, &mut out);
-        out
-    }
 
     /// Σ_i (‖x_i − c‖ − r)²: the squared distance of the points from the sphere (c, r).
     fn sphere_cost(points: &[DVec3], c: DVec3, r: f64) -> f64 {
