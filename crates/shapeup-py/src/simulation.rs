@@ -5,14 +5,13 @@ use crate::errors::{solve_error, value_error};
 use crate::groups::{add_entry, held, remove, set_targets, set_weight};
 use crate::mesh::PyMesh;
 use crate::signals::Interrupt;
-use glam::DVec3;
 use numpy::{PyArray2, PyReadonlyArray2};
 use pyo3::prelude::*;
-use shapeup_core::dynamics::{DynamicsParams, Simulation as CoreSimulation};
+use shapeup_core::dynamics::Simulation as CoreSimulation;
 use shapeup_core::geometry::RestGeometry;
 use shapeup_core::mesh::Mesh as CoreMesh;
 use shapeup_core::scene::lumped_masses;
-use shapeup_core::solver::{SolveError, SolverParams, System};
+use shapeup_core::solver::{SolveError, System};
 
 /// A Projective Dynamics simulation on one mesh (user coordinates and units).
 #[pyclass(name = "_Simulation", module = "shapeup._shapeup")]
@@ -35,22 +34,10 @@ impl PySimulation {
             return Err(value_error(format!("density must be a finite number > 0, found {}", settings.density)));
         }
         let masses = lumped_masses(&rest, settings.density);
-        let solver = SolverParams {
-            acceleration: settings.acceleration,
-            anderson_window: settings.anderson_window,
-            lbfgs_memory: settings.lbfgs_memory,
-            ..SolverParams::default()
-        };
-        let dynamics = DynamicsParams {
-            time_step: settings.time_step,
-            stiffness: settings.stiffness,
-            damping: settings.damping,
-            gravity: DVec3::from_array(settings.gravity),
-            iterations: settings.iterations,
-            tolerance: settings.tolerance,
-        };
+        // The scene's mapping of the `[solver]` keys, in the mesh's own units (scale 1).
+        let dynamics = settings.dynamics_params(1.0);
         dynamics.validate().map_err(value_error)?;
-        let system = System::new(mesh.mesh.num_vertices(), solver);
+        let system = System::new(mesh.mesh.num_vertices(), settings.solver_params());
         let simulation = CoreSimulation::new(system, masses, rest.positions.clone(), dynamics).map_err(value_error)?;
         Ok(PySimulation { mesh: mesh.mesh.clone(), rest, simulation })
     }
