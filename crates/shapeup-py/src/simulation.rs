@@ -42,8 +42,11 @@ impl PySimulation {
         Ok(PySimulation { mesh: mesh.mesh.clone(), rest, simulation })
     }
 
-    fn add(&mut self, entry: &str) -> PyResult<(u32, String, String, usize)> {
-        add_entry(self.simulation.system_mut(), &self.mesh, &self.rest, entry)
+    /// Adds a group from a scene entry and its selection (JSON text each); returns (id, name,
+    /// type, constraints).
+    #[pyo3(signature = (entry, selection="{}"))]
+    fn add(&mut self, entry: &str, selection: &str) -> PyResult<(u32, String, String, usize)> {
+        add_entry(self.simulation.system_mut(), &self.mesh, &self.rest, entry, selection)
     }
 
     fn held(&self, id: u32) -> PyResult<Vec<u32>> {
