@@ -30,13 +30,9 @@ impl PySimulation {
         let settings: shapeup_core::scene::SolverSettings =
             serde_json::from_str(params).map_err(|e| value_error(format!("bad simulation settings: {e}")))?;
         let rest = RestGeometry::of_mesh(mesh.mesh.positions.clone(), &mesh.mesh);
-        if !(settings.density.is_finite() && settings.density > 0.0) {
-            return Err(value_error(format!("density must be a finite number > 0, found {}", settings.density)));
-        }
+        // As a scene's `[solver]` table starts a simulation, in the mesh's own units (scale 1).
+        let dynamics = settings.checked_dynamics_params(1.0).map_err(value_error)?;
         let masses = lumped_masses(&rest, settings.density);
-        // The scene's mapping of the `[solver]` keys, in the mesh's own units (scale 1).
-        let dynamics = settings.dynamics_params(1.0);
-        dynamics.validate().map_err(value_error)?;
         let system = System::new(mesh.mesh.num_vertices(), settings.solver_params());
         let simulation = CoreSimulation::new(system, masses, rest.positions.clone(), dynamics).map_err(value_error)?;
         Ok(PySimulation { mesh: mesh.mesh.clone(), rest, simulation })
