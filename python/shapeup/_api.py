@@ -5,7 +5,7 @@ from ._checks import PathLike, _count, _indices, _json, _polygons, _tetrahedra, 
 from ._shapeup import SolveFailed
 from .groups import Group, GroupRef, _Groups
 from .mesh import Mesh, _mesh_of, read_mesh, write_mesh
-from .scene import Scene, _apply_overrides, _read_scene_dict
+from .scene import Scene
 from .simulation import Simulation
 from .solver import Solver
 from .types import ConstraintType, _types_doc, constraint_types

@@ -111,6 +111,36 @@ def _json(value: Any, key: str) -> Any:
     raise TypeError(f"{key}: cannot pass a {type(value).__name__} (use numbers, booleans, lists or dicts)")
 
 
+def _number(value: Any, name: str) -> float:
+    """``value`` as a float; TypeError naming ``name`` when it is not a number. (Its range is
+    the core's to check.)"""
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name} must be a number, found {value!r}") from None
+
+
+def _name(value: Any) -> str:
+    """A group name: TypeError unless it is a string. (Whether it is free is the core's to
+    say.)"""
+    if not isinstance(value, str):
+        raise TypeError(f"name must be a string, found {value!r}")
+    return value
+
+
+def _selection(selection: Any, n: int) -> np.ndarray:
+    """A vertex selection given as an array: int64 indices from an index array or a boolean
+    mask of length ``n``. ValueError for a wrong shape, IndexError out of range."""
+    a = np.asarray(selection)
+    if a.dtype == np.bool_:
+        if a.shape != (n,):
+            raise ValueError(f"a boolean selection must have shape ({n},), found {a.shape}")
+        a = np.flatnonzero(a)
+    elif a.ndim != 1:
+        raise ValueError(f"selection must be a 1-D array of vertex indices, found shape {a.shape}")
+    return _indices(a, n, "selection")
+
+
 def _count(value: Any, name: str) -> int:
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
         raise TypeError(f"{name} must be an integer, found {value!r}")

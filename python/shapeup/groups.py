@@ -4,13 +4,12 @@
 from __future__ import annotations
 
 import json
-import math
 from dataclasses import dataclass
 from typing import Any, Mapping, Union
 
 import numpy as np
 
-from ._checks import _indices, _json, _vertices
+from ._checks import _indices, _json, _name, _number, _selection, _vertices
 from .types import _types_doc
 
 GroupRef = Union["Group", int, str]
@@ -28,44 +27,6 @@ class Group:
 
     def __int__(self) -> int:
         return self.id
-
-
-# ---------------------------------------------------------------------------------------------
-# What the core also decides, kept here until shapeup-core offers it (then delete this block):
-# - the selection keys of a scene entry (the scene parser knows them as well);
-# - names: a given name must be new, an unnamed group whose type names another group already
-#   gets "type_2", "type_3"… (scene files and the editor name unnamed groups otherwise);
-# - a weight must be finite and >= 0 (the scene parser and System::set_multiplier check it too).
-
-_SELECTION_KEYS = ("vertices", "faces", "box", "sphere")
-
-
-def _group_name(type: str, name: Any, taken: list[str]) -> str | None:
-    """The name a new group of ``type`` asks for: ``name`` when given (a string no group in
-    ``taken`` has), else ``type_2``, ``type_3``… when a group is named ``type`` already, else
-    None (the core names it after its type)."""
-    if name is not None:
-        if not isinstance(name, str):
-            raise TypeError(f"name must be a string, found {name!r}")
-        if name in taken:
-            raise ValueError(f"a group named {name!r} exists already")
-        return name
-    if type in taken:
-        k = 2
-        while f"{type}_{k}" in taken:
-            k += 1
-        return f"{type}_{k}"
-    return None
-
-
-def _checked_weight(w: float, weight: Any) -> float:
-    """``w`` (``weight`` as a float) when finite and >= 0, else ValueError quoting ``weight``."""
-    if not (math.isfinite(w) and w >= 0):
-        raise ValueError(f"weight must be a finite number >= 0, found {weight!r}")
-    return w
-
-
-# ---------------------------------------------------------------------------------------------
 
 
 class _Groups:
@@ -98,51 +59,39 @@ class _Groups:
         or ``hard=True``.
 
         ValueError for an unknown type or option (naming it), a bad option value, a weight
-        that is negative or not finite, or a selection the type cannot act on; IndexError for
-        an index out of range.
+        that is negative or not finite, a name another group has, or a selection the type
+        cannot act on; IndexError for an index out of range; TypeError for a name that is not
+        a string or a weight that is not a number.
 
         Types:
 {types}
         """
+        # The entry in scene keys, the selection apart (the native side takes only selection
+        # keys from it); the core names the group (``type``, ``type_2``… after the groups
+        # already here), checks the weight and parses the rest, as for a scene file.
         entry: dict[str, Any] = {"type": type}
-        group_name = _group_name(type, name, [g.name for g in self._groups.values()])
-        if group_name is not None:
-            entry["name"] = group_name
+        if name is not None:
+            entry["name"] = _name(name)
         if weight is not None:
-            try:
-                w = float(weight)
-            except (TypeError, ValueError):
-                raise TypeError(f"weight must be a number, found {weight!r}") from None
-            entry["weight"] = _checked_weight(w, weight)
-        if selection is not None:
-            if isinstance(selection, Mapping):
-                for key, value in selection.items():
-                    if key not in _SELECTION_KEYS:
-                        raise ValueError(f"unknown selection key {key!r} (one of: {', '.join(_SELECTION_KEYS)})")
-                    if key == "vertices":
-                        value = _indices(value, self._n, "selection")
-                    entry[key] = _json(value, key)
-            else:
-                a = np.asarray(selection)
-                if a.dtype == np.bool_:
-                    if a.shape != (self._n,):
-                        raise ValueError(f"a boolean selection must have shape ({self._n},), found {a.shape}")
-                    a = np.flatnonzero(a)
-                elif a.ndim != 1:
-                    raise ValueError(f"selection must be a 1-D array of vertex indices, found shape {a.shape}")
-                entry["vertices"] = _indices(a, self._n, "selection").tolist()
+            entry["weight"] = _json(_number(weight, "weight"), "weight")
+        picked: dict[str, Any] = {}
+        if isinstance(selection, Mapping):
+            for key, value in selection.items():
+                if key == "vertices":
+                    value = _indices(value, self._n, "selection")
+                picked[str(key)] = _json(value, str(key))
+        elif selection is not None:
+            picked["vertices"] = _selection(selection, self._n).tolist()
         if "spin" in options:
             raise ValueError(
                 "spin turns scene handles in `shapeup simulate`; from Python, move the targets each "
                 "step with set_targets(group, targets)"
             )
         for key, value in options.items():
-            if key in entry:
-                raise ValueError(f"{key} given twice")
             if key == "vertices":
                 value = _indices(value, self._n, "vertices")
             entry[key] = _json(value, key)
-        gid, gname, gtype, count = self._native.add(json.dumps(entry))
+        gid, gname, gtype, count = self._native.add(json.dumps(entry), json.dumps(picked))
         group = Group(gid, gname, gtype, count)
         self._groups[gid] = group
         return group
@@ -177,8 +126,7 @@ class _Groups:
 
     def set_weight(self, group: GroupRef, weight: float) -> None:
         """Changes a group's multiplier (≥ 0; refactors the matrix on the next solve)."""
-        w = _checked_weight(float(weight), weight)
-        self._native.set_weight(self._id(group), w)
+        self._native.set_weight(self._id(group), float(weight))
 
     def remove(self, group: GroupRef) -> None:
         """Removes a group."""

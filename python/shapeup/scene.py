@@ -13,49 +13,6 @@ from . import _shapeup
 from ._checks import PathLike, _count, _json
 
 
-# ---------------------------------------------------------------------------------------------
-# A second scene reader, kept until shapeup-core applies dotted overrides itself (then delete
-# this block and pass the overrides to Rust): with overrides, the file is read here (TOML or
-# JSON, UTF-8 with or without a BOM), changed, and handed to Rust as JSON text.
-
-
-def _read_scene_dict(path: Path) -> dict[str, Any]:
-    text = path.read_text(encoding="utf-8-sig")
-    if path.suffix.lower() == ".json":
-        return json.loads(text)
-    try:
-        import tomllib
-    except ModuleNotFoundError:  # Python 3.10
-        import tomli as tomllib  # type: ignore[no-redef]
-    return tomllib.loads(text)
-
-
-def _apply_overrides(raw: dict[str, Any], overrides: Mapping[str, Any]) -> dict[str, Any]:
-    """Dotted keys into the scene: ``"solver.iterations"``, ``"constraints.1.weight"``,
-    ``"output.path"``."""
-    for dotted, value in overrides.items():
-        parts = dotted.split(".")
-        node: Any = raw
-        for i, part in enumerate(parts[:-1]):
-            if isinstance(node, list):
-                if not part.isdigit() or int(part) >= len(node):
-                    raise KeyError(f"override {dotted!r}: {'.'.join(parts[: i + 1])} is not an entry of the scene")
-                node = node[int(part)]
-            else:
-                node = node.setdefault(part, {})
-        last = parts[-1]
-        if isinstance(node, list):
-            if not last.isdigit() or int(last) >= len(node):
-                raise KeyError(f"override {dotted!r}: no such entry")
-            node[int(last)] = _json(value, dotted)
-        else:
-            node[last] = _json(value, dotted)
-    return raw
-
-
-# ---------------------------------------------------------------------------------------------
-
-
 class Scene:
     """A scene file (TOML or JSON: a mesh, solver settings, constraint groups; see
     ``docs/scenes-and-cli.md``), run exactly as ``shapeup deform`` / ``shapeup simulate``
@@ -70,20 +27,19 @@ class Scene:
         parameter sweeps, e.g. ``{"solver.iterations": 50, "constraints.0.weight": 3.0,
         "output.path": "out/run3.obj"}`` (paths relative to the scene file).
 
-        FileNotFoundError when the scene is missing; ValueError naming the file and the entry
-        (unknown key, bad value, bad selection) otherwise."""
+        The file is read and the overrides applied by the core, as ``shapeup deform`` and
+        ``shapeup simulate`` read scenes (UTF-8 or UTF-16 text). FileNotFoundError when the
+        scene is missing; KeyError for an override whose key names no entry (``"constraints.9.weight"``
+        with fewer groups); ValueError naming the file and the entry (unknown key, bad value,
+        bad selection) otherwise."""
         # Absolute, so that a later os.chdir does not move the scene's mesh.
         path = Path(os.path.abspath(os.fspath(path)))
         if not overrides:
             return Scene(_shapeup._Scene(str(path)))
-        try:
-            raw = _read_scene_dict(path)
-        except FileNotFoundError:
-            raise FileNotFoundError(f"cannot read scene {path}: no such file") from None
-        except (ValueError, UnicodeDecodeError) as e:
-            raise ValueError(f"{path}: {e}") from None
-        raw = _apply_overrides(raw, overrides)
-        return Scene(_shapeup._Scene(str(path), json.dumps(raw)))
+        # Applied by the core, to the file as it reads it (any encoding it reads): a list of
+        # [key, value] pairs, in the order given.
+        pairs = [[str(key), _json(value, str(key))] for key, value in overrides.items()]
+        return Scene(_shapeup._Scene(str(path), json.dumps(pairs)))
 
     @property
     def path(self) -> Path:

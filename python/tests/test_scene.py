@@ -57,6 +57,23 @@ def test_overrides(tmp_path):
         shapeup.Scene.load(scene, {"solver.iteratons": 1})
 
 
+def test_a_utf16_scene_loads_with_overrides(tmp_path):
+    # The core reads the file and applies the overrides: a UTF-16 file (with its byte-order
+    # mark, as Windows editors save "Unicode") loads with overrides as it does without.
+    text = (EXAMPLES / "bunny-springs.toml").read_text(encoding="utf-8")
+    text = text.replace('"../data/stanford-bunny.obj"', f'"{(EXAMPLES.parent / "data" / "stanford-bunny.obj").as_posix()}"')
+    scene = tmp_path / "utf16.toml"
+    scene.write_bytes(text.encode("utf-16"))
+    assert scene.read_bytes()[:2] in (b"\xff\xfe", b"\xfe\xff")
+    plain = shapeup.Scene.load(scene)
+    s = shapeup.Scene.load(scene, {"solver.iterations": 3, "constraints.0.weight": 2.5})
+    assert "iterations = 3" in s.to_toml() and "weight = 2.5" in s.to_toml()
+    assert "iterations = 50" in plain.to_toml()
+    _, report = s.deform()
+    assert report["iterations"] == 3
+    assert report["groups"][0]["weight"] == 2.5
+
+
 def test_nothing_is_written_when_a_result_cannot_be(tmp_path):
     scene = shapeup.Scene.load(EXAMPLES / "bunny-springs.toml")
     out = tmp_path / "left.obj"

@@ -1,5 +1,5 @@
-//! Errors of the core as Python exceptions: `SolveFailed`, and which `OSError`, `FileNotFoundError`
-//! or `ValueError` each core error becomes.
+//! Errors of the core as Python exceptions: `SolveFailed`, and which `OSError`, `FileNotFoundError`,
+//! `KeyError` (a scene override naming no entry) or `ValueError` each core error becomes.
 
 use pyo3::create_exception;
 use pyo3::exceptions::{PyException, PyOSError, PyValueError};
@@ -49,6 +49,8 @@ pub(crate) fn scene_error(e: SceneError) -> PyErr {
             pyo3::exceptions::PyFileNotFoundError::new_err(e.to_string())
         }
         SceneError::Solve { .. } => SolveFailed::new_err(e.to_string()),
+        // A dotted override that names no entry: a missing key, as a dict lookup would say.
+        SceneError::Override { .. } => pyo3::exceptions::PyKeyError::new_err(e.to_string()),
         _ => value_error(e),
     }
 }

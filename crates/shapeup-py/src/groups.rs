@@ -1,29 +1,52 @@
 //! The group calls `_Solver` and `_Simulation` share. Groups come in as JSON text in the scene
-//! contract's keys (`type`, `name`, `weight`, one selection key, targets, options), so that the
-//! Python door and scene files share one parser ([`GroupSpec::from_entry`]) and one builder
+//! contract's keys (`type`, `name`, `weight`, targets, options; the selection as its own object
+//! of selection keys), so that the Python door and scene files share one parser, one naming
+//! rule and one weight check ([`GroupSpec::from_entry_among`]) and one builder
 //! ([`GroupSpec::build`]).
 
 use crate::convert::points;
 use crate::errors::value_error;
 use numpy::PyReadonlyArray2;
 use pyo3::prelude::*;
+use serde_json::{Map, Value};
 use shapeup_core::constraints::held_vertices;
 use shapeup_core::geometry::{RestGeometry, WorkingFrame};
 use shapeup_core::mesh::Mesh as CoreMesh;
-use shapeup_core::scene::GroupSpec;
+use shapeup_core::scene::{GroupSpec, SelectionSpec};
 use shapeup_core::solver::{GroupId, System};
 
-/// Adds a group from one entry (JSON text in scene keys: the scene parser and builder) on
-/// `mesh` / `rest` (user coordinates) to `system`; returns (id, name, type, constraints).
+/// Adds a group to `system` on `mesh` / `rest` (user coordinates) from `entry` (JSON text in
+/// scene keys) and `selection` (JSON text: an object holding at most the selection keys,
+/// vertices, faces, box or sphere; `{}` for every vertex). The group is named among the groups
+/// already in `system`: `type`, else `type_2`, `type_3`…; a given name must be new. Returns
+/// (id, name, type, constraints).
+///
+/// # Errors
+/// `ValueError` for bad JSON, a key of `selection` that selects nothing or that `entry` gives
+/// too, and whatever the scene parser and builder refuse (naming the key).
 pub(crate) fn add_entry(
     system: &mut System,
     mesh: &CoreMesh,
     rest: &RestGeometry,
     entry: &str,
+    selection: &str,
 ) -> PyResult<(u32, String, String, usize)> {
-    let map: serde_json::Map<String, serde_json::Value> =
+    let mut map: Map<String, Value> =
         serde_json::from_str(entry).map_err(|e| value_error(format!("bad group entry: {e}")))?;
-    let spec = GroupSpec::from_entry(map).map_err(value_error)?;
+    let selection: Map<String, Value> =
+        serde_json::from_str(selection).map_err(|e| value_error(format!("bad group selection: {e}")))?;
+    for (key, value) in selection {
+        if !SelectionSpec::KEYS.contains(&key.as_str()) {
+            let keys = SelectionSpec::KEYS.join(", ");
+            return Err(value_error(format!("unknown selection key '{key}' (one of: {keys})")));
+        }
+        if map.contains_key(&key) {
+            return Err(value_error(format!("{key} given twice")));
+        }
+        map.insert(key, value);
+    }
+    let existing: Vec<&str> = system.groups().map(|(_, g)| g.name.as_str()).collect();
+    let spec = GroupSpec::from_entry_among(map, &existing).map_err(value_error)?;
     let group = spec.build(mesh, rest, &WorkingFrame::IDENTITY).map_err(value_error)?;
     let (name, kind, count) = (group.name.clone(), group.kind.to_string(), group.constraints.len());
     let id = system.add_group(group).map_err(value_error)?;

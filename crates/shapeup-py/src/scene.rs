@@ -1,18 +1,18 @@
 //! `_Scene`: a scene file, run as `shapeup deform` and `shapeup simulate` run it.
 
 use crate::convert::to_array;
-use crate::errors::{check_extension, check_folder, io_error, scene_error, solve_error, value_error};
+use crate::errors::{SolveFailed, check_extension, check_folder, io_error, scene_error, value_error};
 use crate::mesh::PyMesh;
-use crate::signals::{Interrupt, SIGNAL_CHECK};
+use crate::signals::Interrupt;
 use glam::DVec3;
 use numpy::PyArray2;
 use pyo3::exceptions::PyOSError;
 use pyo3::prelude::*;
-use shapeup_core::dynamics::Simulation as CoreSimulation;
 use shapeup_core::io::MESH_OUTPUT_EXTENSIONS;
 use shapeup_core::scene::frames::{FrameFormat, FrameWriter};
-use shapeup_core::scene::{Scene as CoreScene, SceneFormat, StepTotals};
-use std::path::{Path, PathBuf};
+use shapeup_core::scene::{RunError, Scene as CoreScene};
+use std::ops::ControlFlow;
+use std::path::PathBuf;
 use std::time::Instant;
 
 /// What `Scene.simulate` returns: the kept frames' positions, their numbers, the report.
@@ -26,19 +26,21 @@ pub(crate) struct PyScene {
 
 #[pymethods]
 impl PyScene {
-    /// Reads a scene file, or (with `text`) scene JSON text standing for that file (its
-    /// paths relative to the file's folder): a sweep's scene with overrides applied.
+    /// Reads a scene file; with `overrides` (JSON text: a list of `[dotted key, value]`
+    /// pairs), the core applies them to the file's entries before checking it
+    /// ([`CoreScene::from_file_with_overrides`]).
     #[new]
-    #[pyo3(signature = (path, text=None))]
-    fn new(path: PathBuf, text: Option<&str>) -> PyResult<Self> {
-        let scene = match text {
-            None => CoreScene::from_file(&path).map_err(scene_error)?,
+    #[pyo3(signature = (path, overrides=None))]
+    fn new(path: PathBuf, overrides: Option<&str>) -> PyResult<Self> {
+        let scene = match overrides {
+            None => CoreScene::from_file(&path),
             Some(text) => {
-                let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
-                CoreScene::parse(text, SceneFormat::Json, &path, base).map_err(scene_error)?
+                let overrides: Vec<(String, serde_json::Value)> =
+                    serde_json::from_str(text).map_err(|e| value_error(format!("bad scene overrides: {e}")))?;
+                CoreScene::from_file_with_overrides(&path, &overrides)
             }
         };
-        Ok(PyScene { scene })
+        Ok(PyScene { scene: scene.map_err(scene_error)? })
     }
 
     #[getter]
@@ -152,46 +154,39 @@ impl PyScene {
         let loaded = &loaded;
         let mut writer = output.as_deref().map(|dir| FrameWriter::new(loaded, dir, frames, format));
         let mut kept: Vec<(usize, Vec<DVec3>)> = Vec::new();
-        let mut keep = |k: usize, sim: &CoreSimulation, writer: &mut Option<FrameWriter<'_>>| -> PyResult<()> {
-            let system = sim.system();
-            let mesh = loaded.output_mesh(sim.positions(), false, |v| system.is_solved(v));
-            kept.push((k, mesh.positions));
-            if let Some(w) = writer {
-                w.write(k, sim).map_err(io_error)?;
-            }
-            Ok(())
-        };
-        keep(0, &run.simulation, &mut writer)?;
-        let mut last_check = Instant::now();
-        let mut totals = StepTotals::default();
-        for k in 1..=frames {
-            let step = py
-                .detach(|| run.step())
-                .map_err(|e| value_error(format!("{}: step {k} of {frames} failed: {e}", self.scene.file.display())))?;
-            totals.add(&step);
-            let energy = match step.energy {
-                Some(e) => e,
-                None => {
-                    let t = Instant::now();
-                    let e = py.detach(|| run.simulation.energy()).map_err(solve_error)?;
-                    totals.energy_seconds += t.elapsed().as_secs_f64();
-                    e
+        // The core's run of `shapeup simulate` without the GIL (Ctrl+C stops it between steps;
+        // the `KeyboardInterrupt` is returned after it stops). E after every step is recorded:
+        // the report is always returned.
+        let mut interrupt = Interrupt::new();
+        let result = py.detach(|| {
+            run.run(frames, every, true, |k, simulation, keep| -> PyResult<()> {
+                if keep {
+                    let system = simulation.system();
+                    let mesh = loaded.output_mesh(simulation.positions(), false, |v| system.is_solved(v));
+                    kept.push((k, mesh.positions));
+                    if let Some(w) = &mut writer {
+                        w.write(k, simulation).map_err(io_error)?;
+                    }
                 }
-            };
-            totals.energies.push(energy);
-            if k % every == 0 || k == frames {
-                keep(k, &run.simulation, &mut writer)?;
+                match (interrupt.poll(), interrupt.error.take()) {
+                    (ControlFlow::Break(()), Some(e)) => Err(e),
+                    _ => Ok(()),
+                }
+            })
+        });
+        let file = self.scene.file.display();
+        let result = result.map_err(|e| match e {
+            RunError::Step { step, source } => value_error(format!("{file}: step {step} of {frames} failed: {source}")),
+            RunError::Energy { step, source } => {
+                SolveFailed::new_err(format!("{file}: energy after step {step}: {source}"))
             }
-            if last_check.elapsed() >= SIGNAL_CHECK {
-                last_check = Instant::now();
-                py.check_signals()?;
-            }
-        }
-        if let Some(w) = &writer
-            && format == FrameFormat::Vtu
-        {
-            w.write_pvd().map_err(io_error)?;
-        }
+            RunError::Stopped(e) => e,
+        });
+        // VTU: the .pvd lists the frames written, also those before an error.
+        let totals = match &writer {
+            Some(w) => w.finish(result, io_error),
+            None => result,
+        }?;
         let mut warnings = loaded.warnings.clone();
         if let Some(w) = &mut writer {
             warnings.extend(w.warnings.take().unwrap_or_default());

@@ -7,7 +7,7 @@ use crate::mesh::PyMesh;
 use crate::signals::Interrupt;
 use numpy::{PyArray2, PyReadonlyArray2};
 use pyo3::prelude::*;
-use shapeup_core::dynamics::{DynamicsParams, Simulation as CoreSimulation};
+use shapeup_core::dynamics::Simulation as CoreSimulation;
 use shapeup_core::geometry::RestGeometry;
 use shapeup_core::mesh::Mesh as CoreMesh;
 use shapeup_core::scene::lumped_masses;
@@ -30,21 +30,19 @@ impl PySimulation {
         let settings: shapeup_core::scene::SolverSettings =
             serde_json::from_str(params).map_err(|e| value_error(format!("bad simulation settings: {e}")))?;
         let rest = RestGeometry::of_mesh(mesh.mesh.positions.clone(), &mesh.mesh);
-        if !(settings.density.is_finite() && settings.density > 0.0) {
-            return Err(value_error(format!("density must be a finite number > 0, found {}", settings.density)));
-        }
+        // As a scene's `[solver]` table starts a simulation, in the mesh's own units (scale 1).
+        let dynamics = settings.checked_dynamics_params(1.0).map_err(value_error)?;
         let masses = lumped_masses(&rest, settings.density);
-        let solver = settings.solver_params();
-        let dynamics = settings.dynamics_params(1.0);
-        dynamics.validate().map_err(value_error)?;
-        DynamicsParams::validate_solver(&solver).map_err(value_error)?;
-        let system = System::new(mesh.mesh.num_vertices(), solver);
+        let system = System::new(mesh.mesh.num_vertices(), settings.solver_params());
         let simulation = CoreSimulation::new(system, masses, rest.positions.clone(), dynamics).map_err(value_error)?;
         Ok(PySimulation { mesh: mesh.mesh.clone(), rest, simulation })
     }
 
-    fn add(&mut self, entry: &str) -> PyResult<(u32, String, String, usize)> {
-        add_entry(self.simulation.system_mut(), &self.mesh, &self.rest, entry)
+    /// Adds a group from a scene entry and its selection (JSON text each); returns (id, name,
+    /// type, constraints).
+    #[pyo3(signature = (entry, selection="{}"))]
+    fn add(&mut self, entry: &str, selection: &str) -> PyResult<(u32, String, String, usize)> {
+        add_entry(self.simulation.system_mut(), &self.mesh, &self.rest, entry, selection)
     }
 
     fn held(&self, id: u32) -> PyResult<Vec<u32>> {

@@ -64,9 +64,11 @@ impl PySolver {
         PySolver { mesh: mesh.mesh.clone(), rest, system }
     }
 
-    /// Adds a group from a scene entry (JSON text); returns (id, name, type, constraints).
-    fn add(&mut self, entry: &str) -> PyResult<(u32, String, String, usize)> {
-        add_entry(&mut self.system, &self.mesh, &self.rest, entry)
+    /// Adds a group from a scene entry and its selection (JSON text each); returns (id, name,
+    /// type, constraints).
+    #[pyo3(signature = (entry, selection="{}"))]
+    fn add(&mut self, entry: &str, selection: &str) -> PyResult<(u32, String, String, usize)> {
+        add_entry(&mut self.system, &self.mesh, &self.rest, entry, selection)
     }
 
     fn held(&self, id: u32) -> PyResult<Vec<u32>> {

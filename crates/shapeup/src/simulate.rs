@@ -85,16 +85,8 @@ pub fn run(args: &SimulateArgs<'_>) -> Result<()> {
         RunError::Stopped(e) => e,
     });
     drop(progress);
-    if format == FrameFormat::Vtu && !frames.written.is_empty() {
-        match &result {
-            Ok(_) => frames.write_pvd()?,
-            // The frames written before the error stay usable; the first error is the one to tell.
-            Err(_) => {
-                let _ = frames.write_pvd();
-            }
-        }
-    }
-    let totals = result?;
+    // VTU: the .pvd lists the frames written, also those before an error.
+    let totals = frames.finish(result, anyhow::Error::from)?;
     let written = frames.written.len();
     let mut warnings = loaded.warnings.clone();
     warnings.extend(frames.warnings.take().unwrap_or_default());

@@ -1,9 +1,9 @@
 //! From a parsed [`Scene`] to a solvable system: load the mesh, map it to the working frame,
 //! resolve selections and build each group.
 
-use super::{Scene, SceneError};
+use super::{Scene, SceneError, SolverSettings};
 use crate::constraints::{attach_degenerate_vertices, held_vertices};
-use crate::dynamics::{DynamicsParams, Simulation};
+use crate::dynamics::{DynamicsParams, ParamError, Simulation};
 use crate::geometry::{RestGeometry, WorkingFrame, lumped_masses_surface, lumped_masses_volume};
 use crate::io::{Attributes, read_mesh};
 use crate::mesh::Mesh;
@@ -192,6 +192,36 @@ pub fn lumped_masses(rest: &RestGeometry, density: f64) -> Vec<f64> {
     masses
 }
 
+/// A `[solver]` setting that time stepping cannot start with.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+pub enum DynamicSettingsError {
+    /// ρ is not a finite number > 0.
+    #[error("density must be a finite number > 0, found {0}")]
+    Density(f64),
+    /// A time-stepping setting is out of range.
+    #[error(transparent)]
+    Params(#[from] ParamError),
+}
+
+impl SolverSettings {
+    /// [`SolverSettings::dynamics_params`] in a working frame `scale` times the input's,
+    /// checked, with the density the masses take ([`lumped_masses`]): what a scene's
+    /// simulation and the Python package's `Simulation` start from.
+    ///
+    /// # Errors
+    /// [`DynamicSettingsError`] naming the first bad setting.
+    pub fn checked_dynamics_params(&self, scale: f64) -> Result<DynamicsParams, DynamicSettingsError> {
+        if !(self.density.is_finite() && self.density > 0.0) {
+            return Err(DynamicSettingsError::Density(self.density));
+        }
+        let params = self.dynamics_params(scale);
+        params.validate()?;
+        // Iterations per step and the tolerance are the solver's, checked for a time step too.
+        DynamicsParams::validate_solver(&self.solver_params())?;
+        Ok(params)
+    }
+}
+
 /// A position group whose targets turn at a constant rate in dynamic mode.
 #[derive(Debug, Clone)]
 pub struct SpinningHandle {
@@ -316,13 +346,8 @@ impl LoadedScene {
     pub fn start_simulation(&mut self) -> Result<Simulation, SceneError> {
         let invalid =
             |message: String| SceneError::Invalid { path: self.scene.file.clone(), entry: "[solver]".into(), message };
-        let density = self.scene.solver.density;
-        if !(density.is_finite() && density > 0.0) {
-            return Err(invalid(format!("density must be a finite number > 0, found {density}")));
-        }
-        let params = self.dynamics_params();
-        params.validate().map_err(|e| invalid(e.to_string()))?;
-        DynamicsParams::validate_solver(self.system.params()).map_err(|e| invalid(e.to_string()))?;
+        // Checked before the system moves, so that a refused start leaves this scene whole.
+        let params = self.scene.solver.checked_dynamics_params(self.frame.scale).map_err(|e| invalid(e.to_string()))?;
         let system =
             std::mem::replace(&mut self.system, System::new(self.mesh.num_vertices(), SolverParams::default()));
         Simulation::new(system, self.masses(), self.rest.positions.clone(), params).map_err(|e| invalid(e.to_string()))

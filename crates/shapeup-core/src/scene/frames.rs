@@ -139,6 +139,26 @@ impl FrameWriter<'_> {
         Ok(warnings.for_file(path))
     }
 
+    /// Ends a run whose frames this writer wrote, `result` what the run returned: for VTU,
+    /// writes `DIR/frames.pvd` listing the frames written, also after a run that stopped early,
+    /// so that the frames before the error stay usable. Returns `result`; after a run that
+    /// succeeded, an error writing the `.pvd` (through `io`) instead; after one that failed,
+    /// the run's error (the first one is the one to tell).
+    ///
+    /// # Errors
+    /// The run's error, or the `.pvd`'s [`IoError`] mapped by `io`.
+    pub fn finish<T, E>(&self, result: Result<T, E>, io: impl FnOnce(IoError) -> E) -> Result<T, E> {
+        if self.format != FrameFormat::Vtu || self.written.is_empty() {
+            return result;
+        }
+        let pvd = self.write_pvd();
+        match (result, pvd) {
+            (Ok(value), Ok(())) => Ok(value),
+            (Ok(_), Err(e)) => Err(io(e)),
+            (Err(e), _) => Err(e),
+        }
+    }
+
     /// Writes `DIR/frames.pvd` listing every frame written so far with its time.
     ///
     /// # Errors

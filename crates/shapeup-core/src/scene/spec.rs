@@ -67,6 +67,9 @@ pub enum SelectionSpec {
 }
 
 impl SelectionSpec {
+    /// The keys of a scene entry that give its selection (an entry has at most one).
+    pub const KEYS: [&'static str; 4] = SELECTION_KEYS;
+
     /// The vertex indices it picks among `positions` (input frame): every vertex for
     /// [`SelectionSpec::All`], the listed order for a list, ascending for a box or sphere.
     ///
