@@ -12,6 +12,7 @@ use super::renderer::{BASE_COLOR, FrameParams, MeshRenderer};
 use crate::camera::OrbitCamera;
 use crate::command::{Command, SelectMode};
 use crate::document::{Document, GroupKey, GroupRole, ShapeModel, WEIGHT_RANGE};
+use crate::error::TetrahedraError;
 use crate::picking::{box_select, faces_within, pick_face, pick_vertex, visible_vertices};
 use crate::simulation::{SimulationRunner, SimulationSettings, tetrahedralize_available};
 use crate::worker::{SolveRequest, SolveResult, SolverWorker};
@@ -148,7 +149,7 @@ struct View {
     add_kind: Option<&'static str>,
     add_options: serde_json::Map<String, serde_json::Value>,
     /// Whether Tetrahedralize can be ticked for this mesh (computed once per mesh).
-    tetrahedralize: Result<(), String>,
+    tetrahedralize: Result<(), TetrahedraError>,
     energy_history: VecDeque<f64>,
     /// The 3D view is drawn at [`INTERACTIVE_SCALE`] for the interaction under way.
     reduced_resolution: bool,
@@ -611,7 +612,7 @@ impl EditorApp {
         let mut colors = vec![BASE_COLOR; self.document.num_vertices()];
         for handle in self.document.handles() {
             for &v in handle.vertices().unwrap_or(&[]) {
-                colors[v as usize] = HANDLE_COLOR;
+                colors[v] = HANDLE_COLOR;
             }
         }
         for (v, c) in colors.iter_mut().enumerate() {
@@ -630,7 +631,7 @@ impl EditorApp {
         }
         if let Some(group) = self.view.hovered_group.and_then(|k| self.document.group(k)) {
             match group.vertices() {
-                Some(list) => list.iter().for_each(|&v| colors[v as usize] = HOVER_COLOR),
+                Some(list) => list.iter().for_each(|&v| colors[v] = HOVER_COLOR),
                 None => colors.iter_mut().for_each(|c| *c = HOVER_COLOR),
             }
         }
@@ -801,13 +802,13 @@ impl EditorApp {
             let row = ui.vertical(|ui| {
                 ui.horizontal(|ui| {
                     let active = self.view.active_handle == Some(group.key);
-                    let name = format!("{} ({})", group.name, group.kind);
+                    let name = format!("{} ({})", group.spec.name, group.spec.kind);
                     if group.role == GroupRole::Handle {
                         if ui.selectable_label(active, name).on_hover_text("put the gizmo on this handle").clicked() {
                             self.view.active_handle = Some(group.key);
                         }
                         if ui.small_button("rename").clicked() {
-                            self.view.renaming = Some((group.key, group.name.clone()));
+                            self.view.renaming = Some((group.key, group.spec.name.clone()));
                         }
                     } else {
                         ui.label(name);
@@ -816,7 +817,7 @@ impl EditorApp {
                         commands.push(Command::RemoveGroup(group.key));
                     }
                 });
-                if let Some(weight) = self.weight_control(ui, group.weight) {
+                if let Some(weight) = self.weight_control(ui, group.spec.weight) {
                     commands.push(Command::SetWeight { group: group.key, weight });
                 }
             });
