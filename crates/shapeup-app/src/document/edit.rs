@@ -9,7 +9,7 @@ use crate::group::{FREE_PIECE_WEIGHT, Group, GroupKey, GroupRole, ShapeModel, WE
 use glam::{DQuat, DVec3};
 use serde_json::Map;
 use shapeup_core::constraints::constraint_type;
-use shapeup_core::scene::{GroupSpec, SelectionSpec, Targets};
+use shapeup_core::scene::{GroupSpec, SelectionSpec, Targets, unique_group_name};
 use shapeup_core::solver::Acceleration;
 use std::sync::Arc;
 
@@ -263,12 +263,4 @@ fn unique_name(state: &EditState, base: &str) -> String {
 /// An editor selection (ascending vertex indices) as a group's selection.
 fn vertex_list(vertices: &[u32]) -> SelectionSpec {
     SelectionSpec::Vertices(vertices.iter().map(|&v| v as usize).collect())
-}
-
-// TEMPORARY until s2/lead's "scene: one rule for group names" lands: the same rule.
-fn unique_group_name(base: &str, existing: &[&str]) -> String {
-    if !existing.contains(&base) {
-        return base.to_string();
-    }
-    (2..).map(|k| format!("{base}_{k}")).find(|name| !existing.contains(&name.as_str())).unwrap_or_default()
 }
