@@ -1,6 +1,6 @@
 //! The solve state behind a document: the rest shape ([`Rest`]), what undo snapshots and the
 //! worker solves ([`EditState`]), and the [`EditSolver`] that turns an `EditState` into a
-//! `shapeup-core` [`System`] ([`build_system`], which dynamic mode uses too) and keeps the
+//! `shapeup-core` [`System`] (`build_system`, which dynamic mode uses too) and keeps the
 //! working positions: a structural change rebuilds the
 //! system, a handle move only sets targets ([`System::set_targets`], no refactorization), a
 //! weight change only refactors.

@@ -81,7 +81,7 @@ impl Document {
     /// The document as a scene whose `[mesh] path` is `mesh_path` (as it should appear in the
     /// file: relative to the scene's directory, or absolute). Its groups are the document's
     /// descriptions as they are: handles with explicit targets, editor groups with explicit
-    /// vertex lists. After [`Command::MakeRest`], save
+    /// vertex lists. After [`Command::MakeRest`](crate::command::Command::MakeRest), save
     /// [`Document::rest_mesh`] to that path too.
     pub fn to_scene(&self, mesh_path: impl Into<PathBuf>) -> Scene {
         let groups = self.state.groups.iter().map(|g| g.spec.clone()).collect();

@@ -5,7 +5,7 @@
 //! what is on screen settles to the converged shape that a saved scene replays.
 //!
 //! This file is the shell: the app's state, the frame's order, applying commands and taking
-//! solver results. The rooms: the side panel's sections in [`super::panels`], the 3D view in
+//! solver results. The rooms: the side panel's sections in `panels/`, the 3D view in
 //! [`super::viewport`], files and dialogs in [`super::files`], measurements in `metrics`.
 
 use super::dialogs::DialogPurpose;

@@ -38,12 +38,14 @@ pub(super) struct ViewportSlot {
 }
 
 impl ViewportSlot {
+    /// Shows `texture` (the rendered mesh) in the slot.
     fn show(&self, texture: egui::TextureId) {
         let uv = Rect::from_min_max(Pos2::ZERO, Pos2::new(1.0, 1.0));
         self.painter.set(self.shape, egui::Shape::image(texture, self.rect, uv, Color32::WHITE));
     }
 }
 
+/// Colour of selected vertices.
 const SELECTED_COLOR: [f32; 3] = [0.15, 0.35, 0.95];
 /// Corners of selected faces (face mode).
 const SELECTED_FACE_COLOR: [f32; 3] = [0.1, 0.75, 0.8];
@@ -66,7 +68,7 @@ enum Gesture {
         handle: GroupKey,
         anchor: Vec3,
     },
-    /// Dynamic mode: pulling the vertices in `EditorApp::grabbed` by `offset` from where they
+    /// Dynamic mode: pulling the grabbed vertices (`ViewportState::grabbed`) by `offset` from where they
     /// were; `anchor` is the picked vertex's position then.
     Grab {
         anchor: Vec3,
