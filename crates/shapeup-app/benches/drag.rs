@@ -22,7 +22,7 @@ fn drag_update(c: &mut Criterion) {
     let path = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/bunny-springs.toml"));
     let scene = Scene::from_file(path).unwrap();
     let mut document = Document::from_scene(&scene).unwrap();
-    let ears = document.handles().find(|h| h.name == "ears").unwrap().key;
+    let ears = document.handles().find(|h| h.spec.name == "ears").unwrap().key;
     document.solve(50).unwrap();
     document.begin_drag();
     let mut step = 0usize;

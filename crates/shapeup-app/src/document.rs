@@ -25,7 +25,7 @@ use history::Snapshot;
 use shapeup_core::constraints::{ConstraintType, Selection, registry, selects_any};
 use shapeup_core::io::{Attributes, read_mesh};
 use shapeup_core::mesh::Mesh;
-use shapeup_core::scene::SolverSettings;
+use shapeup_core::scene::{GroupSpec, SelectionSpec, SolverSettings, Targets};
 use shapeup_core::solver::{Acceleration, SolveReport};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -153,14 +153,15 @@ impl Document {
             .iter()
             .map(|&(kind, weight)| Group {
                 key: self.new_key(),
-                name: kind.to_string(),
                 role: GroupRole::Shape,
-                kind: kind.to_string(),
-                weight,
-                vertices: None,
-                targets: Vec::new(),
-                faces: None,
-                options: Arc::default(),
+                spec: GroupSpec {
+                    kind: kind.to_string(),
+                    name: kind.to_string(),
+                    weight,
+                    selection: SelectionSpec::All,
+                    targets: Targets::default(),
+                    options: serde_json::Map::new(),
+                },
             })
             .collect()
     }
@@ -470,7 +471,7 @@ impl Document {
         let mut pinned = vec![false; self.positions.len()];
         for handle in self.handles() {
             for &v in handle.vertices().unwrap_or(&[]) {
-                pinned[v as usize] = true;
+                pinned[v] = true;
             }
         }
         self.pieces.free(&pinned).len()

@@ -1,16 +1,17 @@
 //! The solve state behind a document: the rest shape ([`Rest`]), what undo snapshots and the
 //! worker solves ([`EditState`]), and the [`EditSolver`] that turns an `EditState` into a
-//! `shapeup-core` [`System`] and keeps the working positions: a structural change rebuilds the
+//! `shapeup-core` [`System`] (`build_system`, which dynamic mode uses too) and keeps the
+//! working positions: a structural change rebuilds the
 //! system, a handle move only sets targets ([`System::set_targets`], no refactorization), a
 //! weight change only refactors.
 
-use crate::error::{EditorError, GroupError};
+use crate::error::{Cause, EditorError, GroupError};
 use crate::group::{Group, GroupKey, GroupRole, ShapeModel, Structure};
 use glam::DVec3;
-use shapeup_core::constraints::{GroupDescription, Params, Selection, build_group as build_described};
 use shapeup_core::geometry::{RestGeometry, WorkingFrame};
 use shapeup_core::mesh::Mesh;
-use shapeup_core::solver::{Acceleration, ConstraintGroup, GroupId, SolveReport, SolverParams, System};
+use shapeup_core::scene::GroupSpec;
+use shapeup_core::solver::{Acceleration, GroupId, SolveReport, SolverParams, System};
 use std::ops::ControlFlow;
 use std::sync::Arc;
 
@@ -103,30 +104,31 @@ impl EditState {
     }
 }
 
-/// Builds a group's constraints on the rest shape, through the library's one route.
-fn build_group(rest: &Rest, group: &Group) -> Result<ConstraintGroup, EditorError> {
-    let n = rest.mesh.num_vertices();
-    let selection = match (&group.faces, &group.vertices) {
-        (Some(faces), _) => {
-            Selection::from_faces(n, &rest.geometry.faces, &faces.iter().map(|&f| f as usize).collect::<Vec<_>>())
-        }
-        (None, None) => Selection::All,
-        (None, Some(list)) => Selection::from_indices(n, &list.iter().map(|&v| v as usize).collect::<Vec<_>>()),
-    };
-    let targets = (group.role == GroupRole::Handle).then(|| {
-        let vertices = group.vertices.clone().unwrap_or_else(|| (0..n as u32).collect());
-        vertices.into_iter().zip(&group.targets).map(|(v, &t)| (v, rest.frame.to_working(t))).collect()
-    });
-    let description = GroupDescription {
-        kind: group.kind.clone(),
-        name: group.name.clone(),
-        weight: Some(group.weight),
-        selection,
-        options: Params::new((*group.options).clone()),
-        targets,
-    };
-    build_described(&description, &rest.geometry, &rest.frame)
-        .map_err(|source| EditorError::Constraint(GroupError::Build { group: group.name.clone(), source }))
+/// A system of `groups` on `rest` with solver `params`: each group built through the library's
+/// one route ([`GroupSpec::build`]), in order, then the vertices only zero-area triangles use
+/// attached to their edge (as a scene does). Returns the system and each group's id, in order.
+///
+/// # Errors
+/// [`GroupError::Build`] naming the first group that cannot be built or added.
+pub(crate) fn build_system<'a>(
+    rest: &Rest,
+    groups: impl IntoIterator<Item = &'a GroupSpec>,
+    params: SolverParams,
+) -> Result<(System, Vec<GroupId>), GroupError> {
+    let mut system = System::new(rest.mesh.num_vertices(), params);
+    let mut ids = Vec::new();
+    for spec in groups {
+        let refused = |source| GroupError::Build { group: spec.name.clone(), source };
+        let group = spec.build(&rest.mesh, &rest.geometry, &rest.frame).map_err(|e| refused(Cause::new(e)))?;
+        ids.push(system.add_group(group).map_err(|e| refused(Cause::new(e)))?);
+    }
+    let (group, _, _) =
+        shapeup_core::constraints::attach_degenerate_vertices(&rest.geometry, system.groups().map(|(_, g)| g));
+    if let Some(group) = group {
+        let name = group.name.clone();
+        system.add_group(group).map_err(|e| GroupError::Build { group: name, source: Cause::new(e) })?;
+    }
+    Ok((system, ids))
 }
 
 /// The solve state of an [`EditState`]: its [`System`] and the working positions (named apart
@@ -158,7 +160,7 @@ impl EditSolver {
     pub fn sync(&mut self, state: &EditState) -> Result<(), EditorError> {
         let same_rest = self.rest.as_ref().is_some_and(|r| Arc::ptr_eq(r, &state.rest));
         let same_groups = self.structure.len() == state.groups.len()
-            && self.structure.iter().zip(&state.groups).all(|(s, g)| *s == g.structure());
+            && self.structure.iter().zip(&state.groups).all(|(s, g)| s.matches(g));
         let params = SolverParams {
             iterations: state.iterations,
             acceleration: state.acceleration,
@@ -174,27 +176,16 @@ impl EditSolver {
                 for (group, &id) in state.groups.iter().zip(&self.ids) {
                     if group.role == GroupRole::Handle {
                         let working: Vec<DVec3> =
-                            group.targets.iter().map(|&t| state.rest.frame.to_working(t)).collect();
+                            group.targets().into_iter().map(|t| state.rest.frame.to_working(t)).collect();
                         system.set_targets(id, &working)?;
                     }
-                    system.set_multiplier(id, group.weight)?;
+                    system.set_multiplier(id, group.spec.weight)?;
                 }
             }
             _ => {
                 let rest = &state.rest;
-                let mut system = System::new(rest.mesh.num_vertices(), params);
-                let mut ids = Vec::with_capacity(state.groups.len());
-                for group in &state.groups {
-                    ids.push(system.add_group(build_group(rest, group)?)?);
-                }
-                // Vertices that only zero-area triangles use follow their edge, as in a scene.
-                let (group, _, _) = shapeup_core::constraints::attach_degenerate_vertices(
-                    &rest.geometry,
-                    system.groups().map(|(_, g)| g),
-                );
-                if let Some(group) = group {
-                    system.add_group(group)?;
-                }
+                let (system, ids) = build_system(rest, state.groups.iter().map(|g| &g.spec), params)
+                    .map_err(EditorError::Constraint)?;
                 self.q = match &self.rest {
                     // Same positions in the input frame, seen in the new working frame.
                     Some(old) if !same_rest && self.q.len() == rest.mesh.num_vertices() => {
@@ -203,7 +194,7 @@ impl EditSolver {
                     Some(_) if same_rest => std::mem::take(&mut self.q),
                     _ => rest.geometry.positions.clone(),
                 };
-                self.structure = state.groups.iter().map(Group::structure).collect();
+                self.structure = state.groups.iter().map(Structure::of).collect();
                 self.system = Some(system);
                 self.ids = ids;
                 self.rest = Some(Arc::clone(rest));

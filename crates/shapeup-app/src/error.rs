@@ -2,7 +2,7 @@
 
 use crate::group::GroupKey;
 use shapeup_core::constraints::ConstraintError;
-use shapeup_core::dynamics::DynamicsError;
+use shapeup_core::dynamics::{DynamicsError, ParamError};
 use shapeup_core::solver::SolveError;
 use std::error::Error;
 use std::fmt;
@@ -72,6 +72,9 @@ pub enum EditorError {
     /// The group is not a handle.
     #[error("group {0} is not a handle")]
     NotAHandle(GroupKey),
+    /// Another group has this name (group names are unique, as in scene files).
+    #[error("a group named \"{0}\" exists already")]
+    NameTaken(String),
     /// Shape-model groups are replaced with
     /// [`Command::SetShapeModel`](crate::command::Command::SetShapeModel), not removed.
     #[error("group {0} belongs to the shape model; choose another model instead of removing it")]
@@ -133,13 +136,14 @@ pub enum GroupError {
     /// An unknown constraint type.
     #[error(transparent)]
     Type(ConstraintError),
-    /// The library cannot build the group.
+    /// The library cannot build the group (a bad option, nothing to constrain, a selection
+    /// out of range).
     #[error("group \"{group}\": {source}")]
     Build {
         /// The group's name.
         group: String,
-        /// Why.
-        source: ConstraintError,
+        /// Why: the library's [`SpecError`](shapeup_core::scene::SpecError).
+        source: Cause,
     },
 }
 
@@ -147,8 +151,8 @@ pub enum GroupError {
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum SimulationError {
     /// A setting is out of range (the message names it).
-    #[error("{0}")]
-    Settings(String),
+    #[error(transparent)]
+    Settings(#[from] SettingsError),
     /// The mesh cannot be filled with tetrahedra.
     #[error("TetGen could not tetrahedralize {mesh}: {why}")]
     Tetrahedralize {
@@ -164,10 +168,9 @@ pub enum SimulationError {
     /// A constraint type the dynamic scene needs is unknown.
     #[error(transparent)]
     Constraint(ConstraintError),
-    /// The dynamic scene cannot be built (the editor's scene has no file, so the empty path in
-    /// front of the library's message is dropped).
-    #[error("{}", without_empty_path(.0))]
-    Scene(Cause),
+    /// A group of the simulation cannot be built on the simulated mesh.
+    #[error(transparent)]
+    Group(#[from] GroupError),
     /// The simulation refuses its start state.
     #[error(transparent)]
     Dynamics(#[from] DynamicsError),
@@ -176,10 +179,34 @@ pub enum SimulationError {
     Thread(#[source] Cause),
 }
 
-/// A scene error's text without the ": " an empty scene path leaves in front.
-fn without_empty_path(cause: &Cause) -> String {
-    let text = cause.to_string();
-    text.strip_prefix(": ").map(str::to_string).unwrap_or(text)
+/// A dynamic-mode setting out of range
+/// ([`SimulationSettings::validate`](crate::simulation::SimulationSettings::validate)).
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+pub enum SettingsError {
+    /// A time-stepping setting (stiffness, time step, damping, gravity).
+    #[error(transparent)]
+    Dynamics(#[from] ParamError),
+    /// The grab strength is outside (0, 1].
+    #[error("grab strength must be in (0, 1], found {0}")]
+    GrabStrength(f64),
+}
+
+/// What went wrong in a running simulation, shown in the Dynamics panel
+/// ([`SimulationStats::error`](crate::simulation::SimulationStats::error)).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum RunnerError {
+    /// New settings were refused (they stay as they were).
+    #[error(transparent)]
+    Settings(DynamicsError),
+    /// A grab was refused.
+    #[error(transparent)]
+    Grab(DynamicsError),
+    /// A time step failed (stepping pauses).
+    #[error(transparent)]
+    Step(SolveError),
+    /// Putting the vertices below the floor back on it failed (stepping pauses).
+    #[error(transparent)]
+    Floor(DynamicsError),
 }
 
 /// Why a mesh cannot be filled with tetrahedra.

@@ -1,9 +1,11 @@
-//! The editor's group vocabulary: what a constraint group is in a document (key, role, kind,
-//! weight, vertices or faces, targets, options) and the shape models that make the shape groups.
+//! The editor's group vocabulary: a constraint group in a document is the scene's description
+//! of it ([`GroupSpec`]) plus the editor's key and role; and the shape models that make the
+//! shape groups.
 
 use glam::DVec3;
+use serde_json::{Map, Value};
+use shapeup_core::scene::{GroupSpec, SelectionSpec, Targets};
 use std::fmt;
-use std::sync::Arc;
 
 /// The range of group weights (the weight sliders are logarithmic over it).
 pub const WEIGHT_RANGE: (f64, f64) = (1e-4, 1e4);
@@ -39,54 +41,103 @@ pub enum GroupRole {
     Other,
 }
 
-/// A constraint group as the editor lists it.
+/// A constraint group as the editor lists it: the scene's description of the group, with a
+/// key and a role.
+///
+/// In a document the description is always resolved: its selection is
+/// [`SelectionSpec::All`], an explicit vertex list (ascending for groups the editor makes and
+/// for handles) or a face list (ascending), never a box or a sphere; a handle's targets are
+/// explicit, one per listed vertex in its order (input frame). Saving a scene writes the
+/// description as it is.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Group {
     /// Stable identity.
     pub key: GroupKey,
-    /// Display name.
-    pub name: String,
     /// What it is for.
     pub role: GroupRole,
-    /// Constraint type name (`"position"`, `"bending"`, …).
-    pub kind: String,
-    /// Multiplier g.
-    pub weight: f64,
-    /// The vertices it applies to (ascending); `None` = all (or the faces', when `faces` is
-    /// set).
-    pub vertices: Option<Vec<u32>>,
-    /// The polygon faces it applies to (ascending), for a group made on a face selection.
-    pub faces: Option<Vec<u32>>,
-    /// Handles: one target per vertex of `vertices`, in its order (input frame); empty
-    /// otherwise.
-    pub targets: Vec<DVec3>,
-    /// Type options (as a scene writes them, `hard` included), shared between undo steps.
-    pub options: Arc<serde_json::Map<String, serde_json::Value>>,
+    /// What the group is: type, name, multiplier g, selection, targets and options, as a
+    /// scene's `[[constraints]]` entry says them.
+    pub spec: GroupSpec,
 }
 
 impl Group {
-    /// Whether it applies to vertex `v` (for hover highlighting).
+    /// Whether it applies to vertex `v` (for hover highlighting): listed, or a group over all
+    /// vertices or faces.
     pub fn covers(&self, v: u32) -> bool {
-        self.vertices.as_ref().is_none_or(|list| list.contains(&v))
+        self.vertices().is_none_or(|list| list.contains(&(v as usize)))
     }
 
-    /// Its vertices, `None` meaning every vertex.
-    pub fn vertices(&self) -> Option<&[u32]> {
-        self.vertices.as_deref()
+    /// Its vertex list; `None` for a group over all vertices or over faces.
+    pub fn vertices(&self) -> Option<&[usize]> {
+        match &self.spec.selection {
+            SelectionSpec::Vertices(list) => Some(list),
+            _ => None,
+        }
+    }
+
+    /// Its face list (polygon faces of the rest mesh, ascending); `None` for a group over
+    /// vertices.
+    pub fn faces(&self) -> Option<&[usize]> {
+        match &self.spec.selection {
+            SelectionSpec::Faces(list) => Some(list),
+            _ => None,
+        }
+    }
+
+    /// A handle's targets (input frame), one per vertex of [`Group::vertices`] in its order;
+    /// empty for other groups.
+    pub fn targets(&self) -> Vec<DVec3> {
+        self.spec.targets.explicit.iter().flatten().map(|&t| DVec3::from(t)).collect()
+    }
+
+    /// Moves every target of a handle to `f(target)` (input frame); nothing for other groups.
+    pub(crate) fn map_targets(&mut self, f: impl Fn(DVec3) -> DVec3) {
+        for t in self.spec.targets.explicit.iter_mut().flatten() {
+            *t = f(DVec3::from(*t)).to_array();
+        }
     }
 
     /// Centroid of a handle's targets (input frame); `None` for other groups.
     pub fn target_centroid(&self) -> Option<DVec3> {
-        (!self.targets.is_empty()).then(|| self.targets.iter().copied().sum::<DVec3>() / self.targets.len() as f64)
-    }
-
-    /// What the system needs to rebuild when this changes (everything but name, weight and
-    /// targets).
-    pub(crate) fn structure(&self) -> Structure {
-        (self.key, self.kind.clone(), self.vertices.clone(), self.faces.clone(), Arc::clone(&self.options))
+        let targets = self.spec.targets.explicit.as_deref().filter(|t| !t.is_empty())?;
+        Some(targets.iter().map(|&t| DVec3::from(t)).sum::<DVec3>() / targets.len() as f64)
     }
 }
 
-/// What a rebuild of a group depends on: (key, kind, vertices, faces, options).
-pub(crate) type Structure =
-    (GroupKey, String, Option<Vec<u32>>, Option<Vec<u32>>, Arc<serde_json::Map<String, serde_json::Value>>);
+/// Explicit targets (input frame), one per vertex of a handle's selection in its order: how
+/// the editor keeps a handle's targets.
+pub fn explicit_targets(targets: impl IntoIterator<Item = DVec3>) -> Targets {
+    Targets { explicit: Some(targets.into_iter().map(|t| t.to_array()).collect()), ..Targets::default() }
+}
+
+/// What a rebuild of a group's constraints depends on: everything but its name, multiplier and
+/// targets.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Structure {
+    key: GroupKey,
+    kind: String,
+    selection: SelectionSpec,
+    options: Map<String, Value>,
+}
+
+impl Structure {
+    /// What `group`'s constraints were built from.
+    pub(crate) fn of(group: &Group) -> Structure {
+        let spec = &group.spec;
+        Structure {
+            key: group.key,
+            kind: spec.kind.clone(),
+            selection: spec.selection.clone(),
+            options: spec.options.clone(),
+        }
+    }
+
+    /// Whether `group` still builds to the same constraints (compared in place, no copies).
+    pub(crate) fn matches(&self, group: &Group) -> bool {
+        let spec = &group.spec;
+        self.key == group.key
+            && self.kind == spec.kind
+            && self.selection == spec.selection
+            && self.options == spec.options
+    }
+}

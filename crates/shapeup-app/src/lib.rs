@@ -5,7 +5,8 @@
 //! without a window:
 //! - [`camera`]: the orbit camera (view, projection, pixel ↔ ray, drags in the view plane);
 //! - [`picking`]: occlusion-aware vertex picking and box selection on a CPU depth buffer;
-//! - [`group`]: what a constraint group is in the editor (key, role, shape models);
+//! - [`group`]: what a constraint group is in the editor: the scene's description of it
+//!   (`GroupSpec`) with a key and a role; the shape models;
 //! - [`edit_state`]: the rest shape, the edit state undo snapshots, and the solver behind it;
 //! - [`pieces`]: the mesh's connected pieces;
 //! - [`document`]: the mesh, its constraint groups (shape model, handles, smoothing), the
@@ -15,9 +16,10 @@
 //! - [`error`]: [`EditorError`], one line for the status bar, keeping its source;
 //! - [`gizmo`]: the handle gizmo's picking, drag math and tessellation, framework-agnostic;
 //! - [`worker`]: a background solver thread, so the UI never waits for a solve;
-//! - [`simulation`]: dynamic mode, a Projective Dynamics simulation of the document on its own
-//!   thread (run/pause, gravity, floor, tetrahedra, grab);
-//! - `gui` (feature `gui`): the window, its panels and viewport, and headless rendering.
+//! - [`simulation`]: dynamic mode, a Projective Dynamics simulation built from the document's
+//!   groups, on its own thread (run/pause, gravity, floor, tetrahedra, grab);
+//! - `gui` (feature `gui`): the window (the app shell, one file per panel, the viewport, files
+//!   and dialogs, metrics) and headless rendering.
 #![warn(missing_docs)]
 
 pub mod camera;

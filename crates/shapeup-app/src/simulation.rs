@@ -1,23 +1,24 @@
 //! Dynamic mode in the editor: a Projective Dynamics simulation of the document's constraints
 //! (shape model or tetrahedral strain, handles as pins, smoothing) stepping on its own thread.
 //!
-//! [`SimulationRunner::start`] turns the document into a dynamic scene (optionally with gravity,
-//! a floor just below the shape and TetGen tetrahedra) and starts from the current shape at
-//! rest. The UI polls the newest positions ([`SimulationRunner::poll`], never blocking), holds
+//! [`SimulationRunner::start`] builds a simulation from the document's groups (optionally with
+//! gravity, a floor just below the shape and TetGen tetrahedra), each through the library's one
+//! route ([`GroupSpec::build`]), and starts from the current shape at rest. The UI polls the newest positions ([`SimulationRunner::poll`], never blocking), holds
 //! vertices at the cursor with [`SimulationRunner::grab`], pauses or resumes it, and changes
 //! gravity, stiffness, time step, damping and grab strength on the fly
 //! ([`SimulationRunner::update_settings`]); a change of the document's constraints, of the
 //! model, the floor or the tetrahedra means a new runner.
 
 use crate::document::Document;
-use crate::error::{Cause, EditorError, SimulationError, TetrahedraError};
+use crate::edit_state::{Rest, build_system};
+use crate::error::{Cause, EditorError, RunnerError, SettingsError, SimulationError, TetrahedraError};
 use crate::group::GroupRole;
 use glam::DVec3;
 use serde_json::{Map, Value};
 use shapeup_core::dynamics::{DynamicsError, DynamicsParams, Simulation, StepReport};
 use shapeup_core::geometry::WorkingFrame;
 use shapeup_core::mesh::Mesh;
-use shapeup_core::scene::{GroupSpec, Mode, SelectionSpec, SolverSettings, Targets};
+use shapeup_core::scene::{GroupSpec, Mode, SelectionSpec, SolverSettings, Targets, lumped_masses};
 use std::collections::{HashMap, VecDeque};
 use std::sync::{Arc, Condvar, Mutex, PoisonError};
 use std::thread::JoinHandle;
@@ -103,8 +104,9 @@ impl SimulationSettings {
     /// Checks the numbers, naming the first bad one.
     ///
     /// # Errors
-    /// A one-line message.
-    pub fn validate(&self) -> Result<(), String> {
+    /// [`SettingsError`]: the stiffness, time step or damping out of range, or a grab strength
+    /// outside (0, 1].
+    pub fn validate(&self) -> Result<(), SettingsError> {
         DynamicsParams {
             time_step: self.time_step,
             stiffness: self.stiffness,
@@ -113,7 +115,7 @@ impl SimulationSettings {
         }
         .validate()?;
         if !(self.grab_strength > 0.0 && self.grab_strength <= 1.0) {
-            return Err(format!("grab strength must be in (0, 1], found {}", self.grab_strength));
+            return Err(SettingsError::GrabStrength(self.grab_strength));
         }
         Ok(())
     }
@@ -130,15 +132,10 @@ impl SimulationSettings {
 /// Whether Tetrahedralize can be ticked for `document`.
 ///
 /// # Errors
-/// The reason, one line for a tooltip: this build has no TetGen (cargo feature `tetgen`), the
+/// The reason (one line for a tooltip): this build has no TetGen (cargo feature `tetgen`), the
 /// mesh already has tetrahedra, it has no triangles, or the surface is not closed (every edge
 /// must be shared by exactly two triangles).
-pub fn tetrahedralize_available(document: &Document) -> Result<(), String> {
-    why_not_tetrahedralize(document).map_err(|e| e.to_string())
-}
-
-/// [`tetrahedralize_available`], typed.
-fn why_not_tetrahedralize(document: &Document) -> Result<(), TetrahedraError> {
+pub fn tetrahedralize_available(document: &Document) -> Result<(), TetrahedraError> {
     if !cfg!(feature = "tetgen") {
         return Err(TetrahedraError::NoTetGen);
     }
@@ -188,7 +185,7 @@ pub struct SimulationStats {
     /// Milliseconds of the last step's global steps (triangular solves).
     pub global_ms: f64,
     /// The error that stopped the stepping, or that a setting or grab caused, if any.
-    pub error: Option<String>,
+    pub error: Option<RunnerError>,
 }
 
 #[derive(Default)]
@@ -246,18 +243,20 @@ impl SimulationRunner {
         Self::try_start(document, settings, notify).map_err(EditorError::Simulation)
     }
 
-    /// [`SimulationRunner::start`]: the mesh, its start shape, the dynamic scene, the
+    /// [`SimulationRunner::start`]: the mesh, its start shape, the simulated groups, the
     /// simulation at that shape, then its thread.
     fn try_start(
         document: &Document,
         settings: SimulationSettings,
         notify: impl Fn() + Send + 'static,
     ) -> Result<SimulationRunner, SimulationError> {
-        settings.validate().map_err(SimulationError::Settings)?;
+        settings.validate()?;
         let mesh = simulated_mesh(document, &settings)?;
         let start = start_shape(document, &mesh);
-        let (scene, floor) = dynamic_scene(document, &settings, &mesh, &start)?;
-        let stepper = Stepper::new(scene, mesh, &start, floor, document.num_vertices())?;
+        let (groups, floor) = dynamic_groups(document, &settings, &mesh, &start)?;
+        let solver = dynamic_solver_settings(document, &settings);
+        let rest = Rest::new(mesh, document.state().rest.normalize);
+        let stepper = Stepper::new(&groups, &solver, rest, &start, floor, document.num_vertices())?;
         let num_tetrahedra = stepper.num_tetrahedra;
         let channel = Arc::new(Channel::default());
         channel.state.lock().unwrap_or_else(PoisonError::into_inner).settings = settings;
@@ -384,23 +383,27 @@ enum Work {
 }
 
 impl Stepper {
-    /// Builds the scene's simulation at `start` (input frame), at rest.
+    /// Builds the simulation of `groups` on `rest` (the simulated mesh and its frame) with the
+    /// `solver` settings, at `start` (input frame), at rest. `floor` is the floor's height
+    /// (input frame), if any.
     fn new(
-        scene: shapeup_core::scene::Scene,
-        mesh: Mesh,
+        groups: &[GroupSpec],
+        solver: &SolverSettings,
+        rest: Rest,
         start: &[DVec3],
         floor: Option<f64>,
         surface_vertices: usize,
     ) -> Result<Stepper, SimulationError> {
-        let scene_error = |e| SimulationError::Scene(Cause::new(e));
-        let mut loaded = scene.build(mesh, shapeup_core::warnings::Warnings::new(), 0.0).map_err(scene_error)?;
-        let mut simulation = loaded.start_simulation().map_err(scene_error)?;
-        let frame = loaded.frame;
+        let (system, _) = build_system(&rest, groups, solver.solver_params())?;
+        let frame = rest.frame;
+        let masses = lumped_masses(&rest.geometry, solver.density);
+        let params = solver.dynamics_params(frame.scale);
+        let mut simulation = Simulation::new(system, masses, rest.geometry.positions, params)?;
         let floor = floor.map(|y| frame.to_working(DVec3::new(0.0, y, 0.0)).y);
         let start: Vec<DVec3> = start.iter().map(|&p| frame.to_working(p)).collect();
         let zero = vec![DVec3::ZERO; start.len()];
         simulation.set_state(&start, &zero)?;
-        let num_tetrahedra = loaded.mesh.num_tetrahedra();
+        let num_tetrahedra = rest.mesh.num_tetrahedra();
         Ok(Stepper { simulation, frame, floor, initial: (start, zero), surface_vertices, num_tetrahedra })
     }
 
@@ -455,18 +458,18 @@ impl Stepper {
     }
 
     /// Applies new settings and a grab or release; the last problem, if any.
-    fn apply(&mut self, grab: GrabChange, settings: Option<SimulationSettings>, strength: f64) -> Option<String> {
+    fn apply(&mut self, grab: GrabChange, settings: Option<SimulationSettings>, strength: f64) -> Option<RunnerError> {
         let mut problem = None;
         if let Some(settings) = settings
             && let Err(e) = self.simulation.set_params(settings.params(self.frame.scale))
         {
-            problem = Some(e.to_string());
+            problem = Some(RunnerError::Settings(e));
         }
         match grab {
             Some(Some((vertices, targets))) => {
                 let working = targets.iter().map(|&t| self.frame.to_working(t)).collect();
                 if let Err(e) = self.simulation.hold(vertices, working, strength) {
-                    problem = Some(e.to_string());
+                    problem = Some(RunnerError::Grab(e));
                 }
             }
             Some(None) => self.simulation.release(),
@@ -475,17 +478,17 @@ impl Stepper {
         problem
     }
 
-    /// One time step, then the floor's collision; the error as the panel shows it.
-    fn step(&mut self) -> Result<StepReport, String> {
-        let report = self.simulation.step().map_err(|e| e.to_string())?;
+    /// One time step, then the floor's collision.
+    fn step(&mut self) -> Result<StepReport, RunnerError> {
+        let report = self.simulation.step().map_err(RunnerError::Step)?;
         if let Some(floor) = self.floor {
-            collide(&mut self.simulation, floor).map_err(|e| e.to_string())?;
+            collide(&mut self.simulation, floor).map_err(RunnerError::Floor)?;
         }
         Ok(report)
     }
 
     /// Hands a step's positions and timings to the UI, or its error (which pauses).
-    fn publish(&self, channel: &Channel, outcome: Result<StepReport, String>) {
+    fn publish(&self, channel: &Channel, outcome: Result<StepReport, RunnerError>) {
         let mut state = channel.state.lock().unwrap_or_else(PoisonError::into_inner);
         match outcome {
             Ok(report) => {
@@ -537,19 +540,13 @@ fn tetrahedralize(_mesh: &Mesh) -> Result<Mesh, TetrahedraError> {
     Err(TetrahedraError::NotBuilt)
 }
 
-/// The document as a dynamic scene on `mesh` (the rest mesh, maybe with tetrahedra) that
-/// starts at `start` (input frame), and the floor's height (input frame), if any.
-fn dynamic_scene(
-    document: &Document,
-    settings: &SimulationSettings,
-    mesh: &Mesh,
-    start: &[DVec3],
-) -> Result<(shapeup_core::scene::Scene, Option<f64>), SimulationError> {
-    let mut scene = document.to_scene("");
+/// The `[solver]` settings of the document's simulation: the document's (factorization,
+/// acceleration, density…) with the panel's time stepping, and the scene default iterations per
+/// step without a tolerance (the document's cap and tolerance are for converging static solves).
+fn dynamic_solver_settings(document: &Document, settings: &SimulationSettings) -> SolverSettings {
     let defaults = SolverSettings::default();
-    scene.solver = SolverSettings {
+    SolverSettings {
         mode: Mode::Dynamic,
-        // The document's iteration cap and tolerance are for converging static solves.
         iterations: defaults.iterations,
         steps: 1,
         tolerance: 0.0,
@@ -557,37 +554,44 @@ fn dynamic_scene(
         gravity: if settings.gravity { defaults.gravity } else { [0.0; 3] },
         stiffness: settings.stiffness,
         damping: settings.damping,
-        ..scene.solver
-    };
-    // `mesh` already holds any tetrahedra.
-    scene.mesh.tetrahedralize = false;
+        ..document.solver_settings()
+    }
+}
+
+/// The groups the document's simulation on `mesh` (the rest mesh, maybe with tetrahedra) that
+/// starts at `start` (input frame) is built from: the document's (its shape model replaced by
+/// one `tet_strain` group for [`DynamicsModel::TetStrain`]) and a floor; and the floor's height
+/// (input frame), if any.
+fn dynamic_groups(
+    document: &Document,
+    settings: &SimulationSettings,
+    mesh: &Mesh,
+    start: &[DVec3],
+) -> Result<(Vec<GroupSpec>, Option<f64>), SimulationError> {
     let default_weight = |kind: &str| {
         shapeup_core::constraints::constraint_type(kind)
             .map(|t| t.default_multiplier())
             .map_err(SimulationError::Constraint)
     };
-    if settings.model == DynamicsModel::TetStrain {
-        if mesh.num_tetrahedra() == 0 {
-            return Err(SimulationError::NeedsTetrahedra);
-        }
-        // `to_scene` writes the groups in the document's order.
-        let roles = document.groups().iter().map(|g| g.role);
-        scene.groups =
-            scene.groups.drain(..).zip(roles).filter(|(_, role)| *role != GroupRole::Shape).map(|(g, _)| g).collect();
-        scene.groups.insert(
-            0,
-            GroupSpec {
-                kind: "tet_strain".into(),
-                name: "tet_strain".into(),
-                weight: default_weight("tet_strain")?,
-                selection: SelectionSpec::All,
-                targets: Targets::default(),
-                options: Map::new(),
-            },
-        );
+    let tet_strain = settings.model == DynamicsModel::TetStrain;
+    if tet_strain && mesh.num_tetrahedra() == 0 {
+        return Err(SimulationError::NeedsTetrahedra);
     }
+    let mut groups: Vec<GroupSpec> = Vec::with_capacity(document.groups().len() + 2);
+    if tet_strain {
+        groups.push(GroupSpec {
+            kind: "tet_strain".into(),
+            name: "tet_strain".into(),
+            weight: default_weight("tet_strain")?,
+            selection: SelectionSpec::All,
+            targets: Targets::default(),
+            options: Map::new(),
+        });
+    }
+    let kept = document.groups().iter().filter(|g| !(tet_strain && g.role == GroupRole::Shape));
+    groups.extend(kept.map(|g| g.spec.clone()));
     if !settings.floor {
-        return Ok((scene, None));
+        return Ok((groups, None));
     }
     // Just below the current shape (the floor type's default is below the rest shape), and
     // over the vertices near it only: an inactive floor term still holds its vertices where
@@ -604,7 +608,7 @@ fn dynamic_scene(
         (0..start.len()).filter(|&v| used[v] && start[v].y <= lowest + FLOOR_BAND * diagonal).collect();
     let mut options = Map::new();
     options.insert("height".into(), Value::from(height));
-    scene.groups.push(GroupSpec {
+    groups.push(GroupSpec {
         kind: "floor".into(),
         name: "floor".into(),
         weight: default_weight("floor")?,
@@ -612,7 +616,7 @@ fn dynamic_scene(
         targets: Targets::default(),
         options,
     });
-    Ok((scene, Some(height)))
+    Ok((groups, Some(height)))
 }
 
 /// The floor lies this fraction of the rest mesh's diagonal below the lowest vertex.

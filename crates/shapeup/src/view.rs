@@ -2,9 +2,10 @@
 
 use anyhow::{Result, anyhow};
 use shapeup_app::document::{Document, ShapeModel};
-use shapeup_app::gui::app::{HANDLE_COLOR, WindowOptions, run_window};
+use shapeup_app::gui::app::{WindowOptions, run_window};
 use shapeup_app::gui::headless::{render_rgba, write_png};
 use shapeup_app::gui::renderer::BASE_COLOR;
+use shapeup_app::gui::viewport::HANDLE_COLOR;
 use shapeup_core::scene::Scene;
 use std::io::Write as _;
 use std::path::PathBuf;

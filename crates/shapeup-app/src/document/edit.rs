@@ -5,9 +5,11 @@ use super::Document;
 use crate::command::Command;
 use crate::edit_state::{EditState, Rest};
 use crate::error::{EditorError, GroupError};
-use crate::group::{FREE_PIECE_WEIGHT, Group, GroupKey, GroupRole, ShapeModel, WEIGHT_RANGE};
+use crate::group::{FREE_PIECE_WEIGHT, Group, GroupKey, GroupRole, ShapeModel, WEIGHT_RANGE, explicit_targets};
 use glam::{DQuat, DVec3};
+use serde_json::Map;
 use shapeup_core::constraints::constraint_type;
+use shapeup_core::scene::{GroupSpec, SelectionSpec, Targets, unique_group_name};
 use shapeup_core::solver::Acceleration;
 use std::sync::Arc;
 
@@ -21,7 +23,11 @@ impl Document {
             Command::MoveHandle { handle, delta } => move_handle(state, handle, delta),
             Command::RotateHandle { handle, axis, angle } => rotate_handle(state, handle, axis, angle),
             Command::RenameHandle { handle, name } => {
-                state.group_mut(handle)?.name = name;
+                // Unique names, as a scene file requires: a saved session must open again.
+                if state.groups.iter().any(|g| g.key != handle && g.spec.name == name) {
+                    return Err(EditorError::NameTaken(name));
+                }
+                state.group_mut(handle)?.spec.name = name;
                 Ok(())
             }
             Command::DeleteHandle(handle) => delete_handle(state, handle),
@@ -68,19 +74,15 @@ impl Document {
         if vertices.is_empty() {
             return Err(EditorError::EmptySelection);
         }
-        let name = unique_name(state, "handle");
-        let targets = vertices.iter().map(|&v| self.positions[v as usize]).collect();
-        state.groups.push(Group {
-            key: self.new_key(),
-            name,
-            role: GroupRole::Handle,
+        let spec = GroupSpec {
             kind: "position".into(),
+            name: unique_name(state, "handle"),
             weight: 1.0,
-            vertices: Some(vertices),
-            targets,
-            faces: None,
-            options: Arc::default(),
-        });
+            targets: explicit_targets(vertices.iter().map(|&v| self.positions[v as usize])),
+            selection: vertex_list(&vertices),
+            options: Map::new(),
+        };
+        state.groups.push(Group { key: self.new_key(), role: GroupRole::Handle, spec });
         Ok(())
     }
 
@@ -109,19 +111,25 @@ impl Document {
         if !on_faces && vertices.is_empty() {
             return Err(EditorError::EmptySelection);
         }
-        let name = unique_name(state, ty.name());
         let handle = ty.has_targets();
-        state.groups.push(Group {
-            key: self.new_key(),
-            name,
-            role: if handle { GroupRole::Handle } else { GroupRole::Other },
+        let spec = GroupSpec {
             kind: ty.name().into(),
+            name: unique_name(state, ty.name()),
             weight: ty.default_multiplier(),
-            targets: if handle { vertices.iter().map(|&v| self.positions[v as usize]).collect() } else { Vec::new() },
-            vertices: (!on_faces).then_some(vertices),
-            faces: on_faces.then_some(faces),
-            options: Arc::new(options),
-        });
+            targets: if handle {
+                explicit_targets(vertices.iter().map(|&v| self.positions[v as usize]))
+            } else {
+                Targets::default()
+            },
+            selection: if on_faces {
+                SelectionSpec::Faces(faces.iter().map(|&f| f as usize).collect())
+            } else {
+                vertex_list(&vertices)
+            },
+            options,
+        };
+        let role = if handle { GroupRole::Handle } else { GroupRole::Other };
+        state.groups.push(Group { key: self.new_key(), role, spec });
         Ok(())
     }
 
@@ -131,18 +139,15 @@ impl Document {
         if vertices.is_empty() {
             return Err(EditorError::EmptySelection);
         }
-        let name = unique_name(state, "smoothing");
-        state.groups.push(Group {
-            key: self.new_key(),
-            name,
-            role: GroupRole::Smoothing,
+        let spec = GroupSpec {
             kind: "smoothing".into(),
+            name: unique_name(state, "smoothing"),
             weight: 1.0,
-            vertices: Some(vertices),
-            targets: Vec::new(),
-            faces: None,
-            options: Arc::default(),
-        });
+            selection: vertex_list(&vertices),
+            targets: Targets::default(),
+            options: Map::new(),
+        };
+        state.groups.push(Group { key: self.new_key(), role: GroupRole::Smoothing, spec });
         Ok(())
     }
 
@@ -159,7 +164,7 @@ impl Document {
         let mut pinned = vec![false; self.positions.len()];
         for group in state.groups.iter().filter(|g| g.role == GroupRole::Handle) {
             for &v in group.vertices().unwrap_or(&[]) {
-                pinned[v as usize] = true;
+                pinned[v] = true;
             }
         }
         let mut free = vec![false; self.pieces.of_vertex.len()];
@@ -171,19 +176,15 @@ impl Document {
         if vertices.is_empty() {
             return;
         }
-        let name = unique_name(state, "free pieces");
-        let targets = vertices.iter().map(|&v| state.rest.mesh.positions[v as usize]).collect();
-        state.groups.push(Group {
-            key: self.new_key(),
-            name,
-            role: GroupRole::Handle,
+        let spec = GroupSpec {
             kind: "position".into(),
+            name: unique_name(state, "free pieces"),
             weight: FREE_PIECE_WEIGHT,
-            vertices: Some(vertices),
-            targets,
-            faces: None,
-            options: Arc::default(),
-        });
+            targets: explicit_targets(vertices.iter().map(|&v| state.rest.mesh.positions[v as usize])),
+            selection: vertex_list(&vertices),
+            options: Map::new(),
+        };
+        state.groups.push(Group { key: self.new_key(), role: GroupRole::Handle, spec });
     }
 }
 
@@ -192,7 +193,7 @@ fn move_handle(state: &mut EditState, handle: GroupKey, delta: DVec3) -> Result<
     if !delta.is_finite() {
         return Err(EditorError::BadValue(format!("translation must be finite, found {delta}")));
     }
-    state.handle_mut(handle)?.targets.iter_mut().for_each(|t| *t += delta);
+    state.handle_mut(handle)?.map_targets(|t| t + delta);
     Ok(())
 }
 
@@ -204,7 +205,7 @@ fn rotate_handle(state: &mut EditState, handle: GroupKey, axis: DVec3, angle: f6
     let group = state.handle_mut(handle)?;
     let center = group.target_centroid().unwrap_or_default();
     let rotation = DQuat::from_axis_angle(axis, angle);
-    group.targets.iter_mut().for_each(|t| *t = center + rotation * (*t - center));
+    group.map_targets(|t| center + rotation * (t - center));
     Ok(())
 }
 
@@ -220,7 +221,7 @@ fn set_weight(state: &mut EditState, group: GroupKey, weight: f64) -> Result<(),
     if weight.is_nan() {
         return Err(EditorError::BadWeight(weight));
     }
-    state.group_mut(group)?.weight = weight.clamp(WEIGHT_RANGE.0, WEIGHT_RANGE.1);
+    state.group_mut(group)?.spec.weight = weight.clamp(WEIGHT_RANGE.0, WEIGHT_RANGE.1);
     Ok(())
 }
 
@@ -256,7 +257,14 @@ fn set_acceleration(state: &mut EditState, acceleration: Acceleration) {
     state.acceleration = acceleration;
 }
 
-/// "prefix N" with the smallest N ≥ 1 no group uses.
-fn unique_name(state: &EditState, prefix: &str) -> String {
-    (1..).map(|k| format!("{prefix} {k}")).find(|name| state.groups.iter().all(|g| &g.name != name)).unwrap_or_default()
+/// A name for a new group no group uses, by the core's one rule for unnamed groups
+/// ([`unique_group_name`]: `base`, else `base_2`, `base_3`, …).
+fn unique_name(state: &EditState, base: &str) -> String {
+    let existing: Vec<&str> = state.groups.iter().map(|g| g.spec.name.as_str()).collect();
+    unique_group_name(base, &existing)
+}
+
+/// An editor selection (ascending vertex indices) as a group's selection.
+fn vertex_list(vertices: &[u32]) -> SelectionSpec {
+    SelectionSpec::Vertices(vertices.iter().map(|&v| v as usize).collect())
 }

@@ -3,7 +3,7 @@
 use super::Document;
 use crate::edit_state::Rest;
 use crate::error::{Cause, EditorError, LoadError};
-use crate::group::{Group, GroupRole, ShapeModel};
+use crate::group::{Group, GroupRole, ShapeModel, explicit_targets};
 use glam::DVec3;
 use shapeup_core::mesh::Mesh;
 use shapeup_core::scene::{GroupSpec, MeshSettings, Scene, SelectionSpec, SolverSettings, Targets};
@@ -20,6 +20,23 @@ pub struct SavedScene {
 }
 
 impl Document {
+    /// The `[solver]` table the document saves: the one it was opened with, with the editor's
+    /// iterations, tolerance and acceleration; one run of up to `iterations` to the tolerance,
+    /// which is how the editor converges.
+    pub fn solver_settings(&self) -> SolverSettings {
+        SolverSettings {
+            iterations: self.state.iterations,
+            steps: 1,
+            tolerance: self.state.tolerance,
+            acceleration: self.state.acceleration,
+            anderson_window: self.state.anderson_window,
+            lbfgs_memory: self.state.lbfgs_memory,
+            ..self.solver_settings
+        }
+    }
+
+    /// A document from a scene: reads its mesh and takes its groups. Shape types over all
+    /// vertices without options become the shape model (when they match one), position groups
     /// become handles (box and sphere selections resolved to vertices, targets made explicit),
     /// smoothing groups stay smoothing, anything else is kept as an "other" group.
     ///
@@ -49,53 +66,12 @@ impl Document {
         let mut document = Document::empty(Arc::clone(&rest), scene.solver);
         let mut groups = Vec::with_capacity(scene.groups.len());
         for (i, spec) in scene.groups.iter().enumerate() {
-            let entry = |cause: Cause| EditorError::Load(LoadError::Entry { index: i, name: spec.name.clone(), cause });
-            let ty = shapeup_core::constraints::constraint_type(&spec.kind).map_err(|e| entry(Cause::new(e)))?;
-            let (faces, picked) = match &spec.selection {
-                SelectionSpec::Faces(list) => {
-                    let m = rest.geometry.faces.len();
-                    if let Some(&f) = list.iter().find(|&&f| f >= m) {
-                        return Err(entry(Cause::text(format!("face {f} is out of range (the mesh has {m} faces)"))));
-                    }
-                    let mut list: Vec<u32> = list.iter().map(|&f| f as u32).collect();
-                    list.sort_unstable();
-                    list.dedup();
-                    (Some(list), None)
-                }
-                other => (None, resolve_selection(other, &rest.mesh).map_err(|m| entry(Cause::text(m)))?),
-            };
-            let shape_kind = ShapeModel::ALL.iter().any(|m| m.groups().iter().any(|(k, _)| *k == spec.kind));
-            let plain = spec.options.is_empty();
-            let (role, targets, picked) = if ty.has_targets() {
-                let vertices = picked.unwrap_or_else(|| (0..rest.mesh.num_vertices() as u32).collect());
-                let targets =
-                    position_targets(&vertices, &spec.targets, &rest.mesh).map_err(|m| entry(Cause::text(m)))?;
-                // Ascending, as the editor keeps every selection (targets follow their vertex).
-                let mut pairs: Vec<(u32, DVec3)> = vertices.into_iter().zip(targets).collect();
-                pairs.sort_unstable_by_key(|&(v, _)| v);
-                let (vertices, targets) = pairs.into_iter().unzip();
-                (GroupRole::Handle, targets, Some(vertices))
-            } else if shape_kind && plain && picked.is_none() && faces.is_none() {
-                (GroupRole::Shape, Vec::new(), picked)
-            } else if spec.kind == "smoothing" && plain {
-                (GroupRole::Smoothing, Vec::new(), picked)
-            } else {
-                (GroupRole::Other, Vec::new(), picked)
-            };
-            let vertices = picked;
-            groups.push(Group {
-                key: document.new_key(),
-                name: spec.name.clone(),
-                role,
-                kind: spec.kind.clone(),
-                weight: spec.weight,
-                vertices,
-                targets,
-                faces,
-                options: Arc::new(spec.options.clone()),
-            });
+            let (role, spec) = editor_group(spec, &rest)
+                .map_err(|cause| EditorError::Load(LoadError::Entry { index: i, name: spec.name.clone(), cause }))?;
+            groups.push(Group { key: document.new_key(), role, spec });
         }
-        let kinds: Vec<&str> = groups.iter().filter(|g| g.role == GroupRole::Shape).map(|g| g.kind.as_str()).collect();
+        let kinds: Vec<&str> =
+            groups.iter().filter(|g| g.role == GroupRole::Shape).map(|g| g.spec.kind.as_str()).collect();
         document.state.shape_model = ShapeModel::from_kinds(&kinds);
         document.state.groups = groups;
         document.solver.sync(&document.state)?;
@@ -103,31 +79,12 @@ impl Document {
     }
 
     /// The document as a scene whose `[mesh] path` is `mesh_path` (as it should appear in the
-    /// file: relative to the scene's directory, or absolute). Handles are written with explicit
-    /// targets, editor groups with explicit vertex lists. After [`Command::MakeRest`], save
+    /// file: relative to the scene's directory, or absolute). Its groups are the document's
+    /// descriptions as they are: handles with explicit targets, editor groups with explicit
+    /// vertex lists. After [`Command::MakeRest`](crate::command::Command::MakeRest), save
     /// [`Document::rest_mesh`] to that path too.
     pub fn to_scene(&self, mesh_path: impl Into<PathBuf>) -> Scene {
-        let groups = self
-            .state
-            .groups
-            .iter()
-            .map(|g| GroupSpec {
-                kind: g.kind.clone(),
-                name: g.name.clone(),
-                weight: g.weight,
-                selection: match (&g.faces, &g.vertices) {
-                    (Some(faces), _) => SelectionSpec::Faces(faces.iter().map(|&f| f as usize).collect()),
-                    (None, None) => SelectionSpec::All,
-                    (None, Some(list)) => SelectionSpec::Vertices(list.iter().map(|&v| v as usize).collect()),
-                },
-                targets: if g.role == GroupRole::Handle {
-                    Targets { explicit: Some(g.targets.iter().map(|t| t.to_array()).collect()), ..Targets::default() }
-                } else {
-                    Targets::default()
-                },
-                options: (*g.options).clone(),
-            })
-            .collect();
+        let groups = self.state.groups.iter().map(|g| g.spec.clone()).collect();
         Scene {
             mesh: MeshSettings {
                 path: mesh_path.into(),
@@ -135,16 +92,7 @@ impl Document {
                 normalize: self.state.rest.normalize,
                 tetrahedralize: false,
             },
-            // One run of up to `iterations` to the tolerance: what the editor converges with.
-            solver: SolverSettings {
-                iterations: self.state.iterations,
-                steps: 1,
-                tolerance: self.state.tolerance,
-                acceleration: self.state.acceleration,
-                anderson_window: self.state.anderson_window,
-                lbfgs_memory: self.state.lbfgs_memory,
-                ..self.solver_settings
-            },
+            solver: self.solver_settings(),
             groups,
             output: Default::default(),
             base_dir: PathBuf::new(),
@@ -197,18 +145,53 @@ impl Document {
     }
 }
 
-/// The vertices a scene selection picks (input frame): `None` for all, else in listed order or
-/// ascending (as the scene loader does).
-fn resolve_selection(spec: &SelectionSpec, mesh: &Mesh) -> Result<Option<Vec<u32>>, String> {
-    match spec {
-        SelectionSpec::All => Ok(None),
-        _ => Ok(Some(spec.resolve(&mesh.positions)?.into_iter().map(|v| v as u32).collect())),
+/// A scene's group as the editor keeps it (see [`Group`]) and its role: a type with targets
+/// is a handle on an ascending vertex list with explicit targets (box and sphere selections
+/// resolved, translate and rotate applied, spin dropped); a shape-model type over all vertices
+/// with no options is part of the shape model; smoothing with no options is smoothing; anything
+/// else is kept as an "other" group, its box or sphere resolved to a vertex list and its faces
+/// sorted.
+///
+/// # Errors
+/// An unknown type, a vertex or face out of range, a vertex listed twice in a handle, bad
+/// targets.
+fn editor_group(spec: &GroupSpec, rest: &Rest) -> Result<(GroupRole, GroupSpec), Cause> {
+    let ty = shapeup_core::constraints::constraint_type(&spec.kind).map_err(Cause::new)?;
+    if ty.has_targets() {
+        let (picked, targets) = spec.input_targets(&rest.mesh).map_err(Cause::new)?;
+        // Ascending, as the editor keeps every selection (targets follow their vertex).
+        let mut pairs: Vec<(usize, DVec3)> = picked.into_iter().zip(targets).collect();
+        pairs.sort_unstable_by_key(|&(v, _)| v);
+        let (vertices, targets): (Vec<usize>, Vec<DVec3>) = pairs.into_iter().unzip();
+        let spec = GroupSpec {
+            selection: SelectionSpec::Vertices(vertices),
+            targets: explicit_targets(targets),
+            ..spec.clone()
+        };
+        return Ok((GroupRole::Handle, spec));
     }
-}
-
-/// A position group's targets (input frame), as the scene loader computes them: explicit, or
-/// rest rotated about its centre (default the centroid), then translated.
-fn position_targets(vertices: &[u32], targets: &Targets, mesh: &Mesh) -> Result<Vec<DVec3>, String> {
-    let rest: Vec<DVec3> = vertices.iter().map(|&v| mesh.positions[v as usize]).collect();
-    targets.resolve(&rest).map_err(|e| e.to_string())
+    let selection = match &spec.selection {
+        SelectionSpec::All => SelectionSpec::All,
+        SelectionSpec::Faces(list) => {
+            let m = rest.geometry.faces.len();
+            if let Some(&f) = list.iter().find(|&&f| f >= m) {
+                return Err(Cause::text(format!("face {f} is out of range (the mesh has {m} faces)")));
+            }
+            let mut list = list.clone();
+            list.sort_unstable();
+            list.dedup();
+            SelectionSpec::Faces(list)
+        }
+        other => SelectionSpec::Vertices(other.resolve(&rest.mesh.positions).map_err(Cause::new)?),
+    };
+    let shape_kind = ShapeModel::ALL.iter().any(|m| m.groups().iter().any(|(k, _)| *k == spec.kind));
+    let plain = spec.options.is_empty();
+    let role = if shape_kind && plain && selection == SelectionSpec::All {
+        GroupRole::Shape
+    } else if spec.kind == "smoothing" && plain {
+        GroupRole::Smoothing
+    } else {
+        GroupRole::Other
+    };
+    Ok((role, GroupSpec { selection, targets: Targets::default(), ..spec.clone() }))
 }

@@ -4,6 +4,7 @@
 //! The panel edits [`SimulationSettings`] in place and says what the user asked for; the editor
 //! acts on it (starting, pausing, dropping runners, [`SimulationRunner::update_settings`]).
 
+use crate::error::TetrahedraError;
 use crate::simulation::{DynamicsModel, SimulationRunner, SimulationSettings};
 use eframe::egui;
 use egui::Color32;
@@ -42,7 +43,7 @@ pub fn dynamics_panel(
     ui: &mut egui::Ui,
     settings: &mut SimulationSettings,
     runner: Option<&SimulationRunner>,
-    tetrahedralize: Result<(), String>,
+    tetrahedralize: Result<(), TetrahedraError>,
 ) -> Option<DynamicsAction> {
     let before = *settings;
     let mut action = None;
@@ -82,7 +83,7 @@ pub fn dynamics_panel(
             .add_enabled(available, egui::Checkbox::new(&mut tick, "Tetrahedralize"))
             .on_hover_text("fill the closed surface with tetrahedra (TetGen): a solid body");
         if let Err(why) = &tetrahedralize {
-            response.on_disabled_hover_text(why.as_str());
+            response.on_disabled_hover_text(why.to_string());
         }
         if tick != settings.tetrahedralize {
             settings.tetrahedralize = tick;
@@ -127,7 +128,7 @@ pub fn dynamics_panel(
             s.steps, s.steps_per_second, s.step_ms, s.local_ms, s.global_ms
         ));
         if let Some(e) = s.error {
-            ui.colored_label(Color32::RED, e);
+            ui.colored_label(Color32::RED, e.to_string());
         }
         ui.label("alt+left drag: grab and pull the mesh");
     }

@@ -121,7 +121,7 @@ pub(super) fn push_bounded(latencies: &mut VecDeque<f64>, ms: f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::gui::app::render_scale;
+    use crate::gui::viewport::render_scale;
 
     #[test]
     fn a_frame_counts_as_slow_only_for_its_own_drawing() {

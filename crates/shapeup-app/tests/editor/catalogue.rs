@@ -43,8 +43,10 @@ fn a_face_group_is_built_on_the_selected_faces_solved_and_replayed() {
     doc.apply(Command::SelectFaces { faces: quads.clone(), mode: SelectMode::Replace }).unwrap();
     doc.apply(Command::AddConstraint { kind: "parallelogram".into(), options: Default::default() }).unwrap();
     let group = doc.groups().last().unwrap().clone();
-    assert_eq!((group.kind.as_str(), group.role), ("parallelogram", GroupRole::Other));
-    assert_eq!(group.faces.as_deref(), Some(&quads[..]));
+    assert_eq!((group.spec.kind.as_str(), group.role), ("parallelogram", GroupRole::Other));
+    // The group keeps face indices as a scene lists them.
+    let quad_faces: Vec<usize> = quads.iter().map(|&f| f as usize).collect();
+    assert_eq!(group.faces(), Some(&quad_faces[..]));
     // A handle: every vertex held softly where it is.
     doc.apply(Command::Select { vertices: (0..doc.num_vertices() as u32).collect(), mode: SelectMode::Replace })
         .unwrap();
@@ -65,8 +67,8 @@ fn a_face_group_is_built_on_the_selected_faces_solved_and_replayed() {
     // And the scene reopens in the editor with its face group.
     let reopened = Document::from_scene(&scene).unwrap();
     assert_eq!(
-        reopened.groups().iter().find(|g| g.kind == "parallelogram").unwrap().faces.as_deref(),
-        Some(&quads[..])
+        reopened.groups().iter().find(|g| g.spec.kind == "parallelogram").unwrap().faces(),
+        Some(&quad_faces[..])
     );
 }
 
@@ -83,10 +85,10 @@ fn options_from_the_widgets_reach_the_group_and_bad_ones_are_refused_by_name() {
     let mut options = serde_json::Map::new();
     options.insert("strain_freedom".into(), serde_json::Value::from(0.2));
     doc.apply(Command::AddConstraint { kind: "triangle_strain".into(), options }).unwrap();
-    assert_eq!(doc.groups().last().unwrap().options.get("strain_freedom"), Some(&serde_json::Value::from(0.2)));
+    assert_eq!(doc.groups().last().unwrap().spec.options.get("strain_freedom"), Some(&serde_json::Value::from(0.2)));
     // A type with targets becomes a handle at the current positions.
     doc.apply(Command::AddConstraint { kind: "position".into(), options: Default::default() }).unwrap();
     let handle = doc.groups().last().unwrap();
     assert_eq!(handle.role, GroupRole::Handle);
-    assert_eq!(handle.targets.len(), 50);
+    assert_eq!(handle.targets().len(), 50);
 }

@@ -224,10 +224,10 @@ fn fix_selection_makes_one_handle_at_the_current_positions() {
     let handles: Vec<_> = doc.handles().collect();
     assert_eq!(handles.len(), 1);
     let handle = handles[0];
-    assert_eq!((handle.key, handle.role, handle.weight), (key, GroupRole::Handle, 1.0));
-    assert_eq!(handle.vertices.as_deref(), Some(&[3, 7, 11][..]));
+    assert_eq!((handle.key, handle.role, handle.spec.weight), (key, GroupRole::Handle, 1.0));
+    assert_eq!(handle.vertices(), Some(&[3, 7, 11][..]));
     let expected: Vec<DVec3> = [3, 7, 11].iter().map(|&v| doc.positions()[v]).collect();
-    assert_eq!(handle.targets, expected);
+    assert_eq!(handle.targets(), expected);
     assert!(handle.covers(7) && !handle.covers(8));
     assert_eq!(doc.groups()[0].role, GroupRole::Shape);
     assert!(doc.groups()[0].covers(12345 % doc.num_vertices() as u32), "shape groups cover every vertex");
@@ -241,7 +241,7 @@ fn undo_and_redo() {
     doc.apply(Command::MoveHandle { handle: key, delta: DVec3::X }).unwrap();
     let moved = doc.state().clone();
     assert!(doc.undo());
-    assert_eq!(doc.group(key).unwrap().targets[0], doc.rest_positions()[1]);
+    assert_eq!(doc.group(key).unwrap().targets()[0], doc.rest_positions()[1]);
     assert!(doc.undo());
     assert_eq!(doc.state(), &before);
     assert!(!doc.can_undo() && !doc.undo());
@@ -270,7 +270,7 @@ fn a_drag_is_one_undo_step() {
         doc.solve(2).unwrap();
     }
     doc.end_drag();
-    let target = doc.group(key).unwrap().targets[0];
+    let target = doc.group(key).unwrap().targets()[0];
     assert!((target - doc.rest_positions()[5] - DVec3::new(0.1, 0.0, 0.0)).length() < 1e-12);
     assert!(doc.undo());
     assert_eq!(doc.state(), &before, "one undo step undoes the whole drag");
@@ -294,7 +294,7 @@ fn undo_during_a_drag_does_nothing_and_the_drag_stays_one_step() {
         doc.apply(step.clone()).unwrap();
     }
     doc.end_drag();
-    let target = doc.group(key).unwrap().targets[0];
+    let target = doc.group(key).unwrap().targets()[0];
     assert!((target - doc.rest_positions()[5] - DVec3::new(0.07, 0.0, 0.0)).length() < 1e-12);
     assert!(doc.undo());
     assert_eq!(doc.state(), &before, "one undo undoes the whole drag, the moves after ctrl+z too");
@@ -308,7 +308,7 @@ fn apply_says_whether_there_is_something_new_to_solve() {
     assert!(!doc.apply(Command::ResetShape).unwrap(), "already at rest");
     assert!(!doc.apply(Command::Select { vertices: vec![1, 2], mode: SelectMode::Replace }).unwrap());
     let key = fix(&mut doc, &[5]);
-    let weight = doc.group(key).unwrap().weight;
+    let weight = doc.group(key).unwrap().spec.weight;
     assert!(!doc.apply(Command::SetWeight { group: key, weight }).unwrap(), "the same weight");
     assert!(doc.apply(Command::SetWeight { group: key, weight: weight * 2.0 }).unwrap());
     assert!(doc.apply(Command::MoveHandle { handle: key, delta: DVec3::X * 0.1 }).unwrap());
@@ -328,11 +328,11 @@ fn switching_the_model_keeps_handles() {
         doc.apply(Command::SetShapeModel(model)).unwrap();
         assert_eq!(doc.shape_model(), Some(model));
         let kinds: Vec<&str> =
-            doc.groups().iter().filter(|g| g.role == GroupRole::Shape).map(|g| g.kind.as_str()).collect();
+            doc.groups().iter().filter(|g| g.role == GroupRole::Shape).map(|g| g.spec.kind.as_str()).collect();
         let expected: Vec<&str> = model.groups().iter().map(|(k, _)| *k).collect();
         assert_eq!(kinds, expected);
         for (g, (_, w)) in doc.groups().iter().zip(model.groups().iter()) {
-            assert_eq!(g.weight, *w, "default weight of {}", g.kind);
+            assert_eq!(g.spec.weight, *w, "default weight of {}", g.spec.kind);
         }
         assert_eq!(doc.handles().cloned().collect::<Vec<_>>(), handles_before);
         doc.solve(3).unwrap();
@@ -351,7 +351,7 @@ fn weights_are_clamped_and_nan_rejected() {
         [(1e9, WEIGHT_RANGE.1), (0.0, WEIGHT_RANGE.0), (-5.0, WEIGHT_RANGE.0), (3.5, 3.5), (f64::INFINITY, 1e4)]
     {
         doc.apply(Command::SetWeight { group: key, weight: given }).unwrap();
-        assert_eq!(doc.group(key).unwrap().weight, expected);
+        assert_eq!(doc.group(key).unwrap().spec.weight, expected);
     }
     let steps = doc.state().clone();
     let error = doc.apply(Command::SetWeight { group: key, weight: f64::NAN }).unwrap_err();
@@ -394,7 +394,10 @@ fn reset_make_rest_and_group_removal() {
     assert_eq!(doc.apply(Command::DeleteHandle(smoothing)).unwrap_err(), EditorError::NotAHandle(smoothing));
     doc.apply(Command::RemoveGroup(smoothing)).unwrap();
     doc.apply(Command::RenameHandle { handle: b, name: "feet".into() }).unwrap();
-    assert_eq!(doc.group(b).unwrap().name, "feet");
+    assert_eq!(doc.group(b).unwrap().spec.name, "feet");
+    // Names stay unique, so that the session saves as a scene that opens again.
+    let taken = doc.apply(Command::RenameHandle { handle: a, name: "feet".into() }).unwrap_err();
+    assert_eq!(taken, EditorError::NameTaken("feet".into()));
     doc.apply(Command::DeleteHandle(a)).unwrap();
     assert_eq!(doc.handles().count(), 1);
     doc.apply(Command::ClearHandles).unwrap();
@@ -429,17 +432,17 @@ fn scene_groups_become_editor_groups() {
     assert_eq!(doc.shape_model(), Some(ShapeModel::EdgeSprings));
     let roles: Vec<GroupRole> = doc.groups().iter().map(|g| g.role).collect();
     assert_eq!(roles, [GroupRole::Shape, GroupRole::Handle, GroupRole::Other]);
-    assert_eq!(doc.groups()[0].weight, 5.0);
+    assert_eq!(doc.groups()[0].spec.weight, 5.0);
     let top = doc.groups()[1].clone();
     let mesh = read_mesh(Path::new(SPOT)).unwrap().mesh;
-    for (&v, t) in top.vertices.as_ref().unwrap().iter().zip(&top.targets) {
-        assert!(mesh.positions[v as usize].y >= 0.6);
-        assert_eq!(*t, mesh.positions[v as usize] + DVec3::new(0.0, 0.1, 0.0));
+    for (&v, t) in top.vertices().unwrap().iter().zip(&top.targets()) {
+        assert!(mesh.positions[v].y >= 0.6);
+        assert_eq!(*t, mesh.positions[v] + DVec3::new(0.0, 0.1, 0.0));
     }
     doc.solve(5).unwrap();
     // The hard handle holds its vertices exactly.
-    for (&v, t) in top.vertices.as_ref().unwrap().iter().zip(&top.targets) {
-        assert!((doc.positions()[v as usize] - *t).length() < 1e-12);
+    for (&v, t) in top.vertices().unwrap().iter().zip(&top.targets()) {
+        assert!((doc.positions()[v] - *t).length() < 1e-12);
     }
     // The floor keeps its option when saved, the handle its `hard`.
     let saved = doc.to_scene(SPOT);
@@ -551,9 +554,9 @@ fn pieces_without_handles() {
     doc.apply(Command::PinFreePieces).unwrap();
     assert_eq!(doc.num_free_pieces(), 0);
     let pins = doc.handles().last().unwrap().clone();
-    assert_eq!(pins.name, "free pieces 1");
-    assert_eq!(pins.weight, shapeup_app::document::FREE_PIECE_WEIGHT);
-    assert_eq!(pins.vertices().unwrap(), (offset..doc.num_vertices() as u32).collect::<Vec<_>>());
+    assert_eq!(pins.spec.name, "free pieces");
+    assert_eq!(pins.spec.weight, shapeup_app::document::FREE_PIECE_WEIGHT);
+    assert_eq!(pins.vertices().unwrap(), (offset as usize..doc.num_vertices()).collect::<Vec<_>>());
     assert_eq!(doc.handles().count(), 2, "one group for every free piece");
     doc.converge().unwrap();
     // The pinned sheets stay at rest (nothing pulls them); the held sheet followed its handle.
@@ -619,9 +622,9 @@ fn undo_steps_restore_what_was_seen() {
     // The whole drag is one step: undo it (after undoing the checkpoint) and the handle is
     // back where it started.
     assert!(doc.undo());
-    let targets = doc.group(head).unwrap().targets.clone();
+    let targets = doc.group(head).unwrap().targets();
     assert!(doc.undo());
-    let back = doc.group(head).unwrap().targets.clone();
+    let back = doc.group(head).unwrap().targets();
     assert!((targets[0].y - back[0].y - 0.1).abs() < 1e-12, "one step undid all ten moves");
     assert_eq!(doc.positions(), &at_rest[..]);
 }

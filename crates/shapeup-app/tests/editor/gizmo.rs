@@ -493,7 +493,7 @@ fn a_document_takes_gizmo_drags_as_single_undo_steps() {
     doc.apply(Command::Select { vertices: corner, mode: SelectMode::Replace }).unwrap();
     doc.apply(Command::FixSelection).unwrap();
     let handle = doc.handles().last().unwrap().key;
-    let targets = |doc: &Document| doc.group(handle).unwrap().targets.clone();
+    let targets = |doc: &Document| doc.group(handle).unwrap().targets();
     let start = targets(&doc);
     let center = doc.group(handle).unwrap().target_centroid().unwrap();
 

@@ -58,7 +58,7 @@ fn the_defaults_are_the_scene_defaults() {
     assert!(s.grab_strength > 0.5 && s.grab_strength <= 1.0, "{}", s.grab_strength);
     assert!(s.validate().is_ok());
     assert!(SimulationSettings { grab_strength: 0.0, ..s }.validate().is_err());
-    assert!(SimulationSettings { stiffness: -1.0, ..s }.validate().unwrap_err().contains("stiffness"));
+    assert!(SimulationSettings { stiffness: -1.0, ..s }.validate().unwrap_err().to_string().contains("stiffness"));
     assert_eq!(DynamicsModel::TetStrain.label(), "Tet strain");
 }
 
@@ -202,7 +202,7 @@ fn live_settings_apply_and_structural_ones_need_a_new_runner() {
         assert!(Instant::now() < deadline, "a bad time step is reported");
         std::thread::sleep(Duration::from_millis(2));
     }
-    assert!(runner.stats().error.unwrap().contains("time_step"));
+    assert!(runner.stats().error.unwrap().to_string().contains("time_step"));
 }
 
 #[test]
@@ -229,14 +229,14 @@ fn tet_strain_needs_tetrahedra_and_a_tetrahedral_mesh_stands_with_it() {
 fn tetrahedralize_needs_a_closed_surface_and_says_why_in_one_line() {
     let grid = shapeup_core::generate::cloth_grid(5, 5, 1.0, 1.0);
     let open = Document::new(grid, ShapeModel::EdgeSprings).unwrap();
-    let why = tetrahedralize_available(&open).unwrap_err();
+    let why = tetrahedralize_available(&open).unwrap_err().to_string();
     let spot = Document::open(Path::new(SPOT), ShapeModel::EdgeSprings).unwrap();
     if cfg!(feature = "tetgen") {
         assert!(why.contains("open"), "{why}");
         assert!(tetrahedralize_available(&spot).is_ok());
     } else {
         assert!(why.contains("TetGen"), "{why}");
-        assert!(tetrahedralize_available(&spot).unwrap_err().contains("TetGen"));
+        assert!(tetrahedralize_available(&spot).unwrap_err().to_string().contains("TetGen"));
     }
     let settings = SimulationSettings { tetrahedralize: true, ..SimulationSettings::default() };
     let e = SimulationRunner::start(&open, settings, || {}).unwrap_err().to_string();
@@ -307,16 +307,20 @@ mod panel {
     use super::*;
     use egui_kittest::Harness;
     use egui_kittest::kittest::{NodeT, Queryable};
+    use shapeup_app::error::TetrahedraError;
     use shapeup_app::gui::dynamics_panel::{DynamicsAction, dynamics_panel};
 
     struct Panel {
         settings: SimulationSettings,
         runner: Option<SimulationRunner>,
-        tetrahedralize: Result<(), String>,
+        tetrahedralize: Result<(), TetrahedraError>,
         actions: Vec<DynamicsAction>,
     }
 
-    fn harness(runner: Option<SimulationRunner>, tetrahedralize: Result<(), String>) -> Harness<'static, Panel> {
+    fn harness(
+        runner: Option<SimulationRunner>,
+        tetrahedralize: Result<(), TetrahedraError>,
+    ) -> Harness<'static, Panel> {
         let state = Panel { settings: SimulationSettings::default(), runner, tetrahedralize, actions: Vec::new() };
         let mut harness = Harness::new_ui_state(
             |ui, p: &mut Panel| {
@@ -362,7 +366,7 @@ mod panel {
 
     #[test]
     fn tetrahedralize_is_disabled_with_the_reason() {
-        let mut h = harness(None, Err("the surface is open".into()));
+        let mut h = harness(None, Err(TetrahedraError::Open { border: 4, a: 0, b: 1 }));
         let tick = h.get_by_label("Tetrahedralize");
         assert!(tick.accesskit_node().is_disabled());
         tick.click();

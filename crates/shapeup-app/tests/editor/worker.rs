@@ -280,8 +280,8 @@ fn the_newest_target_wins() {
     let error = max_distance(sync.positions(), &final_result.positions);
     assert!(error < 1e-6 * diag, "newest targets, converged: off by {error} (diagonal {diag})");
     let handle = sync.group(right).unwrap();
-    for (&v, t) in handle.vertices().unwrap().iter().zip(&handle.targets) {
-        assert!((final_result.positions[v as usize] - *t).length() < 0.05 * diag, "the handle follows its last target");
+    for (&v, t) in handle.vertices().unwrap().iter().zip(&handle.targets()) {
+        assert!((final_result.positions[v] - *t).length() < 0.05 * diag, "the handle follows its last target");
     }
 }
 
@@ -443,8 +443,8 @@ fn the_last_of_many_rapid_requests_is_solved() {
     assert!(result.iterations <= 400);
     assert!(result.apply_to(&mut doc));
     let handle = doc.group(head).unwrap();
-    for (&v, t) in handle.vertices.as_ref().unwrap().iter().zip(&handle.targets) {
-        assert!((doc.positions()[v as usize] - *t).length() < 0.05, "handle vertex follows its last target");
+    for (&v, t) in handle.vertices().unwrap().iter().zip(&handle.targets()) {
+        assert!((doc.positions()[v] - *t).length() < 0.05, "handle vertex follows its last target");
     }
     std::thread::sleep(Duration::from_millis(50));
     assert!(worker.poll().is_none(), "nothing further arrives");
