@@ -77,7 +77,7 @@ pub fn run(input: Option<PathBuf>, screenshot: Option<PathBuf>, size: (u32, u32)
         let mut colors = vec![BASE_COLOR; mesh.num_vertices()];
         for handle in document.handles() {
             for &v in handle.vertices().unwrap_or(&[]) {
-                colors[v as usize] = HANDLE_COLOR;
+                colors[v] = HANDLE_COLOR;
             }
         }
         let (w, h, pixels) = render_rgba(&mesh, &mesh.positions, &colors, size, false).map_err(|e| anyhow!("{e}"))?;
