@@ -5,8 +5,11 @@
 //! what is on screen settles to the converged shape that a saved scene replays.
 //!
 //! This file is the shell: the app's state, the frame's order, applying commands and taking
-//! solver results. The rooms: the side panel's sections in `panels/`, the 3D view in
-//! [`super::viewport`], files and dialogs in [`super::files`], measurements in `metrics`.
+//! solver results. The rooms: the side panel's sections in `panels/`, the 3D view's state in
+//! [`super::viewport`] and its frame in `viewport_ui`, files in [`super::files`] and their rows
+//! and dialogs in `files_ui`, measurements in `metrics`. The shell's fields come from the rooms
+//! below it; `viewport_ui` and `files_ui` add methods to [`EditorApp`] from above it, so no
+//! import runs back up.
 
 use super::dialogs::DialogPurpose;
 use super::dynamics_panel::{DynamicsAction, dynamics_panel};

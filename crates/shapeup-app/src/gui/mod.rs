@@ -4,12 +4,14 @@ pub mod app;
 pub mod dialogs;
 pub mod dynamics_panel;
 pub mod files;
+mod files_ui;
 pub mod gizmo;
 pub mod headless;
 mod metrics;
 mod panels;
 pub mod renderer;
 pub mod viewport;
+mod viewport_ui;
 
 /// The first view of a mesh: a three-quarter view from the +z side, slightly from above.
 pub const INITIAL_YAW: f32 = 0.5;
