@@ -103,13 +103,6 @@ pub enum ParamError {
     Tolerance(f64),
 }
 
-impl From<ParamError> for String {
-    /// The message, for callers that keep errors as text.
-    fn from(e: ParamError) -> String {
-        e.to_string()
-    }
-}
-
 /// Why a simulation cannot be set up.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum DynamicsError {

@@ -27,13 +27,6 @@ impl From<String> for SpecError {
     }
 }
 
-impl From<SpecError> for String {
-    /// The message, for callers that keep errors as text.
-    fn from(e: SpecError) -> String {
-        e.to_string()
-    }
-}
-
 impl From<&str> for SpecError {
     fn from(message: &str) -> Self {
         SpecError::Invalid(message.into())
