@@ -176,11 +176,9 @@ impl PyScene {
         });
         let file = self.scene.file.display();
         let result = result.map_err(|e| match e {
-            RunError::Step { step, source } => value_error(format!("{file}: step {step} of {frames} failed: {source}")),
-            RunError::Energy { step, source } => {
-                SolveFailed::new_err(format!("{file}: energy after step {step}: {source}"))
-            }
             RunError::Stopped(e) => e,
+            e @ RunError::Step { .. } => value_error(format!("{file}: {e}")),
+            e @ RunError::Energy { .. } => SolveFailed::new_err(format!("{file}: {e}")),
         });
         // VTU: the .pvd lists the frames written, also those before an error.
         let totals = match &writer {

@@ -76,13 +76,8 @@ pub fn run(args: &SimulateArgs<'_>) -> Result<()> {
     });
     // The cause in the same line: only the outermost message is printed.
     let result = result.map_err(|e| match e {
-        RunError::Step { step, source } => {
-            anyhow::anyhow!("{}: step {step} of {} failed: {source}", args.scene.display(), args.frames)
-        }
-        RunError::Energy { step, source } => {
-            anyhow::anyhow!("{}: energy after step {step}: {source}", args.scene.display())
-        }
         RunError::Stopped(e) => e,
+        e => anyhow::anyhow!("{}: {e}", args.scene.display()),
     });
     drop(progress);
     // VTU: the .pvd lists the frames written, also those before an error.

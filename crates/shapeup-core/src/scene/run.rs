@@ -231,11 +231,13 @@ impl SceneSimulation {
 /// Why [`SceneSimulation::run`] stopped before its last step.
 #[derive(Debug, thiserror::Error)]
 pub enum RunError<E> {
-    /// Time step `step` (from 1) failed.
-    #[error("step {step} failed: {source}")]
+    /// Time step `step` (from 1) of `frames` failed.
+    #[error("step {step} of {frames} failed: {source}")]
     Step {
         /// The step.
         step: usize,
+        /// The steps the run was asked for.
+        frames: usize,
         /// Why.
         source: StepError,
     },
@@ -274,7 +276,7 @@ impl SceneSimulation {
         on_step(0, &self.simulation, true).map_err(RunError::Stopped)?;
         for k in 1..=frames {
             // Overflowing velocities fail the step whether or not E is recorded (StepError::Diverged).
-            let step = self.step().map_err(|source| RunError::Step { step: k, source })?;
+            let step = self.step().map_err(|source| RunError::Step { step: k, frames, source })?;
             if energies {
                 let energy = match step.energy {
                     Some(e) => e,
