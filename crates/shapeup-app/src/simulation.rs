@@ -107,13 +107,8 @@ impl SimulationSettings {
     /// [`SettingsError`]: the stiffness, time step or damping out of range, or a grab strength
     /// outside (0, 1].
     pub fn validate(&self) -> Result<(), SettingsError> {
-        DynamicsParams {
-            time_step: self.time_step,
-            stiffness: self.stiffness,
-            damping: self.damping,
-            ..DynamicsParams::default()
-        }
-        .validate()?;
+        // The one mapping to the core's settings, checked by the core (gravity is finite).
+        self.params(1.0).validate()?;
         if !(self.grab_strength > 0.0 && self.grab_strength <= 1.0) {
             return Err(SettingsError::GrabStrength(self.grab_strength));
         }
