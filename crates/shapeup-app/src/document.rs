@@ -122,6 +122,8 @@ impl Document {
                 acceleration: solver_settings.acceleration,
                 anderson_window: solver_settings.anderson_window,
                 lbfgs_memory: solver_settings.lbfgs_memory,
+                colliders: Vec::new(),
+                contact: Default::default(),
             },
             solver: EditSolver::new(),
             epoch_start: Arc::new(positions.clone()),

@@ -68,6 +68,11 @@ pub struct EditState {
     pub anderson_window: usize,
     /// Pairs L-BFGS keeps (the scene's `[solver] lbfgs_memory`).
     pub lbfgs_memory: usize,
+    /// The scene's `[[colliders]]`, carried from open to save (mesh paths resolved against
+    /// the scene's folder).
+    pub colliders: Vec<shapeup_core::contact::ColliderSpec>,
+    /// The scene's `[contact]` table.
+    pub contact: shapeup_core::contact::ContactSettings,
 }
 
 impl PartialEq for EditState {
@@ -80,6 +85,8 @@ impl PartialEq for EditState {
             && self.acceleration == other.acceleration
             && self.anderson_window == other.anderson_window
             && self.lbfgs_memory == other.lbfgs_memory
+            && self.colliders == other.colliders
+            && self.contact == other.contact
     }
 }
 

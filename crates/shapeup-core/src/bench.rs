@@ -86,6 +86,8 @@ pub fn scenario_scene(scenario: Scenario, mesh: &Mesh, mesh_path: PathBuf) -> Sc
         mesh: MeshSettings { path: mesh_path.clone(), generate: None, normalize: true, tetrahedralize: false },
         solver: SolverSettings::default(),
         groups,
+        colliders: Vec::new(),
+        contact: Default::default(),
         output: Default::default(),
         base_dir: PathBuf::new(),
         file: mesh_path,

@@ -12,6 +12,7 @@
 //! converts gravity and forces from input units.
 
 use crate::constraints::RowSink;
+use crate::contact::{ContactModel, ContactStats, solve_with_contact};
 use crate::solver::{SolveError, SolverParams, System};
 use glam::DVec3;
 use std::time::Instant;
@@ -137,6 +138,10 @@ pub struct StepReport {
     pub setup_seconds: f64,
     /// Wall-clock seconds of the whole step.
     pub total_seconds: f64,
+    /// What contact did in this step (all 0 without contact).
+    pub contact: ContactStats,
+    /// Seconds in contact detection and the end-of-step projection.
+    pub contact_seconds: f64,
 }
 
 /// Vertices pulled towards points (the editor's mouse grab). [`Simulation::grab`]: each step
@@ -176,6 +181,8 @@ pub struct Simulation {
     target: Vec<DVec3>,
     next: Vec<DVec3>,
     steps: u64,
+    /// Colliders and self-collision, if any ([`Simulation::set_contact`]).
+    contact: Option<ContactModel>,
 }
 
 impl Simulation {
@@ -222,6 +229,7 @@ impl Simulation {
             grab: None,
             hold: None,
             steps: 0,
+            contact: None,
         })
     }
 
@@ -271,14 +279,30 @@ impl Simulation {
         }
         self.system.set_inertial_target(&self.target)?;
         self.next.copy_from_slice(&self.target);
+        // Contact: what may touch during this step, from x_n and the prediction s.
+        let contact_started = Instant::now();
+        let (t0, t1) = (self.time(), self.time() + h);
+        if let Some(contact) = &mut self.contact {
+            contact.begin_step(&self.positions, &self.target, t0, t1);
+        }
+        let mut contact_seconds = contact_started.elapsed().as_secs_f64();
         // 2. Local-global iterations on the inertia + constraint energy; E only if they need it.
         let solver = *self.system.params();
-        let needs_energy = solver.needs_energy();
-        let report = if needs_energy {
-            self.system.solve(&mut self.next, solver.iterations, solver.tolerance)?
-        } else {
-            self.system.iterate(&mut self.next, solver.iterations)?
+        let needs_energy = solver.needs_energy() && self.contact.is_none();
+        let report = match &mut self.contact {
+            // With contact, plain iterations with its targets (the matrix stays the same).
+            Some(contact) => solve_with_contact(&mut self.system, contact, &mut self.next, solver.iterations)?,
+            None if needs_energy => self.system.solve(&mut self.next, solver.iterations, solver.tolerance)?,
+            None => self.system.iterate(&mut self.next, solver.iterations)?,
         };
+        let mut contact_stats = ContactStats::default();
+        if let Some(contact) = &mut self.contact {
+            let t = Instant::now();
+            let inverse_mass: Vec<f64> = self.masses.iter().map(|&m| if m > 0.0 { 1.0 / m } else { 0.0 }).collect();
+            contact.finish_step(&mut self.next, &inverse_mass);
+            contact_stats = contact.stats();
+            contact_seconds += t.elapsed().as_secs_f64();
+        }
         // 3. Velocity update with damping, then the new positions.
         let keep = (1.0 - self.params.damping) / h;
         for ((v, x), q) in self.velocities.iter_mut().zip(&mut self.positions).zip(&self.next) {
@@ -294,7 +318,36 @@ impl Simulation {
             global_seconds: report.global_seconds,
             setup_seconds: report.setup_seconds,
             total_seconds: started.elapsed().as_secs_f64(),
+            contact: contact_stats,
+            contact_seconds,
         })
+    }
+
+    /// Sets the colliders and self-collision the next steps respect (`None`: none). The
+    /// system's matrix is unchanged: contact is a force on the global step's right-hand side
+    /// ([`crate::contact`]).
+    ///
+    /// # Errors
+    /// [`DynamicsError::BadState`] when the model is for another vertex count.
+    pub fn set_contact(&mut self, contact: Option<ContactModel>) -> Result<(), DynamicsError> {
+        if let Some(c) = &contact
+            && c.touching().len() != self.masses.len()
+        {
+            return Err(DynamicsError::BadState(format!(
+                "contact for {} vertices in a simulation of {}",
+                c.touching().len(),
+                self.masses.len()
+            )));
+        }
+        self.contact = contact.filter(ContactModel::is_active);
+        let weights = self.contact.as_ref().map(|c| c.weights(&self.params.inertia(&self.masses)));
+        self.system.set_contact_weights(weights)?;
+        Ok(())
+    }
+
+    /// The contact model, if any.
+    pub fn contact(&self) -> Option<&ContactModel> {
+        self.contact.as_ref()
     }
 
     /// E(x_n) = Σ w_i ‖C_i x_n − p_i(x_n)‖² at the current positions (constraints only, without
@@ -381,6 +434,9 @@ impl Simulation {
             self.params = old;
             return Err(e.into());
         }
+        // The contact weights are relative to the inertia.
+        let weights = self.contact.as_ref().map(|c| c.weights(&params.inertia(&self.masses)));
+        self.system.set_contact_weights(weights)?;
         self.system.set_load_scale(1.0 / params.stiffness)?;
         Ok(())
     }

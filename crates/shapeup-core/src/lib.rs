@@ -50,6 +50,7 @@
 
 pub mod bench;
 pub mod constraints;
+pub mod contact;
 pub mod dynamics;
 pub mod error;
 pub mod generate;

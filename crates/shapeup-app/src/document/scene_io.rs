@@ -74,6 +74,18 @@ impl Document {
             groups.iter().filter(|g| g.role == GroupRole::Shape).map(|g| g.spec.kind.as_str()).collect();
         document.state.shape_model = ShapeModel::from_kinds(&kinds);
         document.state.groups = groups;
+        document.state.colliders = scene
+            .colliders
+            .iter()
+            .cloned()
+            .map(|mut c| {
+                if let shapeup_core::contact::ShapeSpec::Mesh { path, .. } = &mut c.shape {
+                    *path = scene.base_dir.join(&*path);
+                }
+                c
+            })
+            .collect();
+        document.state.contact = scene.contact;
         document.solver.sync(&document.state)?;
         Ok(document)
     }
@@ -94,6 +106,8 @@ impl Document {
             },
             solver: self.solver_settings(),
             groups,
+            colliders: self.state.colliders.clone(),
+            contact: self.state.contact,
             output: Default::default(),
             base_dir: PathBuf::new(),
             file: PathBuf::new(),

@@ -56,6 +56,30 @@ pub fn write_vtu(
     point_vectors: &[PointVectors<'_>],
     warnings: &mut Warnings,
 ) -> io::Result<()> {
+    write_vtu_with_scalars(w, mesh, attributes, point_vectors, &[], warnings)
+}
+
+/// Per-point scalars written beside the positions (e.g. `contact`), one value per vertex.
+#[derive(Debug, Clone, Copy)]
+pub struct PointScalars<'a> {
+    /// Its name in the file.
+    pub name: &'a str,
+    /// One value per vertex.
+    pub values: &'a [f64],
+}
+
+/// [`write_vtu`] with per-point scalars after the vectors.
+///
+/// # Errors
+/// As [`write_vtu`], for the scalars too.
+pub fn write_vtu_with_scalars(
+    w: &mut dyn Write,
+    mesh: &Mesh,
+    attributes: &Attributes,
+    point_vectors: &[PointVectors<'_>],
+    point_scalars: &[PointScalars<'_>],
+    warnings: &mut Warnings,
+) -> io::Result<()> {
     let invalid = |message: String| io::Error::new(io::ErrorKind::InvalidInput, message);
     let n = mesh.positions.len();
     if let Some(v) = point_vectors.iter().find(|v| v.values.len() != n) {
@@ -73,6 +97,15 @@ pub fn write_vtu(
             return Err(invalid(format!("two point data arrays are named '{}'", v.name)));
         }
         point.push(v.name, ElementType::Vectors, flatten(v.values));
+    }
+    for s in point_scalars {
+        if s.values.len() != n {
+            return Err(invalid(format!("point data '{}' has {} values for {n} points", s.name, s.values.len())));
+        }
+        if point.has(s.name) {
+            return Err(invalid(format!("two point data arrays are named '{}'", s.name)));
+        }
+        point.push(s.name, ElementType::Scalars { num_comp: 1, lookup_table: None }, s.values.to_vec().into());
     }
     // The mesh's own arrays come after the caller's, which keep their names on a clash.
     let mut add = |name: &str, elem: ElementType, data: IOBuffer| {

@@ -3,6 +3,7 @@
 
 use super::{Scene, SceneError, SolverSettings};
 use crate::constraints::{attach_degenerate_vertices, held_vertices};
+use crate::contact::{ContactModel, ContactParams, DEFAULT_THICKNESS_FRACTION};
 use crate::dynamics::{DynamicsParams, ParamError, Simulation};
 use crate::geometry::{RestGeometry, WorkingFrame, lumped_masses_surface, lumped_masses_volume};
 use crate::io::{Attributes, read_mesh};
@@ -39,6 +40,8 @@ pub struct LoadedScene {
     pub load_seconds: f64,
     /// Seconds to build rest geometry and constraints.
     pub build_seconds: f64,
+    /// The colliders and self-collision (`None` when the scene has neither).
+    pub contact: Option<ContactModel>,
 }
 
 impl Scene {
@@ -130,6 +133,7 @@ impl Scene {
             stranded.len(),
             || stranded.first().map(|v| format!("vertex {v}")).unwrap_or_default(),
         );
+        let contact = self.build_contact(&mesh, &rest, &frame, &mut warnings)?;
         // Name the mesh file (or, for a generated mesh, the scene) in what building found.
         let source = if self.mesh.generate.is_some() { self.file.clone() } else { self.mesh_path() };
         let warnings = warnings.for_file(&source);
@@ -145,8 +149,119 @@ impl Scene {
             group_ids,
             load_seconds,
             build_seconds: t.elapsed().as_secs_f64(),
+            contact,
         })
     }
+
+    /// The contact thickness in working units: `[contact] thickness` (input units) or
+    /// [`DEFAULT_THICKNESS_FRACTION`] × the rest shape's mean edge length.
+    pub fn contact_thickness(&self, rest: &RestGeometry, frame: &WorkingFrame) -> f64 {
+        match self.contact.thickness {
+            Some(t) => t * frame.scale,
+            None => DEFAULT_THICKNESS_FRACTION * crate::geometry::mean_edge_length(rest),
+        }
+    }
+
+    /// The scene's colliders and `[contact]` settings as a [`ContactModel`] (`None` when there
+    /// are no colliders and no self-collision). Counts, as one warning, the rest shape's
+    /// vertices that start inside a collider or within the thickness of it.
+    ///
+    /// # Errors
+    /// [`SceneError::Invalid`] naming `colliders[i]`: a mesh that cannot be read, has no faces
+    /// or is said to be closed while open.
+    pub fn build_contact(
+        &self,
+        mesh: &Mesh,
+        rest: &RestGeometry,
+        frame: &WorkingFrame,
+        warnings: &mut Warnings,
+    ) -> Result<Option<ContactModel>, SceneError> {
+        if self.colliders.is_empty() && !self.contact.self_collision {
+            return Ok(None);
+        }
+        let thickness = self.contact_thickness(rest, frame);
+        let colliders = self
+            .colliders
+            .iter()
+            .enumerate()
+            .map(|(i, c)| {
+                c.build(frame, &self.base_dir, thickness).map_err(|e| SceneError::Invalid {
+                    path: self.file.clone(),
+                    entry: format!("colliders[{i}]"),
+                    message: e.to_string(),
+                })
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        // Vertices in an element take part; the others keep their positions.
+        let mut active = vec![false; mesh.num_vertices()];
+        for v in mesh.triangles.iter().flatten().chain(mesh.tetrahedra.iter().flatten()) {
+            active[*v as usize] = true;
+        }
+        let overlapping: Vec<usize> = (0..rest.positions.len())
+            .filter(|&v| {
+                active[v] && colliders.iter().any(|c| c.closest_at(rest.positions[v], 0.0).distance < thickness)
+            })
+            .collect();
+        warnings.add_many(
+            "collider_overlaps_rest_shape",
+            "vertices of the rest shape start inside a collider or closer than the contact thickness (they are pushed out at the first step)",
+            overlapping.len(),
+            || overlapping.first().map(|v| format!("vertex {v}")).unwrap_or_default(),
+        );
+        let surface = if mesh.tetrahedra.is_empty() {
+            mesh.triangles.clone()
+        } else {
+            crate::topology::tetrahedron_boundary(&mesh.tetrahedra)
+        };
+        let params =
+            ContactParams { thickness, friction: self.contact.friction, self_collision: self.contact.self_collision };
+        Ok(Some(ContactModel::new(colliders, params, &surface, active)))
+    }
+}
+
+/// Iterations of a static solve between two contact detections: a handle drags the surface
+/// over many iterations, so what touches is found again from where it has got to.
+const STATIC_CONTACT_CHUNK: usize = 10;
+
+/// A static solve with contact: chunks of [`STATIC_CONTACT_CHUNK`] iterations of
+/// [`crate::contact::solve_with_contact`], each detecting from where the last left the
+/// surface (its motion extrapolated) and ending with the contact projection. E after each
+/// chunk is recorded (and passed to `after_iteration` with the iterations so far).
+fn solve_static_with_contact(
+    system: &mut System,
+    contact: &mut ContactModel,
+    q: &mut [DVec3],
+    iterations: usize,
+    mut after_iteration: impl FnMut(usize, f64) -> std::ops::ControlFlow<()>,
+) -> Result<SolveReport, SolveError> {
+    let mut report = SolveReport { initial_energy: system.energy(q)?.total, ..SolveReport::default() };
+    if system.contact_weights().is_none() {
+        // W relative to each vertex's diagonal entry of the static matrix.
+        system.prepare()?;
+        let weights = contact.weights(&system.diagonal());
+        system.set_contact_weights(Some(weights))?;
+    }
+    let mut previous = q.to_vec();
+    let inverse_mass = vec![1.0; q.len()];
+    let mut done = 0;
+    while done < iterations {
+        let chunk = STATIC_CONTACT_CHUNK.min(iterations - done);
+        let predicted: Vec<DVec3> = q.iter().zip(&previous).map(|(&x, &p)| x + (x - p)).collect();
+        previous.copy_from_slice(q);
+        contact.begin_step(q, &predicted, 0.0, 0.0);
+        let part = crate::contact::solve_with_contact(system, contact, q, chunk)?;
+        contact.finish_step(q, &inverse_mass);
+        report.local_seconds += part.local_seconds;
+        report.global_seconds += part.global_seconds;
+        report.setup_seconds += part.setup_seconds;
+        done += chunk;
+        let energy = system.energy(q)?.total;
+        report.energies.push(energy);
+        if after_iteration(done, energy).is_break() {
+            break;
+        }
+    }
+    Ok(report)
 }
 
 /// Why `tetrahedralize = true` failed.
@@ -271,6 +386,11 @@ impl LoadedScene {
     ) -> Result<(Vec<DVec3>, SolveReport), SceneError> {
         let iterations = self.static_iterations(iterations);
         let mut q = self.rest.positions.clone();
+        if let Some(contact) = self.contact.as_mut().filter(|c| c.is_active()) {
+            let report = solve_static_with_contact(&mut self.system, contact, &mut q, iterations, after_iteration)
+                .map_err(|source| SceneError::Solve { path: self.scene.file.clone(), source })?;
+            return Ok((q, report));
+        }
         let report = self
             .system
             .solve_with(&mut q, iterations, self.scene.solver.tolerance, after_iteration)
@@ -350,7 +470,10 @@ impl LoadedScene {
         let params = self.scene.solver.checked_dynamics_params(self.frame.scale).map_err(|e| invalid(e.to_string()))?;
         let system =
             std::mem::replace(&mut self.system, System::new(self.mesh.num_vertices(), SolverParams::default()));
-        Simulation::new(system, self.masses(), self.rest.positions.clone(), params).map_err(|e| invalid(e.to_string()))
+        let mut simulation = Simulation::new(system, self.masses(), self.rest.positions.clone(), params)
+            .map_err(|e| invalid(e.to_string()))?;
+        simulation.set_contact(self.contact.clone()).map_err(|e| invalid(e.to_string()))?;
+        Ok(simulation)
     }
 
     /// Every group with targets that spins (see [`super::Spin`]) in `system` (the scene's,

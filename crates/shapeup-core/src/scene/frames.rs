@@ -4,7 +4,7 @@
 
 use super::LoadedScene;
 use crate::dynamics::Simulation;
-use crate::io::vtu::{PointVectors, write_pvd, write_vtu};
+use crate::io::vtu::{PointScalars, PointVectors, write_pvd, write_vtu_with_scalars};
 use crate::io::{IoError, write_atomic, write_mesh};
 use crate::mesh::Mesh;
 use crate::warnings::Warnings;
@@ -135,7 +135,17 @@ impl FrameWriter<'_> {
             .collect();
         let mut warnings = Warnings::new();
         let vectors = [PointVectors { name: "velocity", values: &velocity }];
-        write_atomic(path, |w| write_vtu(w, mesh, &self.loaded.attributes, &vectors, &mut warnings))?;
+        // With contact: 1 for a vertex touching a collider or the surface at the end of the
+        // step, else 0.
+        let flags: Option<Vec<f64>> = simulation.contact().map(|c| {
+            let touching = c.touching();
+            (0..mesh.positions.len()).map(|v| if touching.get(v) == Some(&true) { 1.0 } else { 0.0 }).collect()
+        });
+        let scalars: Vec<PointScalars> =
+            flags.as_deref().map(|values| PointScalars { name: "contact", values }).into_iter().collect();
+        write_atomic(path, |w| {
+            write_vtu_with_scalars(w, mesh, &self.loaded.attributes, &vectors, &scalars, &mut warnings)
+        })?;
         Ok(warnings.for_file(path))
     }
 

@@ -35,6 +35,10 @@ pub struct Scene {
     pub solver: SolverSettings,
     /// The constraint groups, in file order.
     pub groups: Vec<GroupSpec>,
+    /// The `[[colliders]]` entries, in file order.
+    pub colliders: Vec<crate::contact::ColliderSpec>,
+    /// The `[contact]` table.
+    pub contact: crate::contact::ContactSettings,
     /// The `[output]` table.
     pub output: OutputSettings,
     /// Directory that relative paths start from.

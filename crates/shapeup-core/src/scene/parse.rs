@@ -16,6 +16,10 @@ struct RawScene {
     #[serde(default)]
     constraints: Vec<Entry>,
     #[serde(default)]
+    colliders: Vec<Entry>,
+    #[serde(default)]
+    contact: crate::contact::ContactSettings,
+    #[serde(default)]
     output: OutputSettings,
 }
 
@@ -128,7 +132,33 @@ impl Scene {
             })?;
             groups.push(group);
         }
-        Ok(Scene { mesh: raw.mesh, solver: raw.solver, groups, output: raw.output, base_dir, file: path.into() })
+        raw.contact.validate().map_err(|e| SceneError::Invalid {
+            path: path.into(),
+            entry: "[contact]".into(),
+            message: e.to_string(),
+        })?;
+        let colliders = raw
+            .colliders
+            .into_iter()
+            .enumerate()
+            .map(|(i, Entry(entry))| {
+                crate::contact::ColliderSpec::from_entry(entry).map_err(|e| SceneError::Invalid {
+                    path: path.into(),
+                    entry: format!("colliders[{i}]"),
+                    message: e.to_string(),
+                })
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(Scene {
+            mesh: raw.mesh,
+            solver: raw.solver,
+            groups,
+            colliders,
+            contact: raw.contact,
+            output: raw.output,
+            base_dir,
+            file: path.into(),
+        })
     }
 }
 

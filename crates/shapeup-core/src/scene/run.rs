@@ -133,6 +133,12 @@ pub struct StepTotals {
     pub energy_seconds: f64,
     /// Accelerated iterations replaced by plain ones.
     pub rejected: usize,
+    /// Contacts touching at the end of each step (empty without contact).
+    pub contacts: Vec<usize>,
+    /// Of those, self contacts, per step.
+    pub self_contacts: Vec<usize>,
+    /// Seconds in contact detection and end-of-step projection.
+    pub contact_seconds: f64,
 }
 
 impl StepTotals {
@@ -142,6 +148,7 @@ impl StepTotals {
         self.global_seconds += step.global_seconds;
         self.setup_seconds += step.setup_seconds;
         self.rejected += step.rejected;
+        self.contact_seconds += step.contact_seconds;
     }
 }
 
@@ -174,6 +181,9 @@ impl LoadedScene {
             "energy": totals.energies,
             "kinetic_energy_end": simulation.kinetic_energy(),
             "acceleration": system.params().acceleration.name(),
+            "factorizations": system.factorizations(),
+            "contacts": totals.contacts,
+            "self_contacts": totals.self_contacts,
             "rejected": totals.rejected,
             "warnings": warnings.to_json(),
             "timings": {
@@ -182,6 +192,7 @@ impl LoadedScene {
                 "local_s": totals.local_seconds,
                 "global_s": totals.global_seconds,
                 "energy_s": totals.energy_seconds,
+                "contact_s": totals.contact_seconds,
                 "total_s": total_seconds,
             },
         })
@@ -290,6 +301,10 @@ impl SceneSimulation {
                 totals.energies.push(energy);
             }
             totals.add(&step);
+            if self.simulation.contact().is_some() {
+                totals.contacts.push(step.contact.touching);
+                totals.self_contacts.push(step.contact.self_touching);
+            }
             on_step(k, &self.simulation, k % every.max(1) == 0 || k == frames).map_err(RunError::Stopped)?;
         }
         Ok(totals)

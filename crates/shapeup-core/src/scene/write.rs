@@ -116,6 +116,24 @@ impl Scene {
                 }
             }
         }
+
+        let c = &self.contact;
+        if *c != crate::contact::ContactSettings::default() {
+            out.push_str("\n[contact]\n");
+            line(&mut out, "self_collision", Value::Boolean(c.self_collision));
+            if let Some(t) = c.thickness {
+                line(&mut out, "thickness", Value::Float(t));
+            }
+            line(&mut out, "friction", Value::Float(c.friction));
+        }
+        for collider in &self.colliders {
+            out.push_str("\n[[colliders]]\n");
+            for (key, value) in &collider.to_entry() {
+                if let Some(value) = from_json(value) {
+                    line(&mut out, key, value);
+                }
+            }
+        }
         out
     }
 }
@@ -219,6 +237,29 @@ mod tests {
                 ..SolverSettings::default()
             },
             groups: vec![strain, group("bending", "bend", 1e-4, SelectionSpec::All), handle, rotated, floor],
+            colliders: vec![
+                crate::contact::ColliderSpec {
+                    shape: crate::contact::ShapeSpec::Sphere { center: [0.0, -0.5, 0.25], radius: 0.3 },
+                    friction: 0.4,
+                    velocity: [0.0, 0.0, 0.1],
+                    spin: None,
+                },
+                crate::contact::ColliderSpec {
+                    shape: crate::contact::ShapeSpec::Box {
+                        min: [-1.0, -2.0, -1.0],
+                        max: [1.0, -1.9, 1.0],
+                        rotate: Some(Rotate { axis: [0.0, 0.0, 1.0], angle_deg: 10.0, center: None }),
+                    },
+                    friction: 0.0,
+                    velocity: [0.0; 3],
+                    spin: Some(super::super::Spin {
+                        axis: [0.0, 1.0, 0.0],
+                        deg_per_s: 30.0,
+                        center: Some([0.0, 0.0, 0.0]),
+                    }),
+                },
+            ],
+            contact: crate::contact::ContactSettings { self_collision: true, thickness: Some(0.01), friction: 0.2 },
             output: super::super::OutputSettings { path: Some("out/result.obj".into()), report: None },
             base_dir: PathBuf::from("dir"),
             file: PathBuf::from("s.toml"),

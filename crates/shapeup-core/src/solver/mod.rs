@@ -130,6 +130,14 @@ pub struct System {
     load_scale: f64,
     /// Numeric factorizations so far.
     factorizations: u64,
+    /// The diagonal of the global matrix per vertex (0 outside the system), from the last
+    /// factorization: how contact estimates a vertex's response ([`crate::contact`]).
+    diagonal: Vec<f64>,
+    /// Contact forces per vertex added to the next global steps' right-hand side; empty when
+    /// none ([`System::set_contact_forces`]).
+    contact_rhs: Vec<DVec3>,
+    /// Contact weights W_v on the matrix's diagonal ([`System::set_contact_weights`]).
+    contact_weights: Option<Vec<f64>>,
     /// What does not change between iterations per solved vertex: μ s (dynamic mode) minus the
     /// fixed vertices' share, −Σ_r w_r c_{r,v} Σ_{f fixed} c_{r,f} x_f; empty when neither.
     constant_rhs: Vec<DVec3>,
@@ -159,6 +167,9 @@ impl System {
             rhs_partials: Vec::new(),
             inertia: None,
             inertial_target: Vec::new(),
+            diagonal: Vec::new(),
+            contact_rhs: Vec::new(),
+            contact_weights: None,
             held_rhs: Vec::new(),
             held: Vec::new(),
             load_rhs: Vec::new(),
@@ -386,6 +397,16 @@ impl System {
             for (s, &v) in self.assembly.solved.iter().enumerate() {
                 values[self.assembly.slot(s, s)] += mu[v as usize];
             }
+        }
+        if let Some(w) = &self.contact_weights {
+            for (s, &v) in self.assembly.solved.iter().enumerate() {
+                values[self.assembly.slot(s, s)] += w[v as usize];
+            }
+        }
+        self.diagonal.clear();
+        self.diagonal.resize(self.num_vertices, 0.0);
+        for (s, &v) in self.assembly.solved.iter().enumerate() {
+            self.diagonal[v as usize] = values[self.assembly.slot(s, s)];
         }
         if let Some(factor) = self.factor.as_mut() {
             factor.factorize(&values).map_err(SolveError::from_factor)?;
@@ -619,6 +640,14 @@ impl System {
                 *b = [c.x, c.y, c.z, 0.0];
             }
         }
+        if !self.contact_rhs.is_empty() {
+            for (b, &s) in self.rhs.iter_mut().zip(factor.permutation()) {
+                let f = self.contact_rhs[self.assembly.solved[s as usize] as usize];
+                b[0] += f.x;
+                b[1] += f.y;
+                b[2] += f.z;
+            }
+        }
         global::right_hand_side(
             &self.assembly,
             &self.rhs_map,
@@ -671,6 +700,56 @@ impl System {
     pub fn is_solved(&self, v: usize) -> bool {
         self.is_assembled()
             && (self.assembly.solved_index.get(v).is_some_and(|&s| s != u32::MAX) || self.assembly.is_fixed(v))
+    }
+
+    /// The global matrix's diagonal entry of every vertex (0 for a vertex outside the
+    /// system), as of the last factorization ([`System::prepare`]).
+    pub fn diagonal(&self) -> Vec<f64> {
+        if self.diagonal.len() == self.num_vertices { self.diagonal.clone() } else { vec![0.0; self.num_vertices] }
+    }
+
+    /// Adds the forces r (one per vertex, in the matrix's units: the global step solves
+    /// A q = b + r) to the right-hand side of every global step until
+    /// [`System::clear_contact_forces`]. No refactorization.
+    ///
+    /// # Errors
+    /// [`SolveError::WrongLength`].
+    pub fn set_contact_forces(&mut self, forces: &[DVec3]) -> Result<(), SolveError> {
+        self.check_length(forces)?;
+        self.contact_rhs.clear();
+        self.contact_rhs.extend_from_slice(forces);
+        self.map_changed = true;
+        Ok(())
+    }
+
+    /// Puts contact weights W_v (one per vertex, ≥ 0) on the matrix's diagonal, or removes
+    /// them (`None`): a numeric refactorization at the next solve. With weights, every global
+    /// step must get W_v p_v on its right-hand side ([`System::set_contact_forces`]; p_v = q_v
+    /// for a vertex nothing touches): [`crate::contact::solve_with_contact`] does.
+    ///
+    /// # Errors
+    /// [`SolveError::WrongLength`], or a weight that is negative or not finite.
+    pub fn set_contact_weights(&mut self, weights: Option<Vec<f64>>) -> Result<(), SolveError> {
+        if let Some(w) = &weights {
+            self.check_length(w)?;
+            if let Some(&bad) = w.iter().find(|w| !(w.is_finite() && **w >= 0.0)) {
+                return Err(SolveError::BadWeight { name: "contact".into(), value: bad });
+            }
+        }
+        self.contact_weights = weights;
+        self.mark(Stale::Values);
+        self.map_changed = true;
+        Ok(())
+    }
+
+    /// The contact weights, if set ([`System::set_contact_weights`]).
+    pub fn contact_weights(&self) -> Option<&[f64]> {
+        self.contact_weights.as_deref()
+    }
+
+    /// Removes the forces [`System::set_contact_forces`] set.
+    pub fn clear_contact_forces(&mut self) {
+        self.contact_rhs.clear();
     }
 
     /// Numeric factorizations of the global matrix so far (a diagnostic: moving targets, hard

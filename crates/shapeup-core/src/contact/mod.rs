@@ -1,0 +1,63 @@
+//! Contact: colliders, self-collision and Coulomb friction, inside the projective solver
+//! without refactoring its matrix (math reference, "Contact").
+//!
+//! Layers: [`shape`] (closest point and signed distance of each collider shape), [`collider`]
+//! (a shape, its friction and rigid motion), the self-collision broad and narrow phase,
+//! [`model`] (detection per step, forces per iteration, projection at the end), and
+//! [`spec`] (the one description of a collider and of `[contact]` that scenes, the command
+//! line, the editor and Python share). [`solve_with_contact`] is the iteration a time step
+//! or a static solve runs when something can touch.
+
+pub mod collider;
+pub mod model;
+mod self_collision;
+pub mod shape;
+pub mod spec;
+
+pub use collider::{Collider, Motion};
+pub use model::{ContactModel, ContactParams, ContactStats};
+pub use shape::{MeshShape, Proximity, Shape};
+pub use spec::{COLLIDER_TYPES, ColliderError, ColliderSpec, ContactSettings, DEFAULT_THICKNESS_FRACTION, ShapeSpec};
+
+use crate::solver::{SolveError, SolveReport, System};
+use glam::DVec3;
+use std::time::Instant;
+
+/// `iterations` local-global iterations from q with contact (see [`model`]): each a local
+/// step (the constraints' projections, then the contact targets at the same q) and a global
+/// step with W_v p_v on its right-hand side. The system must carry the contact weights
+/// ([`System::set_contact_weights`], from [`ContactModel::weights`]). The iterations are plain
+/// ones: the contact targets change with the detection of each step, so the accelerations'
+/// histories do not apply; `report.energies` stays empty.
+///
+/// # Errors
+/// As [`System::global_step`]; [`SolveError::WrongLength`] when the system has no contact
+/// weights. The system's contact forces are cleared whatever happens.
+pub fn solve_with_contact(
+    system: &mut System,
+    contact: &mut ContactModel,
+    q: &mut [DVec3],
+    iterations: usize,
+) -> Result<SolveReport, SolveError> {
+    let mut report = SolveReport::default();
+    let t = Instant::now();
+    system.prepare()?;
+    let weights =
+        system.contact_weights().map(<[f64]>::to_vec).ok_or(SolveError::WrongLength { expected: q.len(), found: 0 })?;
+    report.setup_seconds += t.elapsed().as_secs_f64();
+    let result = (|| {
+        for _ in 0..iterations {
+            let t = Instant::now();
+            system.local_step(q)?;
+            let targets = contact.targets(q, &weights);
+            report.local_seconds += t.elapsed().as_secs_f64();
+            let t = Instant::now();
+            system.set_contact_forces(targets)?;
+            system.global_step(q)?;
+            report.global_seconds += t.elapsed().as_secs_f64();
+        }
+        Ok(())
+    })();
+    system.clear_contact_forces();
+    result.map(|()| report)
+}

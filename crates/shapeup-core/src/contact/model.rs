@@ -1,0 +1,424 @@
+//! Contact inside the local-global iterations, with a constant global matrix.
+//!
+//! Every vertex that takes part has a contact term W_v ‖q_v − p_v(q)‖² whose weight W_v is in
+//! the matrix from the start (as the floor's rows are), so the matrix is factored once per run
+//! whatever touches what. When nothing touches v its target is p_v = q_v (the iterate of the
+//! last global step): the term then only damps the iteration (a proximal term) and vanishes at
+//! the fixed point. W_v = [`CONTACT_WEIGHT`] × the vertex's inertia μ_v = m_v/(k h²) in dynamic
+//! mode, × its diagonal entry in static mode.
+//!
+//! Each step:
+//! 1. **Detection** ([`ContactModel::begin_step`]) from the step's start x_n and its inertial
+//!    prediction s: a vertex near a collider (within the thickness plus twice its predicted
+//!    motion), or whose path x_n → x_n + 2(s − x_n) enters one (continuous check), gets a
+//!    contact; with self-collision, so do vertex–triangle and edge–edge pairs of the surface
+//!    whose swept boxes meet (a BVH over the triangles and one over the edges). A contact is
+//!    a linear gap g(q) = n · Σ_j α_j q_j − c with its normal n, points and thickness fixed
+//!    over the step (the side each pair was on at x_n is kept: no pass-through between
+//!    detections).
+//! 2. **Local step** ([`ContactModel::targets`]): for a collider contact with g < 0, p_v is
+//!    q_v moved out by −g along n, then by Coulomb friction (Macklin, Müller, Chentanez and
+//!    Kim, "Unified Particle Physics for Real-Time Applications", SIGGRAPH 2014, §6.1): the
+//!    tangential slip u_t since x_n, relative to the collider's own motion, is undone when
+//!    ‖u_t‖ ≤ μ(−g) (static friction: the vertex sticks) and shortened by μ(−g) otherwise
+//!    (kinetic). A self contact's correction is shared by its vertices in proportion to
+//!    α_j / W_j, and a vertex in several takes their mean (Jacobi).
+//! 3. **Projection** ([`ContactModel::finish_step`]): what the iterations left inside a
+//!    collider (the contact term is a penalty at a finite weight, and a step runs a finite
+//!    number of iterations) is moved out along the normal, which also removes the velocity into
+//!    it; a path that crossed a collider is stopped where it entered. Self contacts still
+//!    overlapping get a few Gauss–Seidel position corrections.
+
+use super::collider::Collider;
+use super::self_collision::{Surface, detect_self_contacts};
+use glam::DVec3;
+use rayon::prelude::*;
+
+/// Contact settings (working frame).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContactParams {
+    /// Distance kept between a vertex and a collider or another part of the surface
+    /// (working units, ≥ 0).
+    pub thickness: f64,
+    /// Coulomb μ for self contact.
+    pub friction: f64,
+    /// Whether the surface collides with itself.
+    pub self_collision: bool,
+}
+
+/// One contact over one step: g(q) = n · Σ_j α_j q_j − offset, with its forces.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Contact {
+    pub(crate) vertices: [u32; 4],
+    pub(crate) alpha: [f64; 4],
+    pub(crate) len: u8,
+    pub(crate) normal: DVec3,
+    /// n · (surface point) + thickness for a collider, the thickness for a pair.
+    pub(crate) offset: f64,
+    pub(crate) friction: f64,
+    /// The collider's motion over the step at the contact (0 for a pair).
+    pub(crate) shift: DVec3,
+    /// Which collider (for collider contacts), or `u32::MAX` for a self contact.
+    pub(crate) collider: u32,
+}
+
+impl Contact {
+    pub(crate) fn new(vertices: &[u32], alpha: &[f64], normal: DVec3, offset: f64, friction: f64) -> Contact {
+        let mut v = [0; 4];
+        let mut a = [0.0; 4];
+        v[..vertices.len()].copy_from_slice(vertices);
+        a[..alpha.len()].copy_from_slice(alpha);
+        Contact {
+            vertices: v,
+            alpha: a,
+            len: vertices.len() as u8,
+            normal,
+            offset,
+            friction,
+            shift: DVec3::ZERO,
+            collider: u32::MAX,
+        }
+    }
+
+    fn terms(&self) -> impl Iterator<Item = (usize, f64)> + '_ {
+        self.vertices[..self.len as usize].iter().zip(&self.alpha).map(|(&v, &a)| (v as usize, a))
+    }
+
+    /// g(q): negative when too close.
+    pub(crate) fn gap(&self, q: &[DVec3]) -> f64 {
+        self.normal.dot(self.terms().map(|(v, a)| a * q[v]).sum::<DVec3>()) - self.offset
+    }
+
+    /// Tangential relative slip since the step's start (minus the collider's motion).
+    fn slip(&self, q: &[DVec3], start: &[DVec3]) -> DVec3 {
+        let u = self.terms().map(|(v, a)| a * (q[v] - start[v])).sum::<DVec3>() - self.shift;
+        u - self.normal.dot(u) * self.normal
+    }
+}
+
+/// Colliders, self-collision and the contacts of the current step.
+#[derive(Debug, Clone)]
+pub struct ContactModel {
+    colliders: Vec<Collider>,
+    params: ContactParams,
+    surface: Option<Surface>,
+    /// Vertices that take part (simulated, with mass or in the system).
+    active: Vec<bool>,
+    contacts: Vec<Contact>,
+    forces: Vec<DVec3>,
+    start: Vec<DVec3>,
+    /// Step interval [t0, t1] the contacts were detected for.
+    times: (f64, f64),
+    /// Per vertex: whether a contact touched it at the end of the last step.
+    touching: Vec<bool>,
+    touching_count: usize,
+    self_count: usize,
+    /// Per vertex, its collider contacts (indices into `contacts`).
+    by_vertex: Vec<Vec<u32>>,
+    /// Where the self contacts start in `contacts` (collider contacts come first).
+    self_from: usize,
+    scratch_sum: Vec<DVec3>,
+    scratch_count: Vec<u32>,
+}
+
+/// What the last step's contact did.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct ContactStats {
+    /// Contacts detected (candidates) this step.
+    pub candidates: usize,
+    /// Contacts touching at the end of the step (force on, or closer than the thickness).
+    pub touching: usize,
+    /// Of those, self contacts.
+    pub self_touching: usize,
+    /// Vertices in a touching contact.
+    pub vertices: usize,
+}
+
+impl ContactModel {
+    /// Contact of `n` vertices (those with `active[v]`) with `colliders`, and with themselves
+    /// over `triangles` when `params.self_collision`.
+    pub fn new(colliders: Vec<Collider>, params: ContactParams, triangles: &[[u32; 3]], active: Vec<bool>) -> Self {
+        let n = active.len();
+        let surface = params.self_collision.then(|| Surface::new(triangles, &active));
+        ContactModel {
+            colliders,
+            params,
+            surface,
+            active,
+            contacts: Vec::new(),
+            forces: vec![DVec3::ZERO; n],
+            start: Vec::new(),
+            times: (0.0, 0.0),
+            touching: vec![false; n],
+            touching_count: 0,
+            self_count: 0,
+            by_vertex: vec![Vec::new(); n],
+            self_from: 0,
+            scratch_sum: Vec::new(),
+            scratch_count: Vec::new(),
+        }
+    }
+
+    /// The colliders.
+    pub fn colliders(&self) -> &[Collider] {
+        &self.colliders
+    }
+
+    /// The settings.
+    pub fn params(&self) -> &ContactParams {
+        &self.params
+    }
+
+    /// Whether anything can touch anything (a collider, or self-collision).
+    pub fn is_active(&self) -> bool {
+        !self.colliders.is_empty() || self.surface.is_some()
+    }
+
+    /// Contacts detected for the current step.
+    pub fn num_candidates(&self) -> usize {
+        self.contacts.len()
+    }
+
+    /// Per vertex: whether it touched something at the end of the last step.
+    pub fn touching(&self) -> &[bool] {
+        &self.touching
+    }
+
+    /// Counts of the last step.
+    pub fn stats(&self) -> ContactStats {
+        ContactStats {
+            candidates: self.contacts.len(),
+            touching: self.touching_count,
+            self_touching: self.self_count,
+            vertices: self.touching.iter().filter(|&&t| t).count(),
+        }
+    }
+
+    /// Detection for the step from time t0 (positions `start`) to t1 (predicted `predicted`):
+    /// see the [module docs](self). Forces start at 0.
+    pub fn begin_step(&mut self, start: &[DVec3], predicted: &[DVec3], t0: f64, t1: f64) {
+        self.start.clear();
+        self.start.extend_from_slice(start);
+        self.times = (t0, t1);
+        let thickness = self.params.thickness;
+        let colliders = &self.colliders;
+        let active = &self.active;
+        let mut contacts: Vec<Contact> = (0..start.len())
+            .into_par_iter()
+            .filter(|&v| active[v])
+            .flat_map_iter(|v| {
+                let (x, s) = (start[v], predicted[v]);
+                let reach = 2.0 * (s - x);
+                let margin = thickness + reach.length();
+                colliders.iter().enumerate().filter_map(move |(k, c)| {
+                    let near = c.closest_at(x, t1);
+                    let (point, normal) = if near.distance < margin + c.displacement(x, t0, t1).length() {
+                        (near.point, near.normal)
+                    } else {
+                        let (t, normal) = c.segment_entry_at(x, x + reach, t1)?;
+                        (x + t * reach, normal)
+                    };
+                    let mut contact =
+                        Contact::new(&[v as u32], &[1.0], normal, normal.dot(point) + thickness, c.friction);
+                    contact.shift = c.displacement(point, t0, t1);
+                    contact.collider = k as u32;
+                    Some(contact)
+                })
+            })
+            .collect();
+        for list in &mut self.by_vertex {
+            list.clear();
+        }
+        for (i, c) in contacts.iter().enumerate() {
+            self.by_vertex[c.vertices[0] as usize].push(i as u32);
+        }
+        self.self_from = contacts.len();
+        if let Some(surface) = &mut self.surface {
+            contacts.extend(detect_self_contacts(surface, start, predicted, thickness, self.params.friction));
+        }
+        self.contacts = contacts;
+    }
+
+    /// The contact weight W_v of every vertex, given the weight scale of each (its inertia
+    /// μ_v in dynamic mode, its diagonal entry in static mode): [`CONTACT_WEIGHT`] × that for
+    /// a vertex that takes part, 0 for the others. Constant for a run: the matrix is factored
+    /// with it once.
+    pub fn weights(&self, scale: &[f64]) -> Vec<f64> {
+        scale.iter().zip(&self.active).map(|(&s, &a)| if a { CONTACT_WEIGHT * s } else { 0.0 }).collect()
+    }
+
+    /// The local step of contact at q: each vertex's target p_v (q_v when nothing touches it;
+    /// else q_v moved out along the contacts' normals, with Coulomb friction, see the
+    /// [module docs](self)), returned as W_v p_v, its share of the global step's right-hand
+    /// side. `weights` are [`ContactModel::weights`].
+    pub fn targets(&mut self, q: &[DVec3], weights: &[f64]) -> &[DVec3] {
+        let start = &self.start;
+        let contacts = &self.contacts;
+        let by_vertex = &self.by_vertex;
+        // Colliders: each vertex on its own (in parallel), its contacts one after the other.
+        self.forces.par_iter_mut().enumerate().for_each(|(v, target)| {
+            let mut p = q[v];
+            for &i in &by_vertex[v] {
+                let c = &contacts[i as usize];
+                let gap = c.normal.dot(p) - c.offset;
+                if gap >= 0.0 {
+                    continue;
+                }
+                p -= gap * c.normal;
+                if c.friction > 0.0 {
+                    let slip = p - start[v] - c.shift;
+                    let slip = slip - c.normal.dot(slip) * c.normal;
+                    p -= coulomb(slip, c.friction * -gap);
+                }
+            }
+            *target = p;
+        });
+        // Self contacts: Jacobi, each vertex moved by the mean of its pairs' corrections, a
+        // pair's correction shared by inverse weight (PBD's rule with W as the masses).
+        if self.self_from < contacts.len() {
+            let inverse = |v: usize| if weights[v] > 0.0 { 1.0 / weights[v] } else { 0.0 };
+            let corrections: Vec<Option<[DVec3; 4]>> = contacts[self.self_from..]
+                .par_iter()
+                .map(|c| {
+                    let gap = c.gap(q);
+                    if gap >= 0.0 {
+                        return None;
+                    }
+                    let w: f64 = c.terms().map(|(v, a)| a * a * inverse(v)).sum();
+                    if w <= 0.0 {
+                        return None;
+                    }
+                    let mut push = -gap * c.normal;
+                    if c.friction > 0.0 {
+                        push -= coulomb(c.slip(q, start), c.friction * -gap);
+                    }
+                    let mut out = [DVec3::ZERO; 4];
+                    for (k, (v, a)) in c.terms().enumerate() {
+                        out[k] = a * inverse(v) / w * push;
+                    }
+                    Some(out)
+                })
+                .collect();
+            let n = q.len();
+            let (sum, count) = (&mut self.scratch_sum, &mut self.scratch_count);
+            sum.clear();
+            sum.resize(n, DVec3::ZERO);
+            count.clear();
+            count.resize(n, 0);
+            for (c, d) in contacts[self.self_from..].iter().zip(&corrections) {
+                if let Some(d) = d {
+                    for (k, (v, _)) in c.terms().enumerate() {
+                        sum[v] += d[k];
+                        count[v] += 1;
+                    }
+                }
+            }
+            for ((t, s), &k) in self.forces.iter_mut().zip(sum.iter()).zip(count.iter()) {
+                if k > 0 {
+                    *t += *s / k as f64;
+                }
+            }
+        }
+        for (t, w) in self.forces.iter_mut().zip(weights) {
+            *t *= *w;
+        }
+        &self.forces
+    }
+
+    /// The end of the step: moves `q` out of colliders and stops paths that crossed one, then
+    /// corrects self contacts still too close; records what touches (see the
+    /// [module docs](self)). `inverse_mass` weighs how a self contact's correction is shared
+    /// (per vertex, 0 for a vertex that must not move).
+    pub fn finish_step(&mut self, q: &mut [DVec3], inverse_mass: &[f64]) {
+        let thickness = self.params.thickness;
+        let (_, t1) = self.times;
+        let colliders = &self.colliders;
+        let active = &self.active;
+        let start = &self.start;
+        // Colliders: each vertex on its own, in parallel.
+        let by_vertex = &self.by_vertex;
+        let contacts = &self.contacts;
+        q.par_iter_mut().enumerate().filter(|(v, _)| active[*v]).for_each(|(v, p)| {
+            for _ in 0..2 {
+                // The step's own contacts first: the side each started on.
+                for &i in &by_vertex[v] {
+                    let c = &contacts[i as usize];
+                    let g = c.normal.dot(*p) - c.offset;
+                    if g < 0.0 {
+                        *p -= g * c.normal;
+                    }
+                }
+                for c in colliders {
+                    if let Some((t, normal)) = c.segment_entry_at(start[v], *p, t1) {
+                        let entry = start[v] + t * (*p - start[v]);
+                        *p = entry + thickness * normal;
+                    }
+                    let near = c.closest_at(*p, t1);
+                    if near.distance < thickness {
+                        *p = near.point + thickness * near.normal;
+                    }
+                }
+            }
+        });
+        // Self contacts: Gauss–Seidel position corrections, sharing by inverse mass.
+        for _ in 0..4 {
+            let mut worst = 0.0f64;
+            for c in self.contacts.iter().filter(|c| c.collider == u32::MAX) {
+                let gap = c.gap(q);
+                if gap >= 0.0 {
+                    continue;
+                }
+                let w: f64 = c.terms().map(|(v, a)| a * a * inverse_mass[v]).sum();
+                if w <= 0.0 {
+                    continue;
+                }
+                worst = worst.max(-gap);
+                let scale = -gap / w;
+                for (v, a) in c.terms() {
+                    q[v] += scale * a * inverse_mass[v] * c.normal;
+                }
+            }
+            if worst <= 1e-3 * thickness {
+                break;
+            }
+        }
+        // What touches at the end: a force on, or within the thickness (plus round-off).
+        self.touching.fill(false);
+        let tolerance = 1e-3 * thickness.max(1e-9);
+        self.touching_count = 0;
+        self.self_count = 0;
+        for c in &self.contacts {
+            if c.gap(q) <= tolerance {
+                self.touching_count += 1;
+                if c.collider == u32::MAX {
+                    self.self_count += 1;
+                }
+                for (v, _) in c.terms() {
+                    self.touching[v] = true;
+                }
+            }
+        }
+        self.forces.fill(DVec3::ZERO);
+    }
+
+    /// The current contacts (for tests and diagnostics).
+    #[cfg(test)]
+    pub(crate) fn contacts(&self) -> &[Contact] {
+        &self.contacts
+    }
+}
+
+/// How many times a vertex's inertia (dynamic mode) or diagonal entry (static mode) its
+/// contact weight W_v is: heavy enough that the shape comes to rest against what it touches
+/// within a step's iterations, light enough that a free vertex converges as before (the
+/// proximal term contracts the error of its slowest modes by W/(μ + W) per iteration at
+/// most). The projection at the end of each step removes what penetration is left.
+pub const CONTACT_WEIGHT: f64 = 1.0;
+
+/// The Coulomb friction correction of a tangential slip `slip` under a normal correction whose
+/// friction bound is `bound` = μ × depth: all of it when ‖slip‖ ≤ bound (static), else `bound`
+/// of it along the slip (kinetic).
+fn coulomb(slip: DVec3, bound: f64) -> DVec3 {
+    let length = slip.length();
+    if length <= bound { slip } else { slip * (bound / length) }
+}

@@ -1,0 +1,428 @@
+//! Collider shapes at rest and their one query: the closest surface point of a point, the
+//! outward normal there and the signed distance (negative inside).
+//!
+//! Plane, sphere, capsule and box are closed-form; a mesh is a parry3d `TriMesh` (its own BVH),
+//! whose inside/outside test uses angle-weighted pseudo-normals (Bærentzen and Aanæs, "Signed
+//! distance computation using the angle weighted pseudonormal", IEEE TVCG 2005): robust at
+//! edges and vertices of a closed, consistently oriented mesh. An open mesh is one-sided: its
+//! front is where the faces' normals point, and a point behind it counts as inside only
+//! within the mesh's `thickness` (deeper, it is free: it came from behind).
+
+use glam::{DMat3, DQuat, DVec3};
+use parry3d_f64::query::{PointQueryWithLocation, Ray, RayCast};
+use parry3d_f64::shape::{TriMesh, TriMeshFlags};
+
+/// What a query finds: the closest point on the surface, the outward unit normal there and
+/// the signed distance of the query point (negative inside, +∞ when nothing answers).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Proximity {
+    /// Closest point on the surface.
+    pub point: DVec3,
+    /// Outward unit normal at `point` (towards the query point when it is outside).
+    pub normal: DVec3,
+    /// Signed distance: ‖x − point‖ outside, −‖x − point‖ inside.
+    pub distance: f64,
+}
+
+/// A collider's shape in its rest pose (working frame).
+#[derive(Debug, Clone)]
+pub enum Shape {
+    /// The half-space n·(x − point) ≤ 0 is inside; `normal` is unit.
+    Plane {
+        /// A point on the plane.
+        point: DVec3,
+        /// Unit outward normal.
+        normal: DVec3,
+    },
+    /// A ball.
+    Sphere {
+        /// Centre.
+        center: DVec3,
+        /// Radius > 0.
+        radius: f64,
+    },
+    /// The points within `radius` of the segment ab.
+    Capsule {
+        /// One end of the axis.
+        a: DVec3,
+        /// The other end (≠ a).
+        b: DVec3,
+        /// Radius > 0.
+        radius: f64,
+    },
+    /// An oriented box: centre, half extents along its own axes, and its orientation.
+    Box {
+        /// Centre.
+        center: DVec3,
+        /// Half extents ≥ 0 along the box's axes.
+        half: DVec3,
+        /// Box axes to world.
+        rotation: DQuat,
+    },
+    /// A triangle mesh.
+    Mesh(Box<MeshShape>),
+}
+
+/// A triangle-mesh collider: parry3d's `TriMesh` (BVH, pseudo-normals) and whether it is
+/// closed.
+#[derive(Debug, Clone)]
+pub struct MeshShape {
+    mesh: TriMesh,
+    /// A closed, oriented mesh: inside is inside. Open: one-sided with `thickness`.
+    pub closed: bool,
+    /// Open meshes: how deep behind the front a point still counts as inside (working units).
+    pub thickness: f64,
+}
+
+/// Why a mesh cannot be a collider.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum MeshShapeError {
+    /// No triangles, or parry3d refused the index buffer.
+    #[error("{0}")]
+    Build(String),
+}
+
+impl MeshShape {
+    /// A mesh collider of `positions` and `triangles` (working frame).
+    ///
+    /// # Errors
+    /// No triangles, or triangles parry3d refuses.
+    pub fn new(
+        positions: &[DVec3],
+        triangles: &[[u32; 3]],
+        closed: bool,
+        thickness: f64,
+    ) -> Result<Self, MeshShapeError> {
+        if triangles.is_empty() {
+            return Err(MeshShapeError::Build("the mesh has no triangles".into()));
+        }
+        let vertices = positions.iter().map(|p| to_parry(*p)).collect();
+        let mesh = TriMesh::with_flags(vertices, triangles.to_vec(), TriMeshFlags::ORIENTED)
+            .map_err(|e| MeshShapeError::Build(e.to_string()))?;
+        Ok(MeshShape { mesh, closed, thickness })
+    }
+
+    fn closest(&self, x: DVec3) -> Proximity {
+        let (projection, _) = self.mesh.project_local_point_and_get_location(to_parry(x), false);
+        let point = from_parry(projection.point);
+        let offset = x - point;
+        let length = offset.length();
+        let inside = projection.is_inside;
+        // The direction from the surface to the point, turned outward; on the surface, the
+        // face's normal.
+        let normal = if length > 1e-12 {
+            if inside { -offset / length } else { offset / length }
+        } else {
+            let face = self.mesh.triangle(projection.subshape);
+            face.normal().map(from_parry).unwrap_or(DVec3::Y)
+        };
+        let distance = if inside { -length } else { length };
+        if !self.closed && inside && length > self.thickness {
+            // Deeper behind an open surface than its thickness: not touching it.
+            return Proximity { point, normal, distance: f64::INFINITY };
+        }
+        Proximity { point, normal, distance }
+    }
+
+    /// The first time t ∈ [0, 1] at which x0 + t (x1 − x0) meets the surface, with the
+    /// surface's normal there, if it does.
+    fn segment_hit(&self, x0: DVec3, x1: DVec3) -> Option<(f64, DVec3)> {
+        let d = x1 - x0;
+        let ray = Ray::new(to_parry(x0), to_parry(d));
+        self.mesh
+            .cast_local_ray_and_get_normal(&ray, 1.0, false)
+            .map(|hit| (hit.time_of_impact, from_parry(hit.normal)))
+    }
+
+    /// Number of triangles.
+    pub fn num_triangles(&self) -> usize {
+        self.mesh.indices().len()
+    }
+}
+
+fn to_parry(p: DVec3) -> parry3d_f64::math::Vector {
+    parry3d_f64::math::Vector::new(p.x, p.y, p.z)
+}
+
+fn from_parry(p: parry3d_f64::math::Vector) -> DVec3 {
+    DVec3::new(p.x, p.y, p.z)
+}
+
+impl Shape {
+    /// The closest surface point of `x`, the outward normal and the signed distance (see
+    /// [`Proximity`]).
+    pub fn closest(&self, x: DVec3) -> Proximity {
+        match self {
+            Shape::Plane { point, normal } => {
+                let distance = normal.dot(x - *point);
+                Proximity { point: x - distance * *normal, normal: *normal, distance }
+            }
+            Shape::Sphere { center, radius } => round(*center, x, *radius),
+            Shape::Capsule { a, b, radius } => {
+                let ab = *b - *a;
+                let t = ((x - *a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0);
+                round(*a + t * ab, x, *radius)
+            }
+            Shape::Box { center, half, rotation } => {
+                let local = rotation.inverse() * (x - *center);
+                let (point, normal, distance) = box_closest(local, *half);
+                Proximity { point: *center + *rotation * point, normal: *rotation * normal, distance }
+            }
+            Shape::Mesh(mesh) => mesh.closest(x),
+        }
+    }
+
+    /// Where the segment x0 → x1 first enters the shape from outside: the parameter t ∈ [0, 1]
+    /// and the outward normal there (continuous collision detection against a thin collider,
+    /// which a point can cross within one step). `None` when it does not cross the surface
+    /// inward, or starts inside.
+    pub fn segment_entry(&self, x0: DVec3, x1: DVec3) -> Option<(f64, DVec3)> {
+        match self {
+            Shape::Mesh(mesh) => {
+                let start = mesh.closest(x0);
+                if start.distance < 0.0 {
+                    return None;
+                }
+                let (t, normal) = mesh.segment_hit(x0, x1)?;
+                // Enters from the front: the segment runs against the face's normal.
+                let normal = if normal.dot(x1 - x0) > 0.0 { -normal } else { normal };
+                Some((t, normal))
+            }
+            _ => {
+                // Closed primitives: an exact ray cast (parry3d's) in the shape's own frame.
+                if self.closest(x0).distance < 0.0 {
+                    return None;
+                }
+                let (origin, direction, turn) = match self {
+                    Shape::Box { center, rotation, .. } => {
+                        (rotation.inverse() * (x0 - *center), rotation.inverse() * (x1 - x0), *rotation)
+                    }
+                    _ => (x0, x1 - x0, DQuat::IDENTITY),
+                };
+                let ray = Ray::new(to_parry(origin), to_parry(direction));
+                let hit = match self {
+                    Shape::Plane { point, normal } => {
+                        let shape = parry3d_f64::shape::HalfSpace::new(to_parry(*normal));
+                        let ray = Ray::new(to_parry(origin - *point), to_parry(direction));
+                        shape.cast_local_ray_and_get_normal(&ray, 1.0, true)
+                    }
+                    Shape::Sphere { center, radius } => {
+                        let ray = Ray::new(to_parry(origin - *center), to_parry(direction));
+                        parry3d_f64::shape::Ball::new(*radius).cast_local_ray_and_get_normal(&ray, 1.0, true)
+                    }
+                    Shape::Capsule { a, b, radius } => {
+                        parry3d_f64::shape::Capsule::new(to_parry(*a), to_parry(*b), *radius)
+                            .cast_local_ray_and_get_normal(&ray, 1.0, true)
+                    }
+                    Shape::Box { half, .. } => {
+                        parry3d_f64::shape::Cuboid::new(to_parry(*half)).cast_local_ray_and_get_normal(&ray, 1.0, true)
+                    }
+                    Shape::Mesh(_) => None,
+                }?;
+                Some((hit.time_of_impact, turn * from_parry(hit.normal)))
+            }
+        }
+    }
+}
+
+/// The points within `radius` of `core`: closest point, normal and signed distance of `x`.
+fn round(core: DVec3, x: DVec3, radius: f64) -> Proximity {
+    let offset = x - core;
+    let length = offset.length();
+    // At the very centre any direction is closest: take +y.
+    let normal = if length > 0.0 { offset / length } else { DVec3::Y };
+    Proximity { point: core + radius * normal, normal, distance: length - radius }
+}
+
+/// Closest surface point, outward normal and signed distance of `x` to the box |x_k| ≤ h_k
+/// (box coordinates).
+fn box_closest(x: DVec3, h: DVec3) -> (DVec3, DVec3, f64) {
+    let q = x.abs() - h;
+    if q.max_element() > 0.0 {
+        // Outside: the clamped point.
+        let point = x.clamp(-h, h);
+        let offset = x - point;
+        let length = offset.length();
+        return (point, offset / length, length);
+    }
+    // Inside: out through the nearest face.
+    let axis = if q.x >= q.y && q.x >= q.z {
+        0
+    } else if q.y >= q.z {
+        1
+    } else {
+        2
+    };
+    let mut normal = DVec3::ZERO;
+    normal[axis] = if x[axis] >= 0.0 { 1.0 } else { -1.0 };
+    let mut point = x;
+    point[axis] = normal[axis] * h[axis];
+    (point, normal, q[axis])
+}
+
+/// The rotation of `angle_deg` degrees about unit `axis`.
+pub(crate) fn rotation(axis: DVec3, angle_deg: f64) -> DQuat {
+    DQuat::from_axis_angle(axis, angle_deg.to_radians())
+}
+
+/// Whether `rotation` is (numerically) the identity, for messages and tests.
+#[allow(dead_code)]
+pub(crate) fn is_identity(rotation: DQuat) -> bool {
+    (DMat3::from_quat(rotation) - DMat3::IDENTITY).to_cols_array().iter().all(|v| v.abs() < 1e-12)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn rng(seed: &mut u64) -> f64 {
+        *seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        ((*seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+    }
+
+    fn random_point(seed: &mut u64) -> DVec3 {
+        DVec3::new(rng(seed), rng(seed), rng(seed)) * 2.0
+    }
+
+    /// Brute-force check of a query against samples of the surface: the point found is on it,
+    /// no sample is closer, the sign agrees with `inside`.
+    fn check(shape: &Shape, surface: &[DVec3], inside: impl Fn(DVec3) -> bool) {
+        let mut seed = 7;
+        for _ in 0..300 {
+            let x = random_point(&mut seed);
+            let p = shape.closest(x);
+            let nearest = surface.iter().map(|s| (*s - x).length()).fold(f64::INFINITY, f64::min);
+            assert!(p.distance.abs() <= nearest + 1e-9, "{x:?}: |d| {} > nearest sample {nearest}", p.distance);
+            assert!(p.distance.abs() >= nearest - 0.05, "{x:?}: |d| {} ≪ nearest sample {nearest}", p.distance);
+            assert!(((x - p.point).length() - p.distance.abs()).abs() < 1e-9);
+            assert_eq!(p.distance < 0.0, inside(x), "{x:?}: sign");
+            assert!((p.normal.length() - 1.0).abs() < 1e-12);
+            if p.distance.abs() > 1e-6 {
+                assert!((x - p.point).normalize().dot(p.normal) * p.distance.signum() > 1.0 - 1e-9, "normal");
+            }
+        }
+    }
+
+    fn sphere_samples(center: DVec3, r: f64, n: usize) -> Vec<DVec3> {
+        let mut out = Vec::new();
+        for i in 0..n {
+            let theta = std::f64::consts::PI * (i as f64 + 0.5) / n as f64;
+            for j in 0..2 * n {
+                let phi = std::f64::consts::PI * j as f64 / n as f64;
+                out.push(center + r * DVec3::new(theta.sin() * phi.cos(), theta.cos(), theta.sin() * phi.sin()));
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn sphere_against_samples() {
+        let c = DVec3::new(0.1, -0.2, 0.3);
+        check(&Shape::Sphere { center: c, radius: 0.7 }, &sphere_samples(c, 0.7, 80), |x| (x - c).length() < 0.7);
+    }
+
+    #[test]
+    fn capsule_against_samples() {
+        let (a, b) = (DVec3::new(-0.5, 0.0, 0.0), DVec3::new(0.5, 0.2, 0.0));
+        let mut surface = Vec::new();
+        for k in 0..=40 {
+            let c = a + (b - a) * (k as f64 / 40.0);
+            surface.extend(sphere_samples(c, 0.4, 40));
+        }
+        let shape = Shape::Capsule { a, b, radius: 0.4 };
+        let core = |x: DVec3| {
+            let t = ((x - a).dot(b - a) / (b - a).length_squared()).clamp(0.0, 1.0);
+            (x - (a + t * (b - a))).length()
+        };
+        // Only samples on the capsule's surface count.
+        surface.retain(|s| (core(*s) - 0.4).abs() < 1e-9);
+        check(&shape, &surface, |x| core(x) < 0.4);
+    }
+
+    #[test]
+    fn box_against_samples() {
+        let rotation = rotation(DVec3::new(1.0, 2.0, 0.5).normalize(), 30.0);
+        let (center, half) = (DVec3::new(0.2, 0.1, -0.1), DVec3::new(0.6, 0.3, 0.9));
+        let mut surface = Vec::new();
+        let n = 60;
+        for i in 0..=n {
+            for j in 0..=n {
+                let (u, v) = (2.0 * i as f64 / n as f64 - 1.0, 2.0 * j as f64 / n as f64 - 1.0);
+                for s in [-1.0, 1.0] {
+                    for local in [DVec3::new(s, u, v), DVec3::new(u, s, v), DVec3::new(u, v, s)] {
+                        surface.push(center + rotation * (local * half));
+                    }
+                }
+            }
+        }
+        let shape = Shape::Box { center, half, rotation };
+        check(&shape, &surface, |x| {
+            let l = rotation.inverse() * (x - center);
+            l.abs().cmplt(half).all()
+        });
+    }
+
+    #[test]
+    fn closed_mesh_inside_outside_and_distance() {
+        // An icosphere-like closed mesh: a cube's 12 triangles, outward.
+        let p: Vec<DVec3> = (0..8)
+            .map(|i| {
+                DVec3::new(
+                    if i & 1 == 0 { -0.5 } else { 0.5 },
+                    if i & 2 == 0 { -0.5 } else { 0.5 },
+                    if i & 4 == 0 { -0.5 } else { 0.5 },
+                )
+            })
+            .collect();
+        let t = vec![
+            [0, 2, 1],
+            [1, 2, 3],
+            [4, 5, 6],
+            [5, 7, 6],
+            [0, 1, 4],
+            [1, 5, 4],
+            [2, 6, 3],
+            [3, 6, 7],
+            [0, 4, 2],
+            [2, 4, 6],
+            [1, 3, 5],
+            [3, 7, 5],
+        ];
+        let mesh = Shape::Mesh(Box::new(MeshShape::new(&p, &t, true, 0.0).expect("a cube")));
+        let exact = Shape::Box { center: DVec3::ZERO, half: DVec3::splat(0.5), rotation: DQuat::IDENTITY };
+        let mut seed = 3;
+        for _ in 0..500 {
+            let x = random_point(&mut seed);
+            let (a, b) = (mesh.closest(x), exact.closest(x));
+            assert!((a.distance - b.distance).abs() < 1e-9, "{x:?}: mesh {} box {}", a.distance, b.distance);
+        }
+    }
+
+    #[test]
+    fn open_mesh_is_one_sided_with_thickness() {
+        let p = vec![
+            DVec3::new(-1.0, 0.0, -1.0),
+            DVec3::new(1.0, 0.0, -1.0),
+            DVec3::new(1.0, 0.0, 1.0),
+            DVec3::new(-1.0, 0.0, 1.0),
+        ];
+        // Faces turned to +y.
+        let t = vec![[0, 2, 1], [0, 3, 2]];
+        let mesh = MeshShape::new(&p, &t, false, 0.1).expect("a square");
+        let shape = Shape::Mesh(Box::new(mesh));
+        let above = shape.closest(DVec3::new(0.2, 0.3, 0.1));
+        assert!((above.distance - 0.3).abs() < 1e-12 && above.normal.dot(DVec3::Y) > 0.999);
+        let shallow = shape.closest(DVec3::new(0.2, -0.05, 0.1));
+        assert!((shallow.distance + 0.05).abs() < 1e-12, "within the thickness behind: inside");
+        assert!(shape.closest(DVec3::new(0.2, -0.5, 0.1)).distance.is_infinite(), "deep behind: free");
+    }
+
+    #[test]
+    fn segment_entry_catches_a_thin_box() {
+        let plate = Shape::Box { center: DVec3::ZERO, half: DVec3::new(1.0, 0.0005, 1.0), rotation: DQuat::IDENTITY };
+        let (t, n) = plate.segment_entry(DVec3::new(0.1, 0.2, 0.0), DVec3::new(0.1, -0.3, 0.0)).expect("crosses");
+        assert!((t - 0.199 / 0.5).abs() < 1e-6, "t = {t}");
+        assert!(n.dot(DVec3::Y) > 0.999);
+        assert!(plate.segment_entry(DVec3::new(0.1, 0.2, 0.0), DVec3::new(0.1, 0.1, 0.0)).is_none());
+    }
+}

@@ -1,0 +1,514 @@
+//! The one description of a collider and of the `[contact]` settings, as scenes, the command
+//! line, the editor and Python give them (input frame, input units), and how they become a
+//! [`ContactModel`](super::ContactModel) in the working frame.
+
+use super::collider::{Collider, Motion};
+use super::shape::{MeshShape, Shape, rotation};
+use crate::geometry::WorkingFrame;
+use crate::scene::{Rotate, Spin};
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+use serde_json::{Map, Value};
+use std::path::PathBuf;
+
+/// Mean edge length × this is the default [`ContactSettings::thickness`]: thin enough that
+/// neighbouring vertices of a surface at rest never count as touching, thick enough to be
+/// kept with a few iterations per step.
+pub const DEFAULT_THICKNESS_FRACTION: f64 = 0.25;
+
+/// The `[contact]` table.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct ContactSettings {
+    /// Whether the surface collides with itself (default false).
+    pub self_collision: bool,
+    /// Distance kept from colliders and between parts of the surface (input units ≥ 0;
+    /// default [`DEFAULT_THICKNESS_FRACTION`] × the mean edge length).
+    pub thickness: Option<f64>,
+    /// Coulomb μ ≥ 0 of self contact (default 0).
+    pub friction: f64,
+}
+
+impl Default for ContactSettings {
+    fn default() -> Self {
+        ContactSettings { self_collision: false, thickness: None, friction: 0.0 }
+    }
+}
+
+impl ContactSettings {
+    /// Checks the values, naming the first bad one.
+    ///
+    /// # Errors
+    /// A thickness or friction that is negative or not finite.
+    pub fn validate(&self) -> Result<(), ColliderError> {
+        if let Some(t) = self.thickness
+            && !(t.is_finite() && t >= 0.0)
+        {
+            return Err(ColliderError::Invalid(format!("thickness must be a finite number ≥ 0, found {t}")));
+        }
+        if !(self.friction.is_finite() && self.friction >= 0.0) {
+            return Err(ColliderError::Invalid(format!(
+                "friction must be a finite number ≥ 0, found {}",
+                self.friction
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// A collider's shape as given (input frame).
+#[derive(Debug, Clone, PartialEq)]
+pub enum ShapeSpec {
+    /// `type = "plane"`: the half-space below the plane through `point` with `normal`.
+    Plane {
+        /// A point on the plane.
+        point: [f64; 3],
+        /// Outward normal (non-zero).
+        normal: [f64; 3],
+    },
+    /// `type = "sphere"`.
+    Sphere {
+        /// Centre.
+        center: [f64; 3],
+        /// Radius > 0.
+        radius: f64,
+    },
+    /// `type = "capsule"`: the points within `radius` of the segment ab.
+    Capsule {
+        /// One end.
+        a: [f64; 3],
+        /// The other end (≠ a).
+        b: [f64; 3],
+        /// Radius > 0.
+        radius: f64,
+    },
+    /// `type = "box"`: the axis-aligned box [min, max], optionally turned.
+    Box {
+        /// Lowest corner.
+        min: [f64; 3],
+        /// Highest corner (≥ min).
+        max: [f64; 3],
+        /// A rotation as position groups take (centre default: the box's centre).
+        rotate: Option<Rotate>,
+    },
+    /// `type = "mesh"`: any mesh file shapeup reads, relative to the scene file.
+    Mesh {
+        /// The file.
+        path: PathBuf,
+        /// Whether it is closed (default: closed when every edge has two triangles).
+        closed: Option<bool>,
+        /// An open mesh's thickness behind its front (input units ≥ 0; default the contact
+        /// thickness).
+        thickness: Option<f64>,
+    },
+}
+
+/// One `[[colliders]]` entry.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ColliderSpec {
+    /// The shape.
+    pub shape: ShapeSpec,
+    /// Coulomb μ ≥ 0 (default 0).
+    pub friction: f64,
+    /// Velocity (input units per second; default 0).
+    pub velocity: [f64; 3],
+    /// A constant spin (centre default: the shape's centre).
+    pub spin: Option<Spin>,
+}
+
+/// Why a collider or the contact settings are refused.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ColliderError {
+    /// A value out of range, a missing or unknown key.
+    #[error("{0}")]
+    Invalid(String),
+    /// The mesh file could not be read or used.
+    #[error("{path}: {message}")]
+    Mesh {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        message: String,
+    },
+}
+
+/// The keys every collider takes besides its shape's.
+const COMMON_KEYS: [&str; 4] = ["type", "friction", "velocity", "spin"];
+
+/// The collider types and their own keys.
+pub const COLLIDER_TYPES: [(&str, &[&str]); 5] = [
+    ("plane", &["point", "normal"]),
+    ("sphere", &["center", "radius"]),
+    ("capsule", &["a", "b", "radius"]),
+    ("box", &["min", "max", "rotate"]),
+    ("mesh", &["path", "closed", "thickness"]),
+];
+
+fn invalid(message: impl Into<String>) -> ColliderError {
+    ColliderError::Invalid(message.into())
+}
+
+fn take<T: serde::de::DeserializeOwned>(entry: &mut Map<String, Value>, key: &str) -> Result<Option<T>, ColliderError> {
+    match entry.remove(key) {
+        None => Ok(None),
+        Some(v) => serde_json::from_value(v).map(Some).map_err(|e| invalid(format!("`{key}`: {e}"))),
+    }
+}
+
+fn required<T: serde::de::DeserializeOwned>(
+    entry: &mut Map<String, Value>,
+    key: &str,
+    kind: &str,
+) -> Result<T, ColliderError> {
+    take(entry, key)?.ok_or_else(|| invalid(format!("a {kind} collider needs `{key}`")))
+}
+
+fn finite3(key: &str, v: [f64; 3]) -> Result<DVec3, ColliderError> {
+    let d = DVec3::from(v);
+    if d.is_finite() { Ok(d) } else { Err(invalid(format!("`{key}` must be three finite numbers"))) }
+}
+
+fn positive(key: &str, v: f64) -> Result<f64, ColliderError> {
+    if v.is_finite() && v > 0.0 {
+        Ok(v)
+    } else {
+        Err(invalid(format!("`{key}` must be a finite number > 0, found {v}")))
+    }
+}
+
+impl ColliderSpec {
+    /// Reads one entry (a scene's table, the editor's or Python's dictionary), checking every
+    /// key and value.
+    ///
+    /// # Errors
+    /// [`ColliderError::Invalid`] naming the key: an unknown type or key, a missing key, a
+    /// negative radius or μ, a zero normal or capsule axis, a box with min > max.
+    pub fn from_entry(mut entry: Map<String, Value>) -> Result<ColliderSpec, ColliderError> {
+        let kind: String =
+            take(&mut entry, "type")?.ok_or_else(|| invalid("missing `type` (plane, sphere, capsule, box or mesh)"))?;
+        let Some((_, keys)) = COLLIDER_TYPES.iter().find(|(name, _)| *name == kind) else {
+            return Err(invalid(format!("unknown collider type \"{kind}\" (plane, sphere, capsule, box or mesh)")));
+        };
+        if let Some(key) = entry.keys().find(|k| !COMMON_KEYS.contains(&k.as_str()) && !keys.contains(&k.as_str())) {
+            return Err(invalid(format!(
+                "unknown key `{key}` for a {kind} collider (it takes {}, friction, velocity, spin)",
+                keys.join(", ")
+            )));
+        }
+        let shape = match kind.as_str() {
+            "plane" => ShapeSpec::Plane {
+                point: required(&mut entry, "point", &kind)?,
+                normal: required(&mut entry, "normal", &kind)?,
+            },
+            "sphere" => ShapeSpec::Sphere {
+                center: required(&mut entry, "center", &kind)?,
+                radius: required(&mut entry, "radius", &kind)?,
+            },
+            "capsule" => ShapeSpec::Capsule {
+                a: required(&mut entry, "a", &kind)?,
+                b: required(&mut entry, "b", &kind)?,
+                radius: required(&mut entry, "radius", &kind)?,
+            },
+            "box" => ShapeSpec::Box {
+                min: required(&mut entry, "min", &kind)?,
+                max: required(&mut entry, "max", &kind)?,
+                rotate: take(&mut entry, "rotate")?,
+            },
+            _ => ShapeSpec::Mesh {
+                path: required(&mut entry, "path", &kind)?,
+                closed: take(&mut entry, "closed")?,
+                thickness: take(&mut entry, "thickness")?,
+            },
+        };
+        let spec = ColliderSpec {
+            shape,
+            friction: take(&mut entry, "friction")?.unwrap_or(0.0),
+            velocity: take(&mut entry, "velocity")?.unwrap_or([0.0; 3]),
+            spin: take(&mut entry, "spin")?,
+        };
+        spec.validate()?;
+        Ok(spec)
+    }
+
+    /// The entry [`ColliderSpec::from_entry`] reads back (what a scene file writes).
+    pub fn to_entry(&self) -> Map<String, Value> {
+        let mut m = Map::new();
+        let mut put = |k: &str, v: Value| {
+            m.insert(k.into(), v);
+        };
+        match &self.shape {
+            ShapeSpec::Plane { point, normal } => {
+                put("type", "plane".into());
+                put("point", serde_json::json!(point));
+                put("normal", serde_json::json!(normal));
+            }
+            ShapeSpec::Sphere { center, radius } => {
+                put("type", "sphere".into());
+                put("center", serde_json::json!(center));
+                put("radius", serde_json::json!(radius));
+            }
+            ShapeSpec::Capsule { a, b, radius } => {
+                put("type", "capsule".into());
+                put("a", serde_json::json!(a));
+                put("b", serde_json::json!(b));
+                put("radius", serde_json::json!(radius));
+            }
+            ShapeSpec::Box { min, max, rotate } => {
+                put("type", "box".into());
+                put("min", serde_json::json!(min));
+                put("max", serde_json::json!(max));
+                if let Some(r) = rotate {
+                    put("rotate", serde_json::json!(r));
+                }
+            }
+            ShapeSpec::Mesh { path, closed, thickness } => {
+                put("type", "mesh".into());
+                put("path", serde_json::json!(path));
+                if let Some(c) = closed {
+                    put("closed", serde_json::json!(c));
+                }
+                if let Some(t) = thickness {
+                    put("thickness", serde_json::json!(t));
+                }
+            }
+        }
+        if self.friction != 0.0 {
+            put("friction", serde_json::json!(self.friction));
+        }
+        if self.velocity != [0.0; 3] {
+            put("velocity", serde_json::json!(self.velocity));
+        }
+        if let Some(s) = &self.spin {
+            put("spin", serde_json::json!(s));
+        }
+        m
+    }
+
+    /// The type's name (`"sphere"`, …).
+    pub fn kind(&self) -> &'static str {
+        match self.shape {
+            ShapeSpec::Plane { .. } => "plane",
+            ShapeSpec::Sphere { .. } => "sphere",
+            ShapeSpec::Capsule { .. } => "capsule",
+            ShapeSpec::Box { .. } => "box",
+            ShapeSpec::Mesh { .. } => "mesh",
+        }
+    }
+
+    /// Checks every value (not the mesh file, which [`ColliderSpec::build`] reads).
+    ///
+    /// # Errors
+    /// [`ColliderError::Invalid`] naming the key.
+    pub fn validate(&self) -> Result<(), ColliderError> {
+        match &self.shape {
+            ShapeSpec::Plane { point, normal } => {
+                finite3("point", *point)?;
+                if finite3("normal", *normal)?.length() == 0.0 {
+                    return Err(invalid("`normal` must be non-zero"));
+                }
+            }
+            ShapeSpec::Sphere { center, radius } => {
+                finite3("center", *center)?;
+                positive("radius", *radius)?;
+            }
+            ShapeSpec::Capsule { a, b, radius } => {
+                if finite3("a", *a)? == finite3("b", *b)? {
+                    return Err(invalid("the capsule's axis is zero: `a` and `b` must differ"));
+                }
+                positive("radius", *radius)?;
+            }
+            ShapeSpec::Box { min, max, rotate } => {
+                let (lo, hi) = (finite3("min", *min)?, finite3("max", *max)?);
+                if let Some(k) = (0..3).find(|&k| lo[k] > hi[k]) {
+                    return Err(invalid(format!("`min` > `max` along {} ({} > {})", ["x", "y", "z"][k], lo[k], hi[k])));
+                }
+                if let Some(r) = rotate {
+                    if finite3("rotate.axis", r.axis)?.length() == 0.0 {
+                        return Err(invalid("`rotate.axis` must be non-zero"));
+                    }
+                    if !r.angle_deg.is_finite() {
+                        return Err(invalid("`rotate.angle_deg` must be finite"));
+                    }
+                    if let Some(c) = r.center {
+                        finite3("rotate.center", c)?;
+                    }
+                }
+            }
+            ShapeSpec::Mesh { path, thickness, .. } => {
+                if path.as_os_str().is_empty() {
+                    return Err(invalid("`path` is empty"));
+                }
+                if let Some(t) = thickness
+                    && !(t.is_finite() && *t >= 0.0)
+                {
+                    return Err(invalid(format!("`thickness` must be a finite number ≥ 0, found {t}")));
+                }
+            }
+        }
+        if !(self.friction.is_finite() && self.friction >= 0.0) {
+            return Err(invalid(format!("`friction` must be a finite number ≥ 0, found {}", self.friction)));
+        }
+        finite3("velocity", self.velocity)?;
+        if let Some(s) = &self.spin {
+            if finite3("spin.axis", s.axis)?.length() == 0.0 {
+                return Err(invalid("`spin.axis` must be non-zero"));
+            }
+            if !s.deg_per_s.is_finite() {
+                return Err(invalid("`spin.deg_per_s` must be finite"));
+            }
+            if let Some(c) = s.center {
+                finite3("spin.center", c)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// The collider in the working `frame`; a mesh is read from `base_dir` / path. `thickness`
+    /// is the contact thickness (working units), an open mesh's default.
+    ///
+    /// # Errors
+    /// [`ColliderError::Mesh`] for a mesh that cannot be read, has no faces or is said to be
+    /// closed while open.
+    pub fn build(
+        &self,
+        frame: &WorkingFrame,
+        base_dir: &std::path::Path,
+        thickness: f64,
+    ) -> Result<Collider, ColliderError> {
+        self.validate()?;
+        let point = |p: [f64; 3]| frame.to_working(DVec3::from(p));
+        let length = |l: f64| l * frame.scale;
+        let (shape, center) = match &self.shape {
+            ShapeSpec::Plane { point: p, normal } => {
+                let normal = DVec3::from(*normal).normalize();
+                (Shape::Plane { point: point(*p), normal }, point(*p))
+            }
+            ShapeSpec::Sphere { center, radius } => {
+                (Shape::Sphere { center: point(*center), radius: length(*radius) }, point(*center))
+            }
+            ShapeSpec::Capsule { a, b, radius } => {
+                let (a, b) = (point(*a), point(*b));
+                (Shape::Capsule { a, b, radius: length(*radius) }, 0.5 * (a + b))
+            }
+            ShapeSpec::Box { min, max, rotate } => {
+                let (lo, hi) = (DVec3::from(*min), DVec3::from(*max));
+                let mut center = 0.5 * (lo + hi);
+                let mut turn = glam::DQuat::IDENTITY;
+                if let Some(r) = rotate {
+                    turn = rotation(DVec3::from(r.axis).normalize(), r.angle_deg);
+                    let pivot = r.center.map_or(center, DVec3::from);
+                    center = pivot + turn * (center - pivot);
+                }
+                let center = frame.to_working(center);
+                (Shape::Box { center, half: 0.5 * (hi - lo) * frame.scale, rotation: turn }, center)
+            }
+            ShapeSpec::Mesh { path, closed, thickness: own } => {
+                let file = base_dir.join(path);
+                let fail = |message: String| ColliderError::Mesh { path: file.clone(), message };
+                let loaded = crate::io::read_mesh(&file).map_err(|e| fail(e.to_string()))?;
+                let mesh = loaded.mesh;
+                if mesh.triangles.is_empty() {
+                    return Err(fail(format!("has no faces{}", mesh.why_no_triangles())));
+                }
+                let is_closed = every_edge_twice(&mesh.triangles);
+                if *closed == Some(true) && !is_closed {
+                    return Err(fail(
+                        "is used as closed (closed = true) but is open: some edges have one triangle; drop `closed` to use it one-sided"
+                            .into(),
+                    ));
+                }
+                let positions: Vec<DVec3> = mesh.positions.iter().map(|&p| frame.to_working(p)).collect();
+                let centroid = positions.iter().copied().sum::<DVec3>() / positions.len().max(1) as f64;
+                let use_closed = closed.unwrap_or(is_closed);
+                let behind = own.map_or(thickness, length);
+                let shape =
+                    MeshShape::new(&positions, &mesh.triangles, use_closed, behind).map_err(|e| fail(e.to_string()))?;
+                (Shape::Mesh(Box::new(shape)), centroid)
+            }
+        };
+        let spin = self.spin.map(|s| {
+            let axis = DVec3::from(s.axis).normalize();
+            let c = s.center.map_or(center, point);
+            (axis, c, s.deg_per_s.to_radians())
+        });
+        Ok(Collider {
+            shape,
+            friction: self.friction,
+            motion: Motion { velocity: DVec3::from(self.velocity) * frame.scale, spin },
+        })
+    }
+}
+
+/// Whether every edge of `triangles` belongs to exactly two of them (a closed surface).
+fn every_edge_twice(triangles: &[[u32; 3]]) -> bool {
+    let mut edges: Vec<[u32; 2]> = triangles
+        .iter()
+        .flat_map(|t| [[t[0], t[1]], [t[1], t[2]], [t[2], t[0]]])
+        .map(|[a, b]| if a < b { [a, b] } else { [b, a] })
+        .collect();
+    edges.sort_unstable();
+    let mut i = 0;
+    while i < edges.len() {
+        let mut j = i;
+        while j < edges.len() && edges[j] == edges[i] {
+            j += 1;
+        }
+        if j - i != 2 {
+            return false;
+        }
+        i = j;
+    }
+    true
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn entry(json: &str) -> Map<String, Value> {
+        match serde_json::from_str(json) {
+            Ok(Value::Object(m)) => m,
+            _ => Map::new(),
+        }
+    }
+
+    #[test]
+    fn every_type_reads_and_writes_back() {
+        for text in [
+            r#"{"type": "plane", "point": [0, 0, 0], "normal": [0, 1, 0], "friction": 0.3}"#,
+            r#"{"type": "sphere", "center": [0, 1, 0], "radius": 0.5, "velocity": [1, 0, 0]}"#,
+            r#"{"type": "capsule", "a": [0, 0, 0], "b": [1, 0, 0], "radius": 0.2}"#,
+            r#"{"type": "box", "min": [0, 0, 0], "max": [1, 1, 1], "rotate": {"axis": [0, 1, 0], "angle_deg": 30}}"#,
+            r#"{"type": "mesh", "path": "terrain.obj", "spin": {"axis": [0, 1, 0], "deg_per_s": 90}}"#,
+        ] {
+            let spec = ColliderSpec::from_entry(entry(text)).expect(text);
+            assert_eq!(ColliderSpec::from_entry(spec.to_entry()).expect("written back"), spec, "{text}");
+        }
+    }
+
+    #[test]
+    fn bad_entries_name_the_key() {
+        for (text, words) in [
+            (r#"{"type": "cone"}"#, "unknown collider type \"cone\""),
+            (r#"{"type": "sphere", "center": [0, 0, 0], "radius": -1}"#, "`radius`"),
+            (r#"{"type": "sphere", "center": [0, 0, 0]}"#, "needs `radius`"),
+            (r#"{"type": "sphere", "center": [0, 0, 0], "radius": 1, "radus": 2}"#, "unknown key `radus`"),
+            (r#"{"type": "plane", "point": [0, 0, 0], "normal": [0, 0, 0]}"#, "`normal` must be non-zero"),
+            (r#"{"type": "capsule", "a": [1, 0, 0], "b": [1, 0, 0], "radius": 1}"#, "axis is zero"),
+            (r#"{"type": "box", "min": [0, 2, 0], "max": [1, 1, 1]}"#, "`min` > `max` along y"),
+            (r#"{"type": "sphere", "center": [0, 0, 0], "radius": 1, "friction": -0.1}"#, "`friction`"),
+            (r#"{"type": "mesh", "path": "a.obj", "thickness": -1}"#, "`thickness`"),
+            (r#"{"radius": 1}"#, "missing `type`"),
+        ] {
+            let message = ColliderSpec::from_entry(entry(text)).expect_err(text).to_string();
+            assert!(message.contains(words), "{text}: {message}");
+        }
+    }
+
+    #[test]
+    fn contact_settings_refuse_negative_values() {
+        assert!(ContactSettings { thickness: Some(-1.0), ..Default::default() }.validate().is_err());
+        assert!(ContactSettings { friction: -0.5, ..Default::default() }.validate().is_err());
+        assert!(ContactSettings::default().validate().is_ok());
+    }
+}
