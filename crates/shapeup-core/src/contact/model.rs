@@ -331,7 +331,7 @@ impl ContactModel {
     /// (per vertex, 0 for a vertex that must not move).
     pub fn finish_step(&mut self, q: &mut [DVec3], inverse_mass: &[f64]) {
         let thickness = self.params.thickness;
-        let (_, t1) = self.times;
+        let (t0, t1) = self.times;
         let colliders = &self.colliders;
         let active = &self.active;
         let start = &self.start;
@@ -346,6 +346,11 @@ impl ContactModel {
                     let g = c.normal.dot(*p) - c.offset;
                     if g < 0.0 {
                         *p -= g * c.normal;
+                        // The push out is a normal impulse too: Coulomb friction with it.
+                        if c.friction > 0.0 {
+                            let slip = *p - start[v] - c.shift;
+                            *p -= coulomb(slip - c.normal.dot(slip) * c.normal, c.friction * -g);
+                        }
                     }
                 }
                 for c in colliders {
@@ -355,7 +360,12 @@ impl ContactModel {
                     }
                     let near = c.closest_at(*p, t1);
                     if near.distance < thickness {
+                        let depth = thickness - near.distance;
                         *p = near.point + thickness * near.normal;
+                        if c.friction > 0.0 {
+                            let slip = *p - start[v] - c.displacement(*p, t0, t1);
+                            *p -= coulomb(slip - near.normal.dot(slip) * near.normal, c.friction * depth);
+                        }
                     }
                 }
             }
@@ -413,7 +423,7 @@ impl ContactModel {
 /// within a step's iterations, light enough that a free vertex converges as before (the
 /// proximal term contracts the error of its slowest modes by W/(μ + W) per iteration at
 /// most). The projection at the end of each step removes what penetration is left.
-pub const CONTACT_WEIGHT: f64 = 1.0;
+pub const CONTACT_WEIGHT: f64 = 4.0;
 
 /// The Coulomb friction correction of a tangential slip `slip` under a normal correction whose
 /// friction bound is `bound` = μ × depth: all of it when ‖slip‖ ≤ bound (static), else `bound`

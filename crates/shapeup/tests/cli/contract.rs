@@ -1318,6 +1318,78 @@ fn simulate_rejects_bad_requests_and_writes_nothing() {
 }
 
 #[test]
+fn bad_colliders_name_the_entry_and_write_nothing() {
+    let ws = Workspace::new();
+    let good = "[mesh]\ngenerate = { kind = \"cloth\", vertices = [4, 4], size = [1.0, 1.0] }\n[solver]\nmode = \"dynamic\"\n\
+                [[constraints]]\ntype = \"edge_spring\"\n";
+    let dir = ws.out("frames");
+    for (bad, needle) in [
+        ("[[colliders]]\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = -1.0\n", "colliders[0]: `radius`"),
+        ("[[colliders]]\ntype = \"cone\"\n", "colliders[0]: unknown collider type"),
+        ("[[colliders]]\ntype = \"plane\"\npoint = [0, 0, 0]\nnormal = [0, 0, 0]\n", "`normal` must be non-zero"),
+        ("[[colliders]]\ntype = \"capsule\"\na = [0, 0, 0]\nb = [0, 0, 0]\nradius = 1.0\n", "axis is zero"),
+        ("[[colliders]]\ntype = \"box\"\nmin = [0, 1, 0]\nmax = [1, 0, 1]\n", "`min` > `max`"),
+        ("[[colliders]]\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1.0\nfriction = -1.0\n", "`friction`"),
+        ("[[colliders]]\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1.0\nradus = 2\n", "unknown key `radus`"),
+        ("[[colliders]]\ntype = \"mesh\"\npath = \"missing.obj\"\n", "missing.obj"),
+        ("[contact]\nthickness = -0.1\n", "[contact]: thickness"),
+        ("[contact]\nfriction = -0.1\n", "[contact]: friction"),
+    ] {
+        let scene = ws.scene("bad.toml", &format!("{good}{bad}"));
+        let out = simulate_in(None, &scene, &dir, &["--frames", "3"]);
+        assert_eq!(out.code, Some(1), "{bad}: {}", out.describe());
+        assert!(out.stderr.contains(needle) && out.stderr.contains("bad.toml"), "{bad}: {}", out.stderr);
+        assert_eq!(out.stderr.lines().count(), 1, "{bad}: {}", out.stderr);
+    }
+    // A mesh with no faces, and an open mesh used as closed.
+    write(&ws.path("points.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\n");
+    write(&ws.path("open.obj"), "v 0 0 0\nv 1 0 0\nv 0 0 1\nf 1 3 2\n");
+    for (bad, needle) in [
+        ("[[colliders]]\ntype = \"mesh\"\npath = \"points.obj\"\n", "no faces"),
+        ("[[colliders]]\ntype = \"mesh\"\npath = \"open.obj\"\nclosed = true\n", "is open"),
+    ] {
+        let scene = ws.scene("bad.toml", &format!("{good}{bad}"));
+        let out = simulate_in(None, &scene, &dir, &["--frames", "3"]);
+        assert_eq!(out.code, Some(1), "{bad}: {}", out.describe());
+        assert!(out.stderr.contains(needle) && out.stderr.contains("colliders[0]"), "{bad}: {}", out.stderr);
+    }
+    assert!(!dir.exists(), "no output directory after errors");
+}
+
+#[test]
+fn a_drape_reports_one_factorization_and_contacts_per_step() {
+    let ws = Workspace::new();
+    let scene = ws.scene(
+        "drape.toml",
+        "[mesh]\ngenerate = { kind = \"cloth\", vertices = [11, 11], size = [1.0, 1.0] }\nnormalize = false\n\
+         [solver]\nmode = \"dynamic\"\n[[constraints]]\ntype = \"triangle_strain\"\n\
+         [[colliders]]\ntype = \"sphere\"\ncenter = [0.0, -0.35, 0.0]\nradius = 0.3\n",
+    );
+    let dir = ws.out("frames");
+    let r = ws.out("r.json");
+    let out = simulate_in(
+        None,
+        &scene,
+        &dir,
+        &["--frames", "60", "--every", "60", "--format", "vtu", "--report", r.to_str().unwrap()],
+    );
+    assert_eq!(out.code, Some(0), "{}", out.describe());
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&r).unwrap()).unwrap();
+    assert_eq!(report["factorizations"], 1, "{report}");
+    let contacts = report["contacts"].as_array().unwrap();
+    assert_eq!(contacts.len(), 60);
+    assert!(contacts.last().unwrap().as_u64().unwrap() > 0, "{contacts:?}");
+    let last = std::fs::read_dir(&dir)
+        .unwrap()
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.to_string_lossy().ends_with("60.vtu"))
+        .next_back()
+        .expect("the last frame");
+    let vtu = std::fs::read_to_string(last).unwrap();
+    assert!(vtu.contains("Name=\"contact\""), "the frame carries the contact flag");
+}
+
+#[test]
 fn simulate_every_k_writes_multiples_of_k_and_the_last_frame() {
     let ws = Workspace::new();
     let scene = ws.scene(
