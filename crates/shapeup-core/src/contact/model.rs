@@ -411,11 +411,6 @@ impl ContactModel {
         self.forces.fill(DVec3::ZERO);
     }
 
-    /// The current contacts (for tests and diagnostics).
-    #[cfg(test)]
-    pub(crate) fn contacts(&self) -> &[Contact] {
-        &self.contacts
-    }
 }
 
 /// How many times a vertex's inertia (dynamic mode) or diagonal entry (static mode) its
