@@ -9,7 +9,8 @@ Arrays follow libigl / trimesh / meshio: V float64 (n, 3), F int (m, 3) or a lis
 T int (t, 4). :mod:`shapeup.batch` runs scene files on a Dask cluster.
 
 One module per concept: ``mesh`` (Mesh, read_mesh, write_mesh), ``types`` (ConstraintType,
-constraint_types), ``groups`` (Group), ``solver`` (Solver), ``simulation`` (Simulation),
+constraint_types), ``groups`` (Group), ``contact`` (the colliders and contact settings Solver
+and Simulation share), ``solver`` (Solver), ``simulation`` (Simulation),
 ``scene`` (Scene); ``_checks`` holds the argument checks they share.
 """
 

@@ -9,18 +9,24 @@ import numpy as np
 
 from . import _shapeup
 from ._checks import _count, _indices, _json, _vertices
+from .contact import _Contact
 from .groups import _Groups
 from .mesh import Mesh, _mesh_of
 
 
-class Simulation(_Groups):
+class Simulation(_Groups, _Contact):
     """Projective Dynamics (Bouaziz et al., SIGGRAPH 2014) on one mesh: implicit Euler time
     steps, each a local-global solve of inertia + constraints, in the mesh's units.
 
     Settings (None: the scene files' defaults): ``time_step`` h in s (1/60), ``gravity`` in
     units/s² ((0, −9.81, 0)), ``stiffness`` k (100), ``damping`` d in [0, 1) (0), ``density``
     ρ (1; lumped masses ρ·area/3 per vertex, ρ·volume/4 on tetrahedra), ``iterations`` per step
-    (10), ``tolerance`` (0), ``acceleration`` ("lbfgs")."""
+    (10), ``tolerance`` (0), ``acceleration`` ("lbfgs").
+
+    Contact: :meth:`add_collider` (spheres, planes, capsules, boxes, meshes) and
+    :meth:`set_contact` (thickness, self-collision), as a scene's ``[[colliders]]`` and
+    ``[contact]``; with contact a step runs plain iterations (no tolerance, no acceleration)
+    and :attr:`contact_flags` says which vertices touch."""
 
     def __init__(
         self,
@@ -59,7 +65,12 @@ class Simulation(_Groups):
 
     def step(self, n: int = 1) -> list[dict[str, Any]]:
         """Advances ``n`` time steps (GIL released; Ctrl+C stops between steps). Returns each
-        step's report (energy when computed, iterations, timings)."""
+        step's report: ``energy`` (E when the iterations computed it, else None),
+        ``iterations``, ``rejected``, timings in seconds (``local_s``, ``global_s``,
+        ``setup_s``, ``total_s``, ``contact_s``) and contact counts at the end of the step
+        (0 without contact): ``contacts`` (touching contacts), ``self_contacts`` (of those,
+        the surface with itself), ``contact_candidates`` (detected), ``contact_vertices``
+        (vertices touching)."""
         return json.loads(self._native.step(_count(n, "n")))
 
     @property

@@ -10,11 +10,12 @@ import numpy as np
 
 from . import _shapeup
 from ._checks import _count, _vertices
+from .contact import _Contact
 from .groups import _Groups
 from .mesh import Mesh, _mesh_of
 
 
-class Solver(_Groups):
+class Solver(_Groups, _Contact):
     """The ShapeUp solver (Bouaziz et al., SGP 2012) on one mesh: constraint groups and a
     prefactored sparse Cholesky global step. Works in the mesh's own coordinates (no
     normalization, unlike scene files' default).
@@ -22,6 +23,9 @@ class Solver(_Groups):
     ``Solver(V, F, T=None)`` or ``Solver(mesh=read_mesh(...))``. ``F`` may be triangles
     (m, 3), polygons (m, k) or a list of polygons; face types (plane, circle, rectangle…) act
     on polygons as given.
+
+    Contact: :meth:`add_collider` and :meth:`set_contact`, as a scene's ``[[colliders]]``
+    and ``[contact]`` (static: colliders do not move).
 
     One thread at a time: a call from another thread while it solves raises RuntimeError
     ("Already borrowed"); give each thread its own Solver."""
@@ -48,7 +52,11 @@ class Solver(_Groups):
     ) -> tuple[np.ndarray, dict[str, Any]]:
         """Runs ``iterations`` local-global iterations from ``q`` float64 (n, 3) (default: the
         rest shape), stopping early when the relative energy change is below ``tolerance``
-        (> 0). ``acceleration``: "lbfgs" (default), "anderson" or "none".
+        (> 0). ``acceleration``: "lbfgs" (default), "anderson" or "none". With a collider
+        or self-collision, the iterations are plain ones in chunks of 10, each detecting
+        contact again from where the last left the surface, as ``shapeup deform`` runs a scene
+        with contact: ``tolerance`` and ``acceleration`` do not apply, and ``energy`` holds E
+        after each chunk.
 
         Returns ``(q, report)``: the new positions float64 (n, 3) and a dict with
         ``iterations``, ``initial_energy``, ``energy`` (E after each iteration),

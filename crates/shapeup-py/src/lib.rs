@@ -2,11 +2,12 @@
 //! (`python/shapeup/`) checks shapes and dtypes, builds group entries and documents the API;
 //! this module moves arrays in and out of `shapeup-core` and runs it without the GIL.
 //!
-//! One file per concept, as the Python modules: [`mesh`], [`types`], [`groups`] (the calls
-//! `_Solver` and `_Simulation` share), [`solver`], [`simulation`], [`scene`]; [`convert`] and
-//! [`errors`] hold the array conversions and exception mapping they all use, [`signals`] the
-//! Ctrl+C check of long runs.
+//! One file per concept, as the Python modules: [`mesh`], [`types`], [`groups`] and
+//! [`contact`] (the calls `_Solver` and `_Simulation` share), [`solver`], [`simulation`],
+//! [`scene`]; [`convert`] and [`errors`] hold the array conversions and exception mapping they
+//! all use, [`signals`] the Ctrl+C check of long runs.
 
+mod contact;
 mod convert;
 mod errors;
 mod groups;

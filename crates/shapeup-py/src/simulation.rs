@@ -1,11 +1,12 @@
 //! `_Simulation`: Projective Dynamics on one mesh.
 
+use crate::contact::{ContactSetup, flags};
 use crate::convert::{points, to_array};
 use crate::errors::{solve_error, value_error};
 use crate::groups::{add_entry, held, remove, set_targets, set_weight};
 use crate::mesh::PyMesh;
 use crate::signals::Interrupt;
-use numpy::{PyArray2, PyReadonlyArray2};
+use numpy::{PyArray1, PyArray2, PyReadonlyArray2};
 use pyo3::prelude::*;
 use shapeup_core::dynamics::Simulation as CoreSimulation;
 use shapeup_core::geometry::RestGeometry;
@@ -19,6 +20,7 @@ pub(crate) struct PySimulation {
     mesh: CoreMesh,
     rest: RestGeometry,
     simulation: CoreSimulation,
+    contact: ContactSetup,
 }
 
 #[pymethods]
@@ -35,7 +37,7 @@ impl PySimulation {
         let masses = lumped_masses(&rest, settings.density);
         let system = System::new(mesh.mesh.num_vertices(), settings.solver_params());
         let simulation = CoreSimulation::new(system, masses, rest.positions.clone(), dynamics).map_err(value_error)?;
-        Ok(PySimulation { mesh: mesh.mesh.clone(), rest, simulation })
+        Ok(PySimulation { mesh: mesh.mesh.clone(), rest, simulation, contact: ContactSetup::default() })
     }
 
     /// Adds a group from a scene entry and its selection (JSON text each); returns (id, name,
@@ -61,6 +63,51 @@ impl PySimulation {
         remove(self.simulation.system_mut(), id)
     }
 
+    /// Adds a collider from a scene entry (JSON text); returns its index. The contact model is
+    /// built again (its state starts afresh; the matrix is refactored at the next step).
+    fn add_collider(&mut self, entry: &str) -> PyResult<usize> {
+        let (spec, model) = self.contact.with_collider(entry, &self.mesh, &self.rest)?;
+        self.simulation.set_contact(model).map_err(value_error)?;
+        Ok(self.contact.commit_collider(spec))
+    }
+
+    /// Replaces the `[contact]` settings (JSON text) and builds the contact model again.
+    fn set_contact(&mut self, settings: &str) -> PyResult<()> {
+        let (settings, model) = self.contact.with_settings(settings, &self.mesh, &self.rest)?;
+        self.simulation.set_contact(model).map_err(value_error)?;
+        self.contact.commit_settings(settings);
+        Ok(())
+    }
+
+    /// The colliders as JSON text (a list of scene entries).
+    #[getter]
+    fn colliders(&self) -> String {
+        self.contact.colliders_json()
+    }
+
+    /// The `[contact]` settings as JSON text.
+    #[getter]
+    fn contact_settings(&self) -> String {
+        self.contact.settings_json()
+    }
+
+    /// The contact thickness in use (None without contact).
+    #[getter]
+    fn contact_thickness(&self) -> Option<f64> {
+        self.simulation.contact().map(|c| c.params().thickness)
+    }
+
+    /// Per vertex: touching at the end of the last step.
+    #[getter]
+    fn contact_flags<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<bool>> {
+        flags(py, self.simulation.contact(), self.mesh.num_vertices())
+    }
+
+    #[getter]
+    fn factorizations(&self) -> u64 {
+        self.simulation.system().factorizations()
+    }
+
     /// `n` time steps without the GIL (Ctrl+C stops between steps); returns the steps' reports
     /// as JSON text.
     fn step(&mut self, py: Python<'_>, n: usize) -> PyResult<String> {
@@ -74,6 +121,9 @@ impl PySimulation {
                     "energy": r.energy, "iterations": r.iterations, "rejected": r.rejected,
                     "local_s": r.local_seconds, "global_s": r.global_seconds,
                     "setup_s": r.setup_seconds, "total_s": r.total_seconds,
+                    "contacts": r.contact.touching, "self_contacts": r.contact.self_touching,
+                    "contact_candidates": r.contact.candidates, "contact_vertices": r.contact.vertices,
+                    "contact_s": r.contact_seconds,
                 }));
                 if !simulation.kinetic_energy().is_finite() {
                     return Err(SolveError::NonFiniteEnergy);

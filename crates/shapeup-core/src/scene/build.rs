@@ -226,8 +226,15 @@ const STATIC_CONTACT_CHUNK: usize = 10;
 /// A static solve with contact: chunks of [`STATIC_CONTACT_CHUNK`] iterations of
 /// [`crate::contact::solve_with_contact`], each detecting from where the last left the
 /// surface (its motion extrapolated) and ending with the contact projection. E after each
-/// chunk is recorded (and passed to `after_iteration` with the iterations so far).
-fn solve_static_with_contact(
+/// chunk is recorded (and passed to `after_iteration` with the iterations so far). The
+/// contact weights are set relative to the static matrix's diagonal when `system` has none
+/// (clear them, [`System::set_contact_weights`] with `None`, after changing the groups or
+/// the model). What [`LoadedScene::solve_static`] runs for a scene with contact, and Python's
+/// `Solver` for one with colliders.
+///
+/// # Errors
+/// As [`System::solve_with`].
+pub fn solve_static_with_contact(
     system: &mut System,
     contact: &mut ContactModel,
     q: &mut [DVec3],
