@@ -342,7 +342,18 @@ impl Simulation {
         self.contact = contact.filter(ContactModel::is_active);
         let weights = self.contact.as_ref().map(|c| c.weights(&self.params.inertia(&self.masses)));
         self.system.set_contact_weights(weights)?;
+        self.push_out_of_colliders();
         Ok(())
+    }
+
+    /// Before a run (or after [`Simulation::set_state`]): vertices that overlap a collider are
+    /// moved out to the thickness without velocity, so that a rest shape placed in a collider
+    /// is not thrown off it.
+    fn push_out_of_colliders(&mut self) {
+        if let Some(contact) = &self.contact {
+            let t = self.time();
+            contact.push_out(&mut self.positions, t);
+        }
     }
 
     /// The contact model, if any.
@@ -409,6 +420,7 @@ impl Simulation {
         }
         self.positions.copy_from_slice(positions);
         self.velocities.copy_from_slice(velocities);
+        self.push_out_of_colliders();
         Ok(())
     }
 

@@ -325,6 +325,32 @@ impl ContactModel {
         &self.forces
     }
 
+    /// Moves the vertices of `positions` that are inside a collider (as it is at time `t`) or
+    /// closer than the thickness out to the thickness, along the collider's normal: for a
+    /// state that starts overlapping (a rest shape placed in a collider), before its first
+    /// step, so that the correction does not become velocity. Returns how many moved.
+    pub fn push_out(&self, positions: &mut [DVec3], t: f64) -> usize {
+        let thickness = self.params.thickness;
+        let colliders = &self.colliders;
+        let active = &self.active;
+        positions
+            .par_iter_mut()
+            .enumerate()
+            .filter(|(v, _)| active[*v])
+            .map(|(_, p)| {
+                let mut moved = false;
+                for c in colliders {
+                    let near = c.closest_at(*p, t);
+                    if near.distance < thickness {
+                        *p = near.point + thickness * near.normal;
+                        moved = true;
+                    }
+                }
+                usize::from(moved)
+            })
+            .sum()
+    }
+
     /// The end of the step: moves `q` out of colliders and stops paths that crossed one, then
     /// corrects self contacts still too close; records what touches (see the
     /// [module docs](self)). `inverse_mass` weighs how a self contact's correction is shared

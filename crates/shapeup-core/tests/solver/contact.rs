@@ -379,3 +379,20 @@ radius = 0.3
     // Without the sphere the middle would go down 0.6 with the rest; with it, it rests on top.
     assert!((q[220].y - (-0.05 + thickness)).abs() < 0.02, "the middle rests on the sphere: {}", q[220].y);
 }
+
+#[test]
+fn a_cloth_starting_inside_the_thickness_is_not_thrown_off() {
+    // The cloth starts 0.01 above a plane with a thickness of 0.07: moved out before the first
+    // step, it must not gain the correction as velocity.
+    let text = format!(
+        "{CLOTH}\n[contact]\nthickness = 0.07\n\n[[colliders]]\ntype = \"plane\"\npoint = [0.0, -0.01, 0.0]\nnormal = [0.0, 1.0, 0.0]\n"
+    );
+    let (_, mut sim) = start(&text);
+    for _ in 0..30 {
+        sim.step().unwrap();
+        let fastest = sim.simulation.velocities().iter().map(|v| v.length()).fold(0.0, f64::max);
+        assert!(fastest < 0.2, "a vertex moves at {fastest} m/s");
+        let lowest = sim.simulation.positions().iter().map(|p| p.y).fold(f64::INFINITY, f64::min);
+        assert!(lowest > -0.01 + 0.07 - 1e-9, "a vertex at {lowest}");
+    }
+}
