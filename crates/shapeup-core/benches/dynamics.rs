@@ -21,5 +21,23 @@ fn step(c: &mut Criterion) {
     }
 }
 
-criterion_group!(benches, step);
+/// One time step of each contact scenario with and without its contact, after 60 untimed steps.
+fn contact(c: &mut Criterion) {
+    use shapeup_core::bench::ContactScenario;
+    for scenario in ContactScenario::ALL {
+        let mut group = c.benchmark_group(format!("contact/{}", scenario.name()));
+        group.sample_size(10).measurement_time(Duration::from_secs(5));
+        for with in [false, true] {
+            let (_, mut simulation, _dir) = scenario.load(with).expect("scenario builds");
+            for _ in 0..60 {
+                simulation.step().expect("step");
+            }
+            let label = if with { "step with contact" } else { "step without contact" };
+            group.bench_function(label, |b| b.iter(|| simulation.step().expect("step")));
+        }
+        group.finish();
+    }
+}
+
+criterion_group!(benches, step, contact);
 criterion_main!(benches);

@@ -166,3 +166,129 @@ impl DynamicScenario {
         Ok((loaded, simulation))
     }
 }
+
+/// The contact benchmark scenarios (`shapeup bench --contact`, the `contact` criterion
+/// group): each runs with and without its contact, 10 iterations per time step.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ContactScenario {
+    /// A 101 × 101 cloth (10,201 vertices, strain + bending) dropped on a sphere.
+    ClothOnSphere,
+    /// The same cloth dropped across a bar onto a floor, folding onto itself (self-collision).
+    ClothFolding,
+    /// A box of 12 × 6 × 12 cubes of tetrahedra dropped on a bumpy mesh terrain (41 × 41).
+    BodyOnTerrain,
+    /// Two 61 × 61 cloths, one above the other, dropped on a sphere (self-collision between them).
+    StackedCloths,
+}
+
+impl ContactScenario {
+    /// Every scenario, in table order.
+    pub const ALL: [ContactScenario; 4] = [
+        ContactScenario::ClothOnSphere,
+        ContactScenario::ClothFolding,
+        ContactScenario::BodyOnTerrain,
+        ContactScenario::StackedCloths,
+    ];
+
+    /// Short name.
+    pub fn name(self) -> &'static str {
+        match self {
+            ContactScenario::ClothOnSphere => "cloth-on-sphere",
+            ContactScenario::ClothFolding => "cloth-folding",
+            ContactScenario::BodyOnTerrain => "body-on-terrain",
+            ContactScenario::StackedCloths => "stacked-cloths",
+        }
+    }
+
+    /// The scene text; `contact` false leaves out its colliders and `[contact]` table (the
+    /// same simulation with nothing to touch).
+    fn scene_text(self, contact: bool, terrain: &std::path::Path) -> String {
+        const CLOTH: &str = "[solver]\nmode = \"dynamic\"\niterations = 10\n\
+             [[constraints]]\ntype = \"triangle_strain\"\nweight = 10.0\n\
+             [[constraints]]\ntype = \"bending\"\nweight = 0.01\n";
+        let (mesh, shape, touch) = match self {
+            ContactScenario::ClothOnSphere => (
+                "[mesh]\ngenerate = { kind = \"cloth\", vertices = [101, 101], size = [1.0, 1.0] }\nnormalize = false\n",
+                CLOTH.to_string(),
+                "[[colliders]]\ntype = \"sphere\"\ncenter = [0.0, -0.4, 0.0]\nradius = 0.3\nfriction = 0.3\n".to_string(),
+            ),
+            ContactScenario::ClothFolding => (
+                "[mesh]\ngenerate = { kind = \"cloth\", vertices = [101, 101], size = [1.0, 1.0] }\nnormalize = false\n",
+                CLOTH.to_string(),
+                "[contact]\nself_collision = true\nthickness = 0.004\nfriction = 0.2\n\
+                 [[colliders]]\ntype = \"capsule\"\na = [0.0, -0.1, -1.0]\nb = [0.0, -0.1, 1.0]\nradius = 0.04\n\
+                 [[colliders]]\ntype = \"plane\"\npoint = [0.0, -0.3, 0.0]\nnormal = [0.0, 1.0, 0.0]\n"
+                    .to_string(),
+            ),
+            ContactScenario::BodyOnTerrain => (
+                "[mesh]\ngenerate = { kind = \"tet_box\", cells = [12, 6, 12], size = [0.4, 0.2, 0.4] }\nnormalize = false\n",
+                "[solver]\nmode = \"dynamic\"\niterations = 10\nstiffness = 1000\n\
+                 [[constraints]]\ntype = \"tet_strain\"\nweight = 1.0\n"
+                    .to_string(),
+                format!(
+                    "[contact]\nthickness = 0.005\n[[colliders]]\ntype = \"mesh\"\npath = {:?}\nfriction = 0.3\n",
+                    terrain.display().to_string()
+                ),
+            ),
+            ContactScenario::StackedCloths => (
+                "",
+                CLOTH.to_string(),
+                "[contact]\nself_collision = true\nthickness = 0.005\nfriction = 0.3\n\
+                 [[colliders]]\ntype = \"sphere\"\ncenter = [0.0, -0.4, 0.0]\nradius = 0.3\nfriction = 0.3\n"
+                    .to_string(),
+            ),
+        };
+        let mesh = if mesh.is_empty() { "[mesh]\npath = \"stacked.obj\"\nnormalize = false\n" } else { mesh };
+        if contact { format!("{mesh}{shape}{touch}") } else { format!("{mesh}{shape}") }
+    }
+
+    /// The scenario loaded and ready to simulate, with or without contact. The terrain and the
+    /// stacked cloths are generated meshes written to a temporary folder (kept while the
+    /// returned guard lives).
+    ///
+    /// # Errors
+    /// Writing the temporary meshes, or the scene loader's (never for the built-in texts).
+    pub fn load(self, contact: bool) -> Result<(LoadedScene, crate::dynamics::Simulation, tempfile::TempDir), SceneError> {
+        let dir = tempfile::tempdir().map_err(|source| SceneError::Read { path: std::env::temp_dir(), source })?;
+        let write = |name: &str, mesh: &Mesh| {
+            let path = dir.path().join(name);
+            crate::io::write_mesh(&path, mesh, &crate::io::Attributes::None)
+                .map_err(|e| SceneError::Invalid { path: path.clone(), entry: "[mesh]".into(), message: e.to_string() })
+                .map(|_| path)
+        };
+        let terrain = write("terrain.obj", &terrain_mesh(41))?;
+        if self == ContactScenario::StackedCloths {
+            write("stacked.obj", &stacked_cloths(61, 0.05))?;
+        }
+        let name = dir.path().join(format!("{}.toml", self.name()));
+        let scene = Scene::parse(
+            &self.scene_text(contact, &terrain),
+            crate::scene::SceneFormat::Toml,
+            &name,
+            dir.path().to_path_buf(),
+        )?;
+        let mut loaded = scene.load()?;
+        let simulation = loaded.start_simulation()?;
+        Ok((loaded, simulation, dir))
+    }
+}
+
+/// A bumpy terrain y = 0.05 sin(3x) cos(2z) − 0.3 over [−1, 1]², `n` × `n` vertices, normals up.
+pub fn terrain_mesh(n: usize) -> Mesh {
+    let mut mesh = crate::generate::cloth_grid(n, n, 2.0, 2.0);
+    for p in &mut mesh.positions {
+        p.y = 0.05 * (3.0 * p.x).sin() * (2.0 * p.z).cos() - 0.3;
+    }
+    mesh
+}
+
+/// Two `n` × `n` unit cloths, the second `gap` above the first, as one mesh.
+pub fn stacked_cloths(n: usize, gap: f64) -> Mesh {
+    let one = crate::generate::cloth_grid(n, n, 1.0, 1.0);
+    let mut positions = one.positions.clone();
+    positions.extend(one.positions.iter().map(|p| *p + glam::DVec3::new(0.0, gap, 0.0)));
+    let offset = one.positions.len() as u32;
+    let mut triangles = one.triangles.clone();
+    triangles.extend(one.triangles.iter().map(|t| t.map(|v| v + offset)));
+    Mesh::from_parts_unchecked(positions, triangles, Vec::new())
+}

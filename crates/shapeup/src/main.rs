@@ -188,6 +188,11 @@ enum Command {
         /// meshes, 10 iterations per time step); `--iterations` counts time steps.
         #[arg(long)]
         dynamic: bool,
+        /// Run the contact scenarios instead (cloth-on-sphere, cloth-folding, body-on-terrain,
+        /// stacked-cloths), each with and without its contact; `--iterations` counts time steps
+        /// after 60 untimed ones (the bodies have landed by then).
+        #[arg(long, conflicts_with_all = ["dynamic", "converge"])]
+        contact: bool,
         /// Time to a converged shape instead: for each scenario, iterations and seconds until
         /// (E_k − E*)/E* ≤ 1 %, 0.1 % and 0.01 %, plain, with Anderson acceleration and with
         /// L-BFGS, E* the lowest energy of a long run with the default acceleration and of the
@@ -332,6 +337,7 @@ fn run(cli: Cli) -> Result<()> {
             bail!("--iterations must be at least 1 (a benchmark of no iterations measures nothing)")
         }
         Command::Bench { dynamic: true, iterations, scenarios, .. } => bench_dynamic(iterations, &scenarios),
+        Command::Bench { contact: true, iterations, scenarios, .. } => bench_contact(iterations, &scenarios),
         Command::Bench { mesh, iterations, scenarios, converge: true, reference_iterations, .. } => {
             bench_converge(mesh, iterations, reference_iterations, &scenarios)
         }
@@ -540,6 +546,58 @@ fn bench_dynamic(steps: usize, names: &[String]) -> Result<()> {
             1e3 * global / n,
             1e3 * per_step,
             1.0 / per_step
+        )?;
+    }
+    Ok(())
+}
+
+/// `shapeup bench --contact`: ms per time step of the contact scenarios with and without their
+/// contact (same meshes, constraints and settings), measured after 60 untimed steps.
+fn bench_contact(steps: usize, names: &[String]) -> Result<()> {
+    use shapeup_core::bench::ContactScenario;
+    let scenarios = pick_scenarios(names, &ContactScenario::ALL, ContactScenario::name)?;
+    let mut out = std::io::stdout().lock();
+    writeln!(out, "{}; {steps} time steps after 60 untimed ones, 10 iterations each", threads_label())?;
+    writeln!(
+        out,
+        "{:<16} {:>9} {:>13} {:>12} {:>7} {:>10} {:>9} {:>15}",
+        "scenario", "vertices", "free ms/step", "contact ms", "ratio", "contacts", "steps/s", "factorizations"
+    )?;
+    for s in scenarios {
+        let mut time = [0.0; 2];
+        let mut contacts = 0usize;
+        let mut factorizations = 0;
+        let mut vertices = 0;
+        for (k, contact) in [false, true].into_iter().enumerate() {
+            let (loaded, mut simulation, _dir) = s.load(contact)?;
+            vertices = loaded.mesh.num_vertices();
+            for _ in 0..60 {
+                simulation.step().with_context(|| format!("{}: step failed", s.name()))?;
+            }
+            let progress = logging::bar(steps.max(1) as u64, &bar_template(s.name(), "steps"));
+            let t = Instant::now();
+            for _ in 0..steps.max(1) {
+                let r = simulation.step().with_context(|| format!("{}: step failed", s.name()))?;
+                if contact {
+                    contacts += r.contact.touching;
+                }
+                progress.bar.inc(1);
+            }
+            time[k] = t.elapsed().as_secs_f64() / steps.max(1) as f64;
+            drop(progress);
+            factorizations = simulation.system().factorizations();
+        }
+        writeln!(
+            out,
+            "{:<16} {:>9} {:>13.2} {:>12.2} {:>7.2} {:>10} {:>9.1} {:>15}",
+            s.name(),
+            vertices,
+            1e3 * time[0],
+            1e3 * time[1],
+            time[1] / time[0],
+            contacts / steps.max(1),
+            1.0 / time[1],
+            factorizations
         )?;
     }
     Ok(())

@@ -366,6 +366,7 @@ impl ContactModel {
         let contacts = &self.contacts;
         q.par_iter_mut().enumerate().filter(|(v, _)| active[*v]).for_each(|(v, p)| {
             for _ in 0..2 {
+                let before = *p;
                 // The step's own contacts first: the side each started on.
                 for &i in &by_vertex[v] {
                     let c = &contacts[i as usize];
@@ -393,6 +394,9 @@ impl ContactModel {
                             *p -= coulomb(slip - near.normal.dot(slip) * near.normal, c.friction * depth);
                         }
                     }
+                }
+                if *p == before {
+                    break;
                 }
             }
         });

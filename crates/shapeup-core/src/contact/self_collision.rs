@@ -14,13 +14,22 @@ use parry3d_f64::bounding_volume::Aabb;
 use parry3d_f64::partitioning::{Bvh, BvhBuildStrategy};
 use rayon::prelude::*;
 
-/// The surface that collides with itself: its triangles, their edges and their vertices.
+/// The surface that collides with itself: its triangles, their edges and their vertices, and
+/// the BVH over the triangles' swept boxes (refitted each step, rebuilt every
+/// [`REBUILD_EVERY`] steps as the surface moves away from the tree's layout).
 #[derive(Debug, Clone)]
 pub(crate) struct Surface {
     triangles: Vec<[u32; 3]>,
+    /// For each triangle, the indices of its three edges in `edges`.
+    triangle_edges: Vec<[u32; 3]>,
     edges: Vec<[u32; 2]>,
     vertices: Vec<u32>,
+    bvh: Option<Bvh>,
+    since_build: u32,
 }
+
+/// Steps between two full builds of the triangle BVH (refits in between).
+const REBUILD_EVERY: u32 = 20;
 
 impl Surface {
     /// The triangles whose three vertices are all `active`.
@@ -37,7 +46,31 @@ impl Surface {
         let mut vertices: Vec<u32> = triangles.iter().flatten().copied().collect();
         vertices.sort_unstable();
         vertices.dedup();
-        Surface { triangles, edges, vertices }
+        let edge_index = |a: u32, b: u32| {
+            let key = if a < b { [a, b] } else { [b, a] };
+            edges.binary_search(&key).map_or(u32::MAX, |i| i as u32)
+        };
+        let triangle_edges =
+            triangles.iter().map(|t| [edge_index(t[0], t[1]), edge_index(t[1], t[2]), edge_index(t[2], t[0])]).collect();
+        Surface { triangles, triangle_edges, edges, vertices, bvh: None, since_build: 0 }
+    }
+
+    /// The BVH of the triangles' boxes `boxes`: refitted, or rebuilt when due.
+    fn tree(&mut self, boxes: &[Aabb]) {
+        match &mut self.bvh {
+            Some(bvh) if self.since_build < REBUILD_EVERY => {
+                for (i, b) in boxes.iter().enumerate() {
+                    bvh.update_partially_if_present(*b, i as u32, 0.0);
+                }
+                bvh.refit_without_opt();
+                self.since_build += 1;
+            }
+            _ => {
+                self.bvh = Some(Bvh::from_leaves(BvhBuildStrategy::Binned, boxes));
+                self.since_build = 0;
+            }
+        }
+
     }
 }
 
@@ -72,7 +105,7 @@ fn relative_motion(first: &[u32], others: &[u32], start: &[DVec3], predicted: &[
 
 /// Every vertex–triangle and edge–edge contact of the step (see the [module docs](self)).
 pub(crate) fn detect_self_contacts(
-    surface: &Surface,
+    surface: &mut Surface,
     start: &[DVec3],
     predicted: &[DVec3],
     thickness: f64,
@@ -82,8 +115,10 @@ pub(crate) fn detect_self_contacts(
         return Vec::new();
     }
     let triangle_boxes: Vec<Aabb> =
-        surface.triangles.iter().map(|t| swept_box(t, start, predicted, thickness)).collect();
-    let triangles = Bvh::from_leaves(BvhBuildStrategy::Binned, &triangle_boxes);
+        surface.triangles.par_iter().map(|t| swept_box(t, start, predicted, thickness)).collect();
+    surface.tree(&triangle_boxes);
+    let surface = &*surface;
+    let Some(triangles) = &surface.bvh else { return Vec::new() };
     let mut contacts: Vec<Contact> = surface
         .vertices
         .par_iter()
@@ -107,14 +142,19 @@ pub(crate) fn detect_self_contacts(
             })
         })
         .collect();
-    let edge_boxes: Vec<Aabb> = surface.edges.iter().map(|e| swept_box(e, start, predicted, thickness)).collect();
-    let edges = Bvh::from_leaves(BvhBuildStrategy::Binned, &edge_boxes);
+    // Edge–edge: each edge against the edges of the triangles its swept box meets.
     contacts.par_extend(surface.edges.par_iter().enumerate().flat_map_iter(|(i, &e)| {
         let query = swept_box(&e, start, predicted, 0.0);
-        let found: Vec<u32> = edges.intersect_aabb(&query).collect();
+        let mut found: Vec<u32> = triangles
+            .intersect_aabb(&query)
+            .flat_map(|t| surface.triangle_edges[t as usize])
+            .filter(|&j| j != u32::MAX && j as usize > i)
+            .collect();
+        found.sort_unstable();
+        found.dedup();
         found.into_iter().filter_map(move |j| {
             let f = surface.edges[j as usize];
-            if (j as usize) <= i || f.contains(&e[0]) || f.contains(&e[1]) {
+            if f.contains(&e[0]) || f.contains(&e[1]) {
                 return None;
             }
             let p = e.map(|v| start[v as usize]);
