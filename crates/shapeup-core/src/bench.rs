@@ -210,7 +210,8 @@ impl ContactScenario {
             ContactScenario::ClothOnSphere => (
                 "[mesh]\ngenerate = { kind = \"cloth\", vertices = [101, 101], size = [1.0, 1.0] }\nnormalize = false\n",
                 CLOTH.to_string(),
-                "[[colliders]]\ntype = \"sphere\"\ncenter = [0.0, -0.4, 0.0]\nradius = 0.3\nfriction = 0.3\n".to_string(),
+                "[[colliders]]\ntype = \"sphere\"\ncenter = [0.0, -0.4, 0.0]\nradius = 0.3\nfriction = 0.3\n"
+                    .to_string(),
             ),
             ContactScenario::ClothFolding => (
                 "[mesh]\ngenerate = { kind = \"cloth\", vertices = [101, 101], size = [1.0, 1.0] }\nnormalize = false\n",
@@ -248,7 +249,10 @@ impl ContactScenario {
     ///
     /// # Errors
     /// Writing the temporary meshes, or the scene loader's (never for the built-in texts).
-    pub fn load(self, contact: bool) -> Result<(LoadedScene, crate::dynamics::Simulation, tempfile::TempDir), SceneError> {
+    pub fn load(
+        self,
+        contact: bool,
+    ) -> Result<(LoadedScene, crate::dynamics::Simulation, tempfile::TempDir), SceneError> {
         let dir = tempfile::tempdir().map_err(|source| SceneError::Read { path: std::env::temp_dir(), source })?;
         let write = |name: &str, mesh: &Mesh| {
             let path = dir.path().join(name);

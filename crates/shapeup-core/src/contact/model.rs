@@ -440,7 +440,6 @@ impl ContactModel {
         }
         self.forces.fill(DVec3::ZERO);
     }
-
 }
 
 /// How many times a vertex's inertia (dynamic mode) or diagonal entry (static mode) its

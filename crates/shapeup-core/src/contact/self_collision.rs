@@ -50,8 +50,10 @@ impl Surface {
             let key = if a < b { [a, b] } else { [b, a] };
             edges.binary_search(&key).map_or(u32::MAX, |i| i as u32)
         };
-        let triangle_edges =
-            triangles.iter().map(|t| [edge_index(t[0], t[1]), edge_index(t[1], t[2]), edge_index(t[2], t[0])]).collect();
+        let triangle_edges = triangles
+            .iter()
+            .map(|t| [edge_index(t[0], t[1]), edge_index(t[1], t[2]), edge_index(t[2], t[0])])
+            .collect();
         Surface { triangles, triangle_edges, edges, vertices, bvh: None, since_build: 0 }
     }
 
@@ -70,7 +72,6 @@ impl Surface {
                 self.since_build = 0;
             }
         }
-
     }
 }
 
@@ -318,8 +319,8 @@ mod tests {
             }
         }
         let triangles = [[0, 1, 2], [0, 2, 3], [4, 6, 5], [4, 7, 6]];
-        let surface = Surface::new(&triangles, &[true; 8]);
-        let contacts = detect_self_contacts(&surface, &start, &start, 0.1, 0.0);
+        let mut surface = Surface::new(&triangles, &[true; 8]);
+        let contacts = detect_self_contacts(&mut surface, &start, &start, 0.1, 0.0);
         assert!(!contacts.is_empty());
         for c in &contacts {
             let sheet = |v: u32| v / 4;

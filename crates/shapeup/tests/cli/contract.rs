@@ -1382,8 +1382,7 @@ fn a_drape_reports_one_factorization_and_contacts_per_step() {
     let last = std::fs::read_dir(&dir)
         .unwrap()
         .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.to_string_lossy().ends_with("60.vtu"))
-        .next_back()
+        .find(|p| p.to_string_lossy().ends_with("60.vtu"))
         .expect("the last frame");
     let vtu = std::fs::read_to_string(last).unwrap();
     assert!(vtu.contains("Name=\"contact\""), "the frame carries the contact flag");
