@@ -1389,6 +1389,35 @@ fn a_drape_reports_one_factorization_and_contacts_per_step() {
 }
 
 #[test]
+fn the_command_line_and_the_library_give_the_same_trajectory_with_contact() {
+    let ws = Workspace::new();
+    let text = "[mesh]\ngenerate = { kind = \"cloth\", vertices = [9, 9], size = [1.0, 1.0] }\nnormalize = false\n\
+                [solver]\nmode = \"dynamic\"\n[[constraints]]\ntype = \"triangle_strain\"\n\
+                [contact]\nself_collision = true\n\
+                [[colliders]]\ntype = \"capsule\"\na = [0.0, -0.2, -1.0]\nb = [0.0, -0.2, 1.0]\nradius = 0.1\nfriction = 0.4\n";
+    let scene = ws.scene("same.toml", text);
+    let dir = ws.out("frames");
+    let out = simulate_in(None, &scene, &dir, &["--frames", "40", "--every", "40"]);
+    assert_eq!(out.code, Some(0), "{}", out.describe());
+    let last = std::fs::read_dir(&dir)
+        .unwrap()
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .find(|p| p.to_string_lossy().ends_with("40.obj"))
+        .expect("the last frame");
+    let cli = shapeup_core::io::read_mesh(&last).unwrap().mesh.positions;
+    let mut loaded = shapeup_core::scene::Scene::from_file(&scene).unwrap().load().unwrap();
+    let mut simulation = loaded.start_scene_simulation().unwrap();
+    for _ in 0..40 {
+        simulation.step().unwrap();
+    }
+    let library = loaded.to_input(simulation.simulation.positions());
+    assert_eq!(cli.len(), library.len());
+    let worst = cli.iter().zip(&library).map(|(a, b)| (*a - *b).length()).fold(0.0, f64::max);
+    // OBJ keeps the shortest round-trip form of each coordinate: the same numbers.
+    assert!(worst < 1e-12, "the frames differ by {worst}");
+}
+
+#[test]
 fn simulate_every_k_writes_multiples_of_k_and_the_last_frame() {
     let ws = Workspace::new();
     let scene = ws.scene(
