@@ -55,8 +55,8 @@ class Solver(_Groups, _Contact):
         (> 0). ``acceleration``: "lbfgs" (default), "anderson" or "none". With a collider
         or self-collision, the iterations are plain ones in chunks of 10, each detecting
         contact again from where the last left the surface, as ``shapeup deform`` runs a scene
-        with contact: ``tolerance`` and ``acceleration`` do not apply, and ``energy`` holds E
-        after each chunk.
+        with contact: ``tolerance`` and ``acceleration`` do not apply; ``energy`` holds E after
+        each iteration.
 
         Returns ``(q, report)``: the new positions float64 (n, 3) and a dict with
         ``iterations``, ``initial_energy``, ``energy`` (E after each iteration),

@@ -23,11 +23,11 @@
 //!    ‖u_t‖ ≤ μ(−g) (static friction: the vertex sticks) and shortened by μ(−g) otherwise
 //!    (kinetic). A self contact's correction is shared by its vertices in proportion to
 //!    α_j / W_j, and a vertex in several takes their mean (Jacobi).
-//! 3. **Projection** ([`ContactModel::finish_step`]): what the iterations left inside a
-//!    collider (the contact term is a penalty at a finite weight, and a step runs a finite
-//!    number of iterations) is moved out along the normal, which also removes the velocity into
-//!    it; a path that crossed a collider is stopped where it entered. Self contacts still
-//!    overlapping get a few Gauss–Seidel position corrections.
+//! 3. **Projection** ([`ContactModel::finish_step`]): self contacts still overlapping get a few
+//!    Gauss–Seidel position corrections; then what is left inside a collider (the contact term
+//!    is a penalty at a finite weight, and a step runs a finite number of iterations) is moved
+//!    out along the normal, which also removes the velocity into it, and a path that crossed a
+//!    collider is stopped where it entered. Colliders come last, so their thickness holds.
 
 use super::collider::Collider;
 use super::self_collision::{Surface, detect_self_contacts};
@@ -351,8 +351,8 @@ impl ContactModel {
             .sum()
     }
 
-    /// The end of the step: moves `q` out of colliders and stops paths that crossed one, then
-    /// corrects self contacts still too close; records what touches (see the
+    /// The end of the step: corrects self contacts still too close, then moves `q` out of
+    /// colliders and stops paths that crossed one (colliders last: their thickness holds); records what touches (see the
     /// [module docs](self)). `inverse_mass` weighs how a self contact's correction is shared
     /// (per vertex, 0 for a vertex that must not move).
     pub fn finish_step(&mut self, q: &mut [DVec3], inverse_mass: &[f64]) {
@@ -361,6 +361,28 @@ impl ContactModel {
         let colliders = &self.colliders;
         let active = &self.active;
         let start = &self.start;
+        // Self contacts: Gauss–Seidel position corrections, sharing by inverse mass.
+        for _ in 0..4 {
+            let mut worst = 0.0f64;
+            for c in self.contacts.iter().filter(|c| c.collider == u32::MAX) {
+                let gap = c.gap(q);
+                if gap >= 0.0 {
+                    continue;
+                }
+                let w: f64 = c.terms().map(|(v, a)| a * a * inverse_mass[v]).sum();
+                if w <= 0.0 {
+                    continue;
+                }
+                worst = worst.max(-gap);
+                let scale = -gap / w;
+                for (v, a) in c.terms() {
+                    q[v] += scale * a * inverse_mass[v] * c.normal;
+                }
+            }
+            if worst <= 1e-3 * thickness {
+                break;
+            }
+        }
         // Colliders: each vertex on its own, in parallel.
         let by_vertex = &self.by_vertex;
         let contacts = &self.contacts;
@@ -400,28 +422,6 @@ impl ContactModel {
                 }
             }
         });
-        // Self contacts: Gauss–Seidel position corrections, sharing by inverse mass.
-        for _ in 0..4 {
-            let mut worst = 0.0f64;
-            for c in self.contacts.iter().filter(|c| c.collider == u32::MAX) {
-                let gap = c.gap(q);
-                if gap >= 0.0 {
-                    continue;
-                }
-                let w: f64 = c.terms().map(|(v, a)| a * a * inverse_mass[v]).sum();
-                if w <= 0.0 {
-                    continue;
-                }
-                worst = worst.max(-gap);
-                let scale = -gap / w;
-                for (v, a) in c.terms() {
-                    q[v] += scale * a * inverse_mass[v] * c.normal;
-                }
-            }
-            if worst <= 1e-3 * thickness {
-                break;
-            }
-        }
         // What touches at the end: a force on, or within the thickness (plus round-off).
         self.touching.fill(false);
         let tolerance = 1e-3 * thickness.max(1e-9);

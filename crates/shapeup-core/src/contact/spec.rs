@@ -42,13 +42,13 @@ impl ContactSettings {
     /// A thickness or friction that is negative or not finite.
     pub fn validate(&self) -> Result<(), ColliderError> {
         if let Some(t) = self.thickness
-            && !(t.is_finite() && t >= 0.0)
+            && !(t.is_finite() && (0.0..=MAX_MAGNITUDE).contains(&t))
         {
-            return Err(ColliderError::Invalid(format!("thickness must be a finite number ≥ 0, found {t}")));
+            return Err(ColliderError::Invalid(format!("thickness must be a finite number in [0, 1e12], found {t}")));
         }
-        if !(self.friction.is_finite() && self.friction >= 0.0) {
+        if !(self.friction.is_finite() && (0.0..=MAX_MAGNITUDE).contains(&self.friction)) {
             return Err(ColliderError::Invalid(format!(
-                "friction must be a finite number ≥ 0, found {}",
+                "friction must be a finite number in [0, 1e12], found {}",
                 self.friction
             )));
         }
@@ -151,9 +151,33 @@ fn invalid(message: impl Into<String>) -> ColliderError {
 fn take<T: serde::de::DeserializeOwned>(entry: &mut Map<String, Value>, key: &str) -> Result<Option<T>, ColliderError> {
     match entry.remove(key) {
         None => Ok(None),
+        // A scene's nan or inf arrives as null (JSON has no such numbers).
+        Some(v) if contains_null(&v) => Err(invalid(format!("`{key}` must be finite numbers (not nan or inf)"))),
         Some(v) => serde_json::from_value(v).map(Some).map_err(|e| invalid(format!("`{key}`: {e}"))),
     }
 }
+
+/// `value` without its null members (an unset optional `center`), as a scene leaves them out.
+fn without_nulls(value: Value) -> Value {
+    match value {
+        Value::Object(map) => Value::Object(map.into_iter().filter(|(_, v)| !v.is_null()).collect()),
+        other => other,
+    }
+}
+
+fn contains_null(v: &Value) -> bool {
+    match v {
+        Value::Null => true,
+        Value::Array(items) => items.iter().any(contains_null),
+        Value::Object(map) => map.values().any(contains_null),
+        _ => false,
+    }
+}
+
+/// The largest magnitude a collider's coordinate, length, speed or rate may have: beyond it
+/// the closest-point arithmetic loses every digit of a shape of ordinary size (a box from
+/// −1e300 to 1e300 has no top).
+pub const MAX_MAGNITUDE: f64 = 1e12;
 
 fn required<T: serde::de::DeserializeOwned>(
     entry: &mut Map<String, Value>,
@@ -165,15 +189,29 @@ fn required<T: serde::de::DeserializeOwned>(
 
 fn finite3(key: &str, v: [f64; 3]) -> Result<DVec3, ColliderError> {
     let d = DVec3::from(v);
-    if d.is_finite() { Ok(d) } else { Err(invalid(format!("`{key}` must be three finite numbers"))) }
+    if !d.is_finite() {
+        return Err(invalid(format!("`{key}` must be three finite numbers")));
+    }
+    if d.abs().max_element() > MAX_MAGNITUDE {
+        return Err(invalid(format!("`{key}` is too large: each number must be within ±{MAX_MAGNITUDE:e}")));
+    }
+    Ok(d)
 }
 
 fn positive(key: &str, v: f64) -> Result<f64, ColliderError> {
-    if v.is_finite() && v > 0.0 {
-        Ok(v)
-    } else {
-        Err(invalid(format!("`{key}` must be a finite number > 0, found {v}")))
+    if !(v.is_finite() && v > 0.0) {
+        return Err(invalid(format!("`{key}` must be a finite number > 0, found {v}")));
     }
+    if v > MAX_MAGNITUDE {
+        return Err(invalid(format!("`{key}` is too large: at most {MAX_MAGNITUDE:e}, found {v}")));
+    }
+    Ok(v)
+}
+
+/// A direction scaled to unit length without overflowing (its largest component first).
+fn direction(v: [f64; 3]) -> DVec3 {
+    let d = DVec3::from(v);
+    (d / d.abs().max_element()).normalize()
 }
 
 impl ColliderSpec {
@@ -258,7 +296,7 @@ impl ColliderSpec {
                 put("min", serde_json::json!(min));
                 put("max", serde_json::json!(max));
                 if let Some(r) = rotate {
-                    put("rotate", serde_json::json!(r));
+                    put("rotate", without_nulls(serde_json::json!(r)));
                 }
             }
             ShapeSpec::Mesh { path, closed, thickness } => {
@@ -279,7 +317,7 @@ impl ColliderSpec {
             put("velocity", serde_json::json!(self.velocity));
         }
         if let Some(s) = &self.spin {
-            put("spin", serde_json::json!(s));
+            put("spin", without_nulls(serde_json::json!(s)));
         }
         m
     }
@@ -326,8 +364,8 @@ impl ColliderSpec {
                     if finite3("rotate.axis", r.axis)?.length() == 0.0 {
                         return Err(invalid("`rotate.axis` must be non-zero"));
                     }
-                    if !r.angle_deg.is_finite() {
-                        return Err(invalid("`rotate.angle_deg` must be finite"));
+                    if !(r.angle_deg.is_finite() && r.angle_deg.abs() <= MAX_MAGNITUDE) {
+                        return Err(invalid("`rotate.angle_deg` must be a finite number within ±1e12"));
                     }
                     if let Some(c) = r.center {
                         finite3("rotate.center", c)?;
@@ -339,22 +377,22 @@ impl ColliderSpec {
                     return Err(invalid("`path` is empty"));
                 }
                 if let Some(t) = thickness
-                    && !(t.is_finite() && *t >= 0.0)
+                    && !(t.is_finite() && (0.0..=MAX_MAGNITUDE).contains(t))
                 {
-                    return Err(invalid(format!("`thickness` must be a finite number ≥ 0, found {t}")));
+                    return Err(invalid(format!("`thickness` must be a finite number in [0, 1e12], found {t}")));
                 }
             }
         }
-        if !(self.friction.is_finite() && self.friction >= 0.0) {
-            return Err(invalid(format!("`friction` must be a finite number ≥ 0, found {}", self.friction)));
+        if !(self.friction.is_finite() && (0.0..=MAX_MAGNITUDE).contains(&self.friction)) {
+            return Err(invalid(format!("`friction` must be a finite number in [0, 1e12], found {}", self.friction)));
         }
         finite3("velocity", self.velocity)?;
         if let Some(s) = &self.spin {
             if finite3("spin.axis", s.axis)?.length() == 0.0 {
                 return Err(invalid("`spin.axis` must be non-zero"));
             }
-            if !s.deg_per_s.is_finite() {
-                return Err(invalid("`spin.deg_per_s` must be finite"));
+            if !(s.deg_per_s.is_finite() && s.deg_per_s.abs() <= MAX_MAGNITUDE) {
+                return Err(invalid("`spin.deg_per_s` must be a finite number within ±1e12"));
             }
             if let Some(c) = s.center {
                 finite3("spin.center", c)?;
@@ -380,7 +418,7 @@ impl ColliderSpec {
         let length = |l: f64| l * frame.scale;
         let (shape, center) = match &self.shape {
             ShapeSpec::Plane { point: p, normal } => {
-                let normal = DVec3::from(*normal).normalize();
+                let normal = direction(*normal);
                 (Shape::Plane { point: point(*p), normal }, point(*p))
             }
             ShapeSpec::Sphere { center, radius } => {
@@ -395,7 +433,7 @@ impl ColliderSpec {
                 let mut center = 0.5 * (lo + hi);
                 let mut turn = glam::DQuat::IDENTITY;
                 if let Some(r) = rotate {
-                    turn = rotation(DVec3::from(r.axis).normalize(), r.angle_deg);
+                    turn = rotation(direction(r.axis), r.angle_deg);
                     let pivot = r.center.map_or(center, DVec3::from);
                     center = pivot + turn * (center - pivot);
                 }
@@ -405,7 +443,8 @@ impl ColliderSpec {
             ShapeSpec::Mesh { path, closed, thickness: own } => {
                 let file = base_dir.join(path);
                 let fail = |message: String| ColliderError::Mesh { path: file.clone(), message };
-                let loaded = crate::io::read_mesh(&file).map_err(|e| fail(e.to_string()))?;
+                // The reader's error names the file itself.
+                let loaded = crate::io::read_mesh(&file).map_err(|e| ColliderError::Invalid(e.to_string()))?;
                 let mesh = loaded.mesh;
                 if mesh.triangles.is_empty() {
                     return Err(fail(format!("has no faces{}", mesh.why_no_triangles())));
@@ -427,7 +466,7 @@ impl ColliderSpec {
             }
         };
         let spin = self.spin.map(|s| {
-            let axis = DVec3::from(s.axis).normalize();
+            let axis = direction(s.axis);
             let c = s.center.map_or(center, point);
             (axis, c, s.deg_per_s.to_radians())
         });
@@ -499,6 +538,9 @@ mod tests {
             (r#"{"type": "sphere", "center": [0, 0, 0], "radius": 1, "friction": -0.1}"#, "`friction`"),
             (r#"{"type": "mesh", "path": "a.obj", "thickness": -1}"#, "`thickness`"),
             (r#"{"radius": 1}"#, "missing `type`"),
+            (r#"{"type": "sphere", "center": [0, 0, 0], "radius": 1e300}"#, "`radius` is too large"),
+            (r#"{"type": "box", "min": [-1e300, -1, -1], "max": [1, 1, 1]}"#, "`min` is too large"),
+            (r#"{"type": "sphere", "center": [0, null, 0], "radius": 1}"#, "`center` must be finite numbers"),
         ] {
             let message = ColliderSpec::from_entry(entry(text)).expect_err(text).to_string();
             assert!(message.contains(words), "{text}: {message}");
@@ -509,6 +551,25 @@ mod tests {
     fn contact_settings_refuse_negative_values() {
         assert!(ContactSettings { thickness: Some(-1.0), ..Default::default() }.validate().is_err());
         assert!(ContactSettings { friction: -0.5, ..Default::default() }.validate().is_err());
+        assert!(ContactSettings { thickness: Some(1e300), ..Default::default() }.validate().is_err());
         assert!(ContactSettings::default().validate().is_ok());
+    }
+}
+
+#[cfg(test)]
+mod direction_tests {
+    use super::*;
+
+    #[test]
+    fn a_long_normal_is_a_unit_normal() {
+        let spec = ColliderSpec {
+            shape: ShapeSpec::Plane { point: [0.0, -1.0, 0.0], normal: [0.0, 1e11, 0.0] },
+            friction: 0.0,
+            velocity: [0.0; 3],
+            spin: None,
+        };
+        let c = spec.build(&WorkingFrame::IDENTITY, std::path::Path::new("."), 0.0).expect("a plane");
+        let p = c.closest_at(DVec3::new(0.0, 0.5, 0.0), 0.0);
+        assert!((p.distance - 1.5).abs() < 1e-12 && (p.normal - DVec3::Y).length() < 1e-12, "{p:?}");
     }
 }

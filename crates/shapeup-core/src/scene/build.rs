@@ -226,7 +226,7 @@ const STATIC_CONTACT_CHUNK: usize = 10;
 /// A static solve with contact: chunks of [`STATIC_CONTACT_CHUNK`] iterations of
 /// [`crate::contact::solve_with_contact`], each detecting from where the last left the
 /// surface (its motion extrapolated) and ending with the contact projection. E after each
-/// chunk is recorded (and passed to `after_iteration` with the iterations so far). The
+/// iteration is recorded and passed to `after_iteration` (which may stop the solve). The
 /// contact weights are set relative to the static matrix's diagonal when `system` has none
 /// (clear them, [`System::set_contact_weights`] with `None`, after changing the groups or
 /// the model). What [`LoadedScene::solve_static`] runs for a scene with contact, and Python's
@@ -251,21 +251,26 @@ pub fn solve_static_with_contact(
     let mut previous = q.to_vec();
     let inverse_mass = vec![1.0; q.len()];
     let mut done = 0;
-    while done < iterations {
+    'chunks: while done < iterations {
         let chunk = STATIC_CONTACT_CHUNK.min(iterations - done);
         let predicted: Vec<DVec3> = q.iter().zip(&previous).map(|(&x, &p)| x + (x - p)).collect();
         previous.copy_from_slice(q);
         contact.begin_step(q, &predicted, 0.0, 0.0);
-        let part = crate::contact::solve_with_contact(system, contact, q, chunk)?;
-        contact.finish_step(q, &inverse_mass);
-        report.local_seconds += part.local_seconds;
-        report.global_seconds += part.global_seconds;
-        report.setup_seconds += part.setup_seconds;
-        done += chunk;
-        let energy = system.energy(q)?.total;
-        report.energies.push(energy);
-        if after_iteration(done, energy).is_break() {
-            break;
+        for k in 0..chunk {
+            let part = crate::contact::solve_with_contact(system, contact, q, 1)?;
+            report.local_seconds += part.local_seconds;
+            report.global_seconds += part.global_seconds;
+            report.setup_seconds += part.setup_seconds;
+            if k + 1 == chunk {
+                contact.finish_step(q, &inverse_mass);
+            }
+            done += 1;
+            let energy = system.energy(q)?.total;
+            report.energies.push(energy);
+            if after_iteration(done, energy).is_break() {
+                contact.finish_step(q, &inverse_mass);
+                break 'chunks;
+            }
         }
     }
     Ok(report)

@@ -69,7 +69,12 @@ impl LoadedScene {
             "energy": solve.energies,
             // |E_k − E_{k−1}| / E_{k−1}, from E_0 = initial_energy.
             "relative_change": relative_changes(solve.initial_energy, &solve.energies),
-            "acceleration": self.system.params().acceleration,
+            // Contact iterates plainly (crate::contact::solve_with_contact).
+            "acceleration": if self.contact.as_ref().is_some_and(|c| c.is_active()) {
+                crate::solver::Acceleration::None
+            } else {
+                self.system.params().acceleration
+            },
             "rejected": solve.rejected,
             "factor": {"nnz_lower": nnz_a, "nnz_l": nnz_l},
             "warnings": warnings.to_json(),
@@ -137,6 +142,8 @@ pub struct StepTotals {
     pub contacts: Vec<usize>,
     /// Of those, self contacts, per step.
     pub self_contacts: Vec<usize>,
+    /// Vertices in a touching contact at the end of each step (the frames' `contact` flag).
+    pub contact_vertices: Vec<usize>,
     /// Seconds in contact detection and end-of-step projection.
     pub contact_seconds: f64,
 }
@@ -184,6 +191,7 @@ impl LoadedScene {
             "factorizations": system.factorizations(),
             "contacts": totals.contacts,
             "self_contacts": totals.self_contacts,
+            "contact_vertices": totals.contact_vertices,
             "rejected": totals.rejected,
             "warnings": warnings.to_json(),
             "timings": {
@@ -304,6 +312,7 @@ impl SceneSimulation {
             if self.simulation.contact().is_some() {
                 totals.contacts.push(step.contact.touching);
                 totals.self_contacts.push(step.contact.self_touching);
+                totals.contact_vertices.push(step.contact.vertices);
             }
             on_step(k, &self.simulation, k % every.max(1) == 0 || k == frames).map_err(RunError::Stopped)?;
         }

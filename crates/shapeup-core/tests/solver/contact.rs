@@ -231,6 +231,11 @@ normal = [0.0, 1.0, 0.0]
         most_self = most_self.max(report.contact.self_touching);
         let bad = intersecting_pairs(sim.simulation.positions(), &triangles);
         assert_eq!(bad, 0, "step {k}: {bad} pairs of triangles intersect");
+        // The colliders' thickness holds with self-collision on too.
+        for p in sim.simulation.positions() {
+            let bar = (p.x * p.x + (p.y + 0.1) * (p.y + 0.1)).sqrt() - 0.04;
+            assert!(bar.min(p.y + 0.3) > 0.01 * (1.0 - 1e-6), "step {k}: {p:?} too close to a collider");
+        }
     }
     assert!(most_self > 0, "the halves never touched: the scene tests nothing");
     assert_eq!(sim.simulation.system().factorizations(), 1);
