@@ -222,7 +222,7 @@ def test_static_solver_keeps_a_dragged_handle_out_of_a_sphere():
     solver.add_collider("sphere", center=center, radius=radius)
     q, report = solver.solve(iterations=100)
     assert report["iterations"] == 100 and report["acceleration"] == "none"
-    assert len(report["energy"]) == 10
+    assert len(report["energy"]) == 100  # E after every iteration
     distance = np.linalg.norm(q - center, axis=1)
     assert distance.min() >= radius - 1e-9
     assert solver.contact_flags[middle]
