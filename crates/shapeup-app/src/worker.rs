@@ -93,15 +93,15 @@ pub struct SolveResult {
     pub global_ms: f64,
     /// Milliseconds rebuilding and factoring (these chunks).
     pub setup_ms: f64,
-    /// E after each iteration of these chunks (the last `energy.len()` of `iterations`).
+    /// E after each iteration of these chunks (the last `energy.len()` of `iterations`). With
+    /// colliders or self-collision, one E per chunk of the core's static contact solve (a
+    /// detection every 10 iterations), and `iterations` counts those chunks.
     pub energy: Vec<f64>,
     /// Why nothing was solved (no handles, a singular system, a group that cannot be built, a
     /// non-finite energy).
     pub error: Option<EditorError>,
     /// Per vertex, whether it touches a collider or the surface itself after the last chunk
-    /// (empty without colliders and self-collision). With contact, `energy` has one E per
-    /// chunk of the core's static contact solve (a detection every few iterations), not one
-    /// per iteration.
+    /// (empty without colliders and self-collision).
     pub touching: Vec<bool>,
 }
 

@@ -767,6 +767,16 @@ fn the_contact_panel_adds_selects_edits_and_removes_colliders() {
     assert_eq!(harness.state().selected_collider(), Some(0), "the new collider gets the gizmo");
     harness.get_by_label("0: sphere");
     harness.get_by_label_contains("radius");
+    // Its outline is drawn over the view in the selection's orange (the mesh has no orange).
+    let view = viewport_rect(&harness);
+    let orange = render(&mut harness).count(view, is_orange);
+    assert!(orange > 100, "{orange} orange pixels");
+    harness.get_by_label("0: sphere").click();
+    settle(&mut harness);
+    assert_eq!(harness.state().selected_collider(), None, "a second click deselects");
+    assert_eq!(render(&mut harness).count(view, is_orange), 0, "not selected: grey");
+    harness.get_by_label("0: sphere").click();
+    settle(&mut harness);
 
     harness.get_by_role_and_label(Role::CheckBox, "Self-collision").click();
     settle(&mut harness);
