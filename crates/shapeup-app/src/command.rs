@@ -4,6 +4,7 @@
 
 use crate::group::{GroupKey, ShapeModel};
 use glam::DVec3;
+use shapeup_core::contact::{ColliderSpec, ContactSettings};
 
 /// How a selection combines with the current one.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -20,7 +21,8 @@ pub enum SelectMode {
 /// One editor action.
 ///
 /// Commands that change the constraints (handles, groups, weights, shape model, rest shape,
-/// iterations, tolerance) or the shape ([`Command::ResetShape`]) are undoable; selection
+/// iterations, tolerance, colliders, contact settings) or the shape ([`Command::ResetShape`])
+/// are undoable; selection
 /// changes, [`Command::Undo`] and [`Command::Redo`] are not ([`Command::effect`]).
 #[derive(Debug, Clone, PartialEq)]
 #[must_use]
@@ -119,6 +121,39 @@ pub enum Command {
     SetTolerance(f64),
     /// How the solver combines iterates (Anderson acceleration or plain).
     SetAcceleration(shapeup_core::solver::Acceleration),
+    /// A collider, appended to the document's (a scene's `[[colliders]]` entry, input frame;
+    /// [`Document::default_collider`](crate::document::Document::default_collider) places a
+    /// primitive around the mesh, [`mesh_collider`](crate::collider::mesh_collider) reads a
+    /// file). Refused when a value is out of range or its mesh file cannot be used.
+    AddCollider(ColliderSpec),
+    /// Removes the collider at this index.
+    RemoveCollider(usize),
+    /// Replaces the collider at `index` (e.g. a number edited in the Contact panel).
+    EditCollider {
+        /// Which collider.
+        index: usize,
+        /// Its new description.
+        spec: ColliderSpec,
+    },
+    /// Translates a collider by `delta` (input frame; the gizmo on a collider). A mesh
+    /// collider cannot move (its file places it).
+    MoveCollider {
+        /// Which collider.
+        index: usize,
+        /// Translation, input frame.
+        delta: DVec3,
+    },
+    /// Turns a collider about its centre ([`crate::collider::center`]).
+    RotateCollider {
+        /// Which collider.
+        index: usize,
+        /// Rotation axis (input frame, any non-zero length).
+        axis: DVec3,
+        /// Angle in radians, right-handed about the axis.
+        angle: f64,
+    },
+    /// The `[contact]` settings: self-collision, thickness, self friction.
+    SetContact(ContactSettings),
     /// Undoes the last undoable command (or drag).
     Undo,
     /// Redoes the last undone step.
@@ -140,6 +175,20 @@ pub struct Effect {
 }
 
 impl Command {
+    /// Whether it changes only the colliders or the contact settings: a running simulation
+    /// takes these over live instead of starting again.
+    pub fn is_contact_edit(&self) -> bool {
+        matches!(
+            self,
+            Command::AddCollider(_)
+                | Command::RemoveCollider(_)
+                | Command::EditCollider { .. }
+                | Command::MoveCollider { .. }
+                | Command::RotateCollider { .. }
+                | Command::SetContact(_)
+        )
+    }
+
     /// What applying it can change.
     pub fn effect(&self) -> Effect {
         let effect = |undoable, changes_solve, redraws| Effect { undoable, changes_solve, redraws };
@@ -156,7 +205,9 @@ impl Command {
             | Command::SetWeight { .. }
             | Command::SetIterations(_)
             | Command::SetTolerance(_)
-            | Command::SetAcceleration(_) => effect(true, true, false),
+            | Command::SetAcceleration(_)
+            | Command::MoveCollider { .. }
+            | Command::RotateCollider { .. } => effect(true, true, false),
             Command::FixSelection
             | Command::PinFreePieces
             | Command::DeleteHandle(_)
@@ -166,7 +217,11 @@ impl Command {
             | Command::AddConstraint { .. }
             | Command::RemoveGroup(_)
             | Command::ResetShape
-            | Command::MakeRest => effect(true, true, true),
+            | Command::MakeRest
+            | Command::AddCollider(_)
+            | Command::RemoveCollider(_)
+            | Command::EditCollider { .. }
+            | Command::SetContact(_) => effect(true, true, true),
         }
     }
 }

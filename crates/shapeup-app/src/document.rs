@@ -2,8 +2,9 @@
 //! undo history, with no GUI.
 //!
 //! - [`EditState`] is what undo snapshots: the rest shape (shared, cheap to clone), the groups
-//!   (shape model, handles with their targets, smoothing, others from a scene) and the
-//!   iteration count. It is also what the [`worker`](crate::worker) receives to solve.
+//!   (shape model, handles with their targets, smoothing, others from a scene), the colliders
+//!   and contact settings, and the iteration count. It is also what the
+//!   [`worker`](crate::worker) receives to solve.
 //! - [`EditSolver`] turns an `EditState` into a `shapeup-core` system and keeps the working
 //!   positions ([`edit_state`](crate::edit_state)).
 //! - [`Document`] ties them together with the selection and the current positions, and applies
@@ -23,6 +24,7 @@ use crate::error::{Cause, LoadError};
 use glam::DVec3;
 use history::Snapshot;
 use shapeup_core::constraints::{ConstraintType, Selection, registry, selects_any};
+use shapeup_core::contact::{ColliderSpec, ContactSettings};
 use shapeup_core::io::{Attributes, read_mesh};
 use shapeup_core::mesh::Mesh;
 use shapeup_core::scene::{GroupSpec, SelectionSpec, SolverSettings, Targets};
@@ -208,6 +210,31 @@ impl Document {
     /// The convergence tolerance on the relative energy change ([`EditState::tolerance`]).
     pub fn tolerance(&self) -> f64 {
         self.state.tolerance
+    }
+
+    /// The colliders, in order ([`EditState::colliders`]).
+    pub fn colliders(&self) -> &[ColliderSpec] {
+        &self.state.colliders
+    }
+
+    /// The `[contact]` settings ([`EditState::contact`]).
+    pub fn contact_settings(&self) -> ContactSettings {
+        self.state.contact
+    }
+
+    /// A collider of type `kind` (sphere, box, plane, capsule) placed just below the current
+    /// shape ([`crate::collider::default_collider`]), for [`Command::AddCollider`]; `None` for
+    /// another type.
+    pub fn default_collider(&self, kind: &str) -> Option<ColliderSpec> {
+        let lo = self.positions.iter().copied().reduce(DVec3::min)?;
+        let hi = self.positions.iter().copied().reduce(DVec3::max)?;
+        crate::collider::default_collider(kind, lo, hi)
+    }
+
+    /// Per vertex, whether it touched a collider or the surface itself at the end of the last
+    /// synchronous solve ([`Document::converge`]); `None` without colliders and self-collision.
+    pub fn touching(&self) -> Option<&[bool]> {
+        self.solver.touching()
     }
 
     /// Number of vertices.

@@ -3,15 +3,19 @@
 //! `shapeup-core` [`System`] (`build_system`, which dynamic mode uses too) and keeps the
 //! working positions: a structural change rebuilds the
 //! system, a handle move only sets targets ([`System::set_targets`], no refactorization), a
-//! weight change only refactors.
+//! weight change only refactors. With colliders or self-collision the solve is the core's
+//! static solve with contact (`solve_static_with_contact`), so dragging into a collider stops
+//! at it.
 
+use crate::collider::contact_model;
 use crate::error::{Cause, EditorError, GroupError};
 use crate::group::{Group, GroupKey, GroupRole, ShapeModel, Structure};
 use glam::DVec3;
+use shapeup_core::contact::{ColliderSpec, ContactModel, ContactSettings};
 use shapeup_core::geometry::{RestGeometry, WorkingFrame};
 use shapeup_core::mesh::Mesh;
-use shapeup_core::scene::GroupSpec;
-use shapeup_core::solver::{Acceleration, GroupId, SolveReport, SolverParams, System};
+use shapeup_core::scene::{GroupSpec, solve_static_with_contact};
+use shapeup_core::solver::{Acceleration, GroupId, SolveReport, SolverParams, System, is_converged};
 use std::ops::ControlFlow;
 use std::sync::Arc;
 
@@ -68,11 +72,11 @@ pub struct EditState {
     pub anderson_window: usize,
     /// Pairs L-BFGS keeps (the scene's `[solver] lbfgs_memory`).
     pub lbfgs_memory: usize,
-    /// The scene's `[[colliders]]`, carried from open to save (mesh paths resolved against
-    /// the scene's folder).
-    pub colliders: Vec<shapeup_core::contact::ColliderSpec>,
-    /// The scene's `[contact]` table.
-    pub contact: shapeup_core::contact::ContactSettings,
+    /// The colliders (a scene's `[[colliders]]`, input frame; mesh paths absolute, resolved
+    /// against the scene's folder when opened).
+    pub colliders: Vec<ColliderSpec>,
+    /// The `[contact]` settings (self-collision, thickness, self friction).
+    pub contact: ContactSettings,
 }
 
 impl PartialEq for EditState {
@@ -149,6 +153,10 @@ pub struct EditSolver {
     ids: Vec<GroupId>,
     /// Current positions, working frame.
     q: Vec<DVec3>,
+    /// The colliders and self-collision of the synced state (`None`: nothing can touch).
+    contact: Option<ContactModel>,
+    /// What `contact` was built from.
+    contact_of: Option<(Vec<ColliderSpec>, ContactSettings)>,
 }
 
 impl EditSolver {
@@ -168,6 +176,18 @@ impl EditSolver {
         let same_rest = self.rest.as_ref().is_some_and(|r| Arc::ptr_eq(r, &state.rest));
         let same_groups = self.structure.len() == state.groups.len()
             && self.structure.iter().zip(&state.groups).all(|(s, g)| s.matches(g));
+        let same_contact =
+            same_rest && self.contact_of.as_ref().is_some_and(|(c, s)| *c == state.colliders && *s == state.contact);
+        // Built first, so that a collider that cannot be used changes nothing.
+        let contact = if same_contact {
+            None
+        } else {
+            let rest = &state.rest;
+            Some(contact_model(&state.colliders, state.contact, &rest.mesh, &rest.geometry, &rest.frame)?)
+        };
+        // The contact weights are relative to the static matrix's diagonal: set again after a
+        // rebuild, a weight change or new contact (`solve_static_with_contact` sets them).
+        let mut stale_weights = contact.is_some();
         let params = SolverParams {
             iterations: state.iterations,
             acceleration: state.acceleration,
@@ -186,6 +206,7 @@ impl EditSolver {
                             group.targets().into_iter().map(|t| state.rest.frame.to_working(t)).collect();
                         system.set_targets(id, &working)?;
                     }
+                    stale_weights |= system.group(id).is_some_and(|g| g.multiplier != group.spec.weight);
                     system.set_multiplier(id, group.spec.weight)?;
                 }
             }
@@ -205,7 +226,18 @@ impl EditSolver {
                 self.system = Some(system);
                 self.ids = ids;
                 self.rest = Some(Arc::clone(rest));
+                stale_weights = true;
             }
+        }
+        if let Some(contact) = contact {
+            self.contact = contact.filter(ContactModel::is_active);
+            self.contact_of = Some((state.colliders.clone(), state.contact));
+        }
+        if let Some(system) = self.system.as_mut()
+            && system.contact_weights().is_some()
+            && (stale_weights || self.contact.is_none())
+        {
+            system.set_contact_weights(None)?;
         }
         Ok(())
     }
@@ -249,9 +281,26 @@ impl EditSolver {
         interrupted: impl Fn() -> bool,
     ) -> Result<SolveReport, EditorError> {
         let system = self.system.as_mut().ok_or(EditorError::NoHandles)?;
-        Ok(system.solve_with(&mut self.q, iterations, tolerance, |_, _| {
-            if interrupted() { ControlFlow::Break(()) } else { ControlFlow::Continue(()) }
+        let Some(contact) = self.contact.as_mut() else {
+            return Ok(system.solve_with(&mut self.q, iterations, tolerance, |_, _| {
+                if interrupted() { ControlFlow::Break(()) } else { ControlFlow::Continue(()) }
+            })?);
+        };
+        // With contact: the core's static solve, a detection every few iterations and the
+        // projection out of colliders after each, with E recorded after each such chunk; the
+        // tolerance is checked between chunks.
+        let mut previous: Option<f64> = None;
+        Ok(solve_static_with_contact(system, contact, &mut self.q, iterations, |_, energy| {
+            let converged = tolerance > 0.0 && previous.is_some_and(|p| is_converged(p, energy, tolerance, 0.0));
+            previous = Some(energy);
+            if converged || interrupted() { ControlFlow::Break(()) } else { ControlFlow::Continue(()) }
         })?)
+    }
+
+    /// Per vertex, whether it touched a collider or another part of the surface at the end of
+    /// the last solve; `None` without colliders and self-collision.
+    pub fn touching(&self) -> Option<&[bool]> {
+        self.contact.as_ref().map(ContactModel::touching)
     }
 
     /// The current positions in the input frame; vertices no constraint touches keep their rest

@@ -100,6 +100,13 @@ pub enum EditorError {
     /// Dynamic mode could not start or failed.
     #[error("simulation: {0}")]
     Simulation(#[source] SimulationError),
+    /// A collider cannot be used (a mesh file that cannot be read, a bad value), naming it
+    /// as a scene does (`colliders[1]: …`).
+    #[error("{0}")]
+    Collider(String),
+    /// No collider has this index.
+    #[error("no collider {0} (there are {1})")]
+    UnknownCollider(usize, usize),
 }
 
 /// Why a mesh or scene cannot be opened in the editor.
@@ -174,6 +181,9 @@ pub enum SimulationError {
     /// The simulation refuses its start state.
     #[error(transparent)]
     Dynamics(#[from] DynamicsError),
+    /// A collider cannot be built on the simulated mesh.
+    #[error("{0}")]
+    Collider(String),
     /// The simulation thread cannot be started.
     #[error("cannot start the simulation thread: {0}")]
     Thread(#[source] Cause),
@@ -207,6 +217,9 @@ pub enum RunnerError {
     /// Putting the vertices below the floor back on it failed (stepping pauses).
     #[error(transparent)]
     Floor(DynamicsError),
+    /// New colliders or contact settings were refused (the old ones stay).
+    #[error("{0}")]
+    Contact(String),
 }
 
 /// Why a mesh cannot be filled with tetrahedra.

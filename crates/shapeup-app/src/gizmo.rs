@@ -12,7 +12,8 @@
 //!
 //! The gizmo's parts are in world axes (global orientation): an arrow moves only along its
 //! axis, a square only in its plane, a ring turns about its axis through the handle's centroid,
-//! which is exactly what [`Command::RotateHandle`] does.
+//! which is exactly what [`Command::RotateHandle`] does. On a collider the same drags move and
+//! turn it about its centre ([`COLLIDER_GIZMO`], [`collider_command`]).
 
 use crate::camera::OrbitCamera;
 use crate::command::Command;
@@ -125,6 +126,21 @@ pub fn command_from_result(handle: GroupKey, result: &GizmoResult) -> Option<Com
                 .then_some(Command::RotateHandle { handle, axis, angle: delta })
         }
         GizmoResult::Scale { .. } | GizmoResult::Arcball { .. } => None,
+    }
+}
+
+/// The key the gizmo is given when it sits on a collider: no group has it (group keys count
+/// up from 0), and [`collider_command`] turns the commands for it into the collider's.
+pub const COLLIDER_GIZMO: GroupKey = GroupKey(u32::MAX);
+
+/// A gizmo command as the command for collider `index`: [`Command::MoveHandle`] moves it
+/// ([`Command::MoveCollider`]), [`Command::RotateHandle`] turns it about its centre
+/// ([`Command::RotateCollider`]), as they would a handle; other commands stay as they are.
+pub fn collider_command(index: usize, command: Command) -> Command {
+    match command {
+        Command::MoveHandle { delta, .. } => Command::MoveCollider { index, delta },
+        Command::RotateHandle { axis, angle, .. } => Command::RotateCollider { index, axis, angle },
+        other => other,
     }
 }
 

@@ -9,6 +9,8 @@
 //!   (`GroupSpec`) with a key and a role; the shape models;
 //! - [`edit_state`]: the rest shape, the edit state undo snapshots, and the solver behind it;
 //! - [`pieces`]: the mesh's connected pieces;
+//! - [`collider`]: colliders in the editor (defaults around the mesh, moves and turns, their
+//!   outlines) and the core's contact model of them;
 //! - [`document`]: the mesh, its constraint groups (shape model, handles, smoothing), the
 //!   selection, the current shape, undo/redo and scene round trips;
 //! - [`command`]: the [`command::Command`]s a panel or a drag emits, applied by
@@ -17,12 +19,13 @@
 //! - [`gizmo`]: the handle gizmo's picking, drag math and tessellation, framework-agnostic;
 //! - [`worker`]: a background solver thread, so the UI never waits for a solve;
 //! - [`simulation`]: dynamic mode, a Projective Dynamics simulation built from the document's
-//!   groups, on its own thread (run/pause, gravity, floor, tetrahedra, grab);
+//!   groups, on its own thread (run/pause, gravity, floor, tetrahedra, grab, colliders);
 //! - `gui` (feature `gui`): the window (the app shell, one file per panel, the viewport, files
 //!   and dialogs, metrics) and headless rendering.
 #![warn(missing_docs)]
 
 pub mod camera;
+pub mod collider;
 pub mod command;
 pub mod document;
 pub mod edit_state;

@@ -7,14 +7,20 @@
 //! vertices at the cursor with [`SimulationRunner::grab`], pauses or resumes it, and changes
 //! gravity, stiffness, time step, damping and grab strength on the fly
 //! ([`SimulationRunner::update_settings`]); a change of the document's constraints, of the
-//! model, the floor or the tetrahedra means a new runner.
+//! model, the floor or the tetrahedra means a new runner. The document's colliders and
+//! `[contact]` settings become the core's contact model by the scene's rule
+//! ([`crate::collider::contact_model`]) and can change while it runs
+//! ([`SimulationRunner::set_contact`]); which vertices touch something comes back with the
+//! positions ([`SimulationRunner::touching`]).
 
+use crate::collider::contact_model;
 use crate::document::Document;
 use crate::edit_state::{Rest, build_system};
 use crate::error::{Cause, EditorError, RunnerError, SettingsError, SimulationError, TetrahedraError};
 use crate::group::GroupRole;
 use glam::DVec3;
 use serde_json::{Map, Value};
+use shapeup_core::contact::{ColliderSpec, ContactSettings};
 use shapeup_core::dynamics::{DynamicsError, DynamicsParams, Simulation, StepReport};
 use shapeup_core::geometry::WorkingFrame;
 use shapeup_core::mesh::Mesh;
@@ -179,6 +185,10 @@ pub struct SimulationStats {
     pub local_ms: f64,
     /// Milliseconds of the last step's global steps (triangular solves).
     pub global_ms: f64,
+    /// Milliseconds of the last step's contact detection and projection.
+    pub contact_ms: f64,
+    /// Vertices touching a collider or the surface itself at the end of the last step.
+    pub contact_vertices: usize,
     /// The error that stopped the stepping, or that a setting or grab caused, if any.
     pub error: Option<RunnerError>,
 }
@@ -186,6 +196,8 @@ pub struct SimulationStats {
 #[derive(Default)]
 struct Shared {
     running: bool,
+    /// Steps to take before pausing ([`SimulationRunner::run_for`]); `None`: until paused.
+    steps_left: Option<u64>,
     shutdown: bool,
     reset: bool,
     /// Vertices and targets (input frame) to hold; `grab_changed` says the thread must look.
@@ -197,6 +209,12 @@ struct Shared {
     params_changed: bool,
     /// Newest positions (input frame), taken by `poll`.
     latest: Option<Vec<DVec3>>,
+    /// Per document vertex, whether it touched something at the end of the newest step
+    /// (empty without contact).
+    touching: Vec<bool>,
+    /// New colliders and contact settings; `contact_changed` says the thread must look.
+    contact: Option<(Vec<ColliderSpec>, ContactSettings)>,
+    contact_changed: bool,
     /// When the steps of the last second ended.
     recent: VecDeque<Instant>,
     stats: SimulationStats,
@@ -251,7 +269,8 @@ impl SimulationRunner {
         let (groups, floor) = dynamic_groups(document, &settings, &mesh, &start)?;
         let solver = dynamic_solver_settings(document, &settings);
         let rest = Rest::new(mesh, document.state().rest.normalize);
-        let stepper = Stepper::new(&groups, &solver, rest, &start, floor, document.num_vertices())?;
+        let contact = (document.colliders().to_vec(), document.contact_settings());
+        let stepper = Stepper::new(&groups, &solver, rest, &start, floor, document.num_vertices(), &contact)?;
         let num_tetrahedra = stepper.num_tetrahedra;
         let channel = Arc::new(Channel::default());
         channel.state.lock().unwrap_or_else(PoisonError::into_inner).settings = settings;
@@ -272,7 +291,19 @@ impl SimulationRunner {
 
     /// Runs or pauses the time stepping.
     pub fn set_running(&self, running: bool) {
-        self.with_state(|s| s.running = running);
+        self.with_state(|s| {
+            s.running = running;
+            s.steps_left = None;
+        });
+    }
+
+    /// Takes exactly `steps` more time steps, then pauses (e.g. to compare with another
+    /// simulation step for step).
+    pub fn run_for(&self, steps: u64) {
+        self.with_state(|s| {
+            s.running = steps > 0;
+            s.steps_left = (steps > 0).then_some(steps);
+        });
     }
 
     /// Whether it is stepping.
@@ -306,6 +337,23 @@ impl SimulationRunner {
     /// The newest positions of the document's vertices (input frame) since the last poll.
     pub fn poll(&self) -> Option<Vec<DVec3>> {
         self.with_state(|s| s.latest.take())
+    }
+
+    /// Per document vertex, whether it touched a collider or the surface itself at the end of
+    /// the newest step (`touching()` of the core's contact model); empty without contact.
+    pub fn touching(&self) -> Vec<bool> {
+        self.with_state(|s| s.touching.clone())
+    }
+
+    /// Takes over new colliders and contact settings from the next step (the document's,
+    /// after a collider was added, moved or edited): the contact model is built again, and
+    /// vertices now inside a collider are moved out without velocity. A collider that cannot
+    /// be built shows as the stats' error and the old ones stay.
+    pub fn set_contact(&self, colliders: Vec<ColliderSpec>, settings: ContactSettings) {
+        self.with_state(|s| {
+            s.contact = Some((colliders, settings));
+            s.contact_changed = true;
+        });
     }
 
     /// Steps, steps per second over the last second, the last step's timings, and the error.
@@ -354,6 +402,8 @@ fn start_shape(document: &Document, mesh: &Mesh) -> Vec<DVec3> {
 /// What the simulation thread owns: the simulation and what a restart goes back to.
 struct Stepper {
     simulation: Simulation,
+    /// The simulated mesh and its rest geometry (contact is built on them).
+    rest: Rest,
     frame: WorkingFrame,
     /// The floor's height, working frame.
     floor: Option<f64>,
@@ -373,14 +423,19 @@ enum Work {
     Shutdown,
     /// A restart, already done.
     Reset,
-    /// New settings and a grab or release, if any, and the grab strength.
-    Changes { grab: GrabChange, settings: Option<SimulationSettings>, strength: f64 },
+    /// New settings, a grab or release and new contact, if any, and the grab strength.
+    Changes {
+        grab: GrabChange,
+        settings: Option<SimulationSettings>,
+        strength: f64,
+        contact: Option<(Vec<ColliderSpec>, ContactSettings)>,
+    },
 }
 
 impl Stepper {
     /// Builds the simulation of `groups` on `rest` (the simulated mesh and its frame) with the
-    /// `solver` settings, at `start` (input frame), at rest. `floor` is the floor's height
-    /// (input frame), if any.
+    /// `solver` settings, at `start` (input frame), at rest, with `contact`'s colliders and
+    /// settings. `floor` is the floor's height (input frame), if any.
     fn new(
         groups: &[GroupSpec],
         solver: &SolverSettings,
@@ -388,18 +443,23 @@ impl Stepper {
         start: &[DVec3],
         floor: Option<f64>,
         surface_vertices: usize,
+        contact: &(Vec<ColliderSpec>, ContactSettings),
     ) -> Result<Stepper, SimulationError> {
         let (system, _) = build_system(&rest, groups, solver.solver_params())?;
         let frame = rest.frame;
         let masses = lumped_masses(&rest.geometry, solver.density);
         let params = solver.dynamics_params(frame.scale);
-        let mut simulation = Simulation::new(system, masses, rest.geometry.positions, params)?;
+        let model = contact_model(&contact.0, contact.1, &rest.mesh, &rest.geometry, &frame)
+            .map_err(|e| SimulationError::Collider(e.to_string()))?;
+        let mut simulation = Simulation::new(system, masses, rest.geometry.positions.clone(), params)?;
         let floor = floor.map(|y| frame.to_working(DVec3::new(0.0, y, 0.0)).y);
         let start: Vec<DVec3> = start.iter().map(|&p| frame.to_working(p)).collect();
         let zero = vec![DVec3::ZERO; start.len()];
         simulation.set_state(&start, &zero)?;
+        // As a scene's simulation: vertices starting in a collider are moved out, at rest.
+        simulation.set_contact(model)?;
         let num_tetrahedra = rest.mesh.num_tetrahedra();
-        Ok(Stepper { simulation, frame, floor, initial: (start, zero), surface_vertices, num_tetrahedra })
+        Ok(Stepper { simulation, rest, frame, floor, initial: (start, zero), surface_vertices, num_tetrahedra })
     }
 
     /// The thread's loop: waits for work, applies it, steps while running.
@@ -408,8 +468,9 @@ impl Stepper {
             match self.wait(channel) {
                 Work::Shutdown => return,
                 Work::Reset => notify(),
-                Work::Changes { grab, settings, strength } => {
-                    let problem = self.apply(grab, settings, strength);
+                Work::Changes { grab, settings, strength, contact } => {
+                    let new_contact = contact.is_some();
+                    let problem = self.apply(grab, settings, strength, contact);
                     let running = {
                         let mut state = channel.state.lock().unwrap_or_else(PoisonError::into_inner);
                         if problem.is_some() {
@@ -418,7 +479,12 @@ impl Stepper {
                         state.running
                     };
                     if !running {
-                        // Only settings changed while paused.
+                        // Only settings changed while paused; new colliders may have pushed
+                        // vertices out: show them.
+                        if new_contact {
+                            self.show(&mut channel.state.lock().unwrap_or_else(PoisonError::into_inner));
+                            notify();
+                        }
                         continue;
                     }
                     let outcome = self.step();
@@ -432,7 +498,7 @@ impl Stepper {
     /// Waits until there is something to do; a restart is done here, under the lock.
     fn wait(&mut self, channel: &Channel) -> Work {
         let mut state = channel.state.lock().unwrap_or_else(PoisonError::into_inner);
-        while !state.shutdown && !state.running && !state.reset && !state.params_changed {
+        while !state.shutdown && !state.running && !state.reset && !state.params_changed && !state.contact_changed {
             state = channel.wake.wait(state).unwrap_or_else(PoisonError::into_inner);
         }
         if state.shutdown {
@@ -441,7 +507,8 @@ impl Stepper {
         if std::mem::take(&mut state.reset) {
             // Checked: same lengths as the simulation's.
             let _ = self.simulation.set_state(&self.initial.0, &self.initial.1);
-            state.latest = Some(to_input(&self.frame, &self.initial.0[..self.surface_vertices]));
+            // Back to the start, moved out of the colliders as at the start.
+            self.show(&mut state);
             state.recent.clear();
             state.stats = SimulationStats::default();
             return Work::Reset;
@@ -449,12 +516,35 @@ impl Stepper {
         let settings = std::mem::take(&mut state.params_changed).then_some(state.settings);
         let strength = state.settings.grab_strength;
         let grab = std::mem::take(&mut state.grab_changed).then(|| state.grab.clone());
-        Work::Changes { grab, settings, strength }
+        let contact = if std::mem::take(&mut state.contact_changed) { state.contact.take() } else { None };
+        Work::Changes { grab, settings, strength, contact }
     }
 
-    /// Applies new settings and a grab or release; the last problem, if any.
-    fn apply(&mut self, grab: GrabChange, settings: Option<SimulationSettings>, strength: f64) -> Option<RunnerError> {
+    /// Hands the current positions and what touches to the UI.
+    fn show(&self, state: &mut Shared) {
+        let n = self.surface_vertices;
+        state.latest = Some(to_input(&self.frame, &self.simulation.positions()[..n]));
+        state.touching = self.simulation.contact().map(|c| c.touching()[..n].to_vec()).unwrap_or_default();
+    }
+
+    /// Applies new settings, a grab or release and new contact; the last problem, if any.
+    fn apply(
+        &mut self,
+        grab: GrabChange,
+        settings: Option<SimulationSettings>,
+        strength: f64,
+        contact: Option<(Vec<ColliderSpec>, ContactSettings)>,
+    ) -> Option<RunnerError> {
         let mut problem = None;
+        if let Some((colliders, contact)) = contact {
+            let rest = &self.rest;
+            let built = contact_model(&colliders, contact, &rest.mesh, &rest.geometry, &self.frame)
+                .map_err(|e| e.to_string())
+                .and_then(|model| self.simulation.set_contact(model).map_err(|e| e.to_string()));
+            if let Err(e) = built {
+                problem = Some(RunnerError::Contact(e));
+            }
+        }
         if let Some(settings) = settings
             && let Err(e) = self.simulation.set_params(settings.params(self.frame.scale))
         {
@@ -487,7 +577,7 @@ impl Stepper {
         let mut state = channel.state.lock().unwrap_or_else(PoisonError::into_inner);
         match outcome {
             Ok(report) => {
-                state.latest = Some(to_input(&self.frame, &self.simulation.positions()[..self.surface_vertices]));
+                self.show(&mut state);
                 let now = Instant::now();
                 state.recent.push_back(now);
                 while state.recent.front().is_some_and(|&t| now.duration_since(t) > Duration::from_secs(1)) {
@@ -498,10 +588,20 @@ impl Stepper {
                 stats.step_ms = 1e3 * report.total_seconds;
                 stats.local_ms = 1e3 * report.local_seconds;
                 stats.global_ms = 1e3 * report.global_seconds;
+                stats.contact_ms = 1e3 * report.contact_seconds;
+                stats.contact_vertices = report.contact.vertices;
+                if let Some(left) = state.steps_left.as_mut() {
+                    *left -= 1;
+                    if *left == 0 {
+                        state.steps_left = None;
+                        state.running = false;
+                    }
+                }
             }
             Err(e) => {
                 state.stats.error = Some(e);
                 state.running = false;
+                state.steps_left = None;
             }
         }
     }

@@ -93,11 +93,16 @@ pub struct SolveResult {
     pub global_ms: f64,
     /// Milliseconds rebuilding and factoring (these chunks).
     pub setup_ms: f64,
-    /// E after each iteration of these chunks (the last `energy.len()` of `iterations`).
+    /// E after each iteration of these chunks (the last `energy.len()` of `iterations`). With
+    /// colliders or self-collision, one E per chunk of the core's static contact solve (a
+    /// detection every 10 iterations), and `iterations` counts those chunks.
     pub energy: Vec<f64>,
     /// Why nothing was solved (no handles, a singular system, a group that cannot be built, a
     /// non-finite energy).
     pub error: Option<EditorError>,
+    /// Per vertex, whether it touches a collider or the surface itself after the last chunk
+    /// (empty without colliders and self-collision).
+    pub touching: Vec<bool>,
 }
 
 impl SolveResult {
@@ -135,6 +140,7 @@ impl SolveResult {
         self.setup_ms += next.setup_ms;
         self.energy.extend(next.energy);
         self.error = next.error;
+        self.touching = next.touching;
     }
 }
 
@@ -510,6 +516,7 @@ impl Converger {
             setup_ms: 0.0,
             energy: Vec::new(),
             error: None,
+            touching: Vec::new(),
         };
         let outcome = self.chunk(job, interrupted);
         match outcome {
@@ -542,6 +549,7 @@ impl Converger {
                 result.energy = report.energies;
                 self.last_good.clone_from(&positions);
                 result.positions = positions;
+                result.touching = self.solver.touching().map(<[bool]>::to_vec).unwrap_or_default();
             }
             Err(e) => {
                 result.setup_ms = 1e3 * started.elapsed().as_secs_f64();

@@ -9,6 +9,7 @@ use crate::group::{FREE_PIECE_WEIGHT, Group, GroupKey, GroupRole, ShapeModel, WE
 use glam::{DQuat, DVec3};
 use serde_json::Map;
 use shapeup_core::constraints::constraint_type;
+use shapeup_core::contact::ColliderSpec;
 use shapeup_core::scene::{GroupSpec, SelectionSpec, Targets, unique_group_name};
 use shapeup_core::solver::Acceleration;
 use std::sync::Arc;
@@ -55,6 +56,36 @@ impl Document {
             }
             Command::PinFreePieces => {
                 self.pin_free_pieces(state);
+                Ok(())
+            }
+            Command::AddCollider(spec) => {
+                checked(&spec)?;
+                state.colliders.push(spec);
+                Ok(())
+            }
+            Command::RemoveCollider(index) => {
+                collider_mut(state, index)?;
+                state.colliders.remove(index);
+                Ok(())
+            }
+            Command::EditCollider { index, spec } => {
+                checked(&spec)?;
+                *collider_mut(state, index)? = spec;
+                Ok(())
+            }
+            Command::MoveCollider { index, delta } => {
+                let c = collider_mut(state, index)?;
+                *c = crate::collider::translated(c, delta)?;
+                Ok(())
+            }
+            Command::RotateCollider { index, axis, angle } => {
+                let c = collider_mut(state, index)?;
+                *c = crate::collider::turned(c, axis, angle)?;
+                Ok(())
+            }
+            Command::SetContact(settings) => {
+                settings.validate().map_err(|e| EditorError::BadValue(e.to_string()))?;
+                state.contact = settings;
                 Ok(())
             }
             Command::Select { .. }
@@ -255,6 +286,17 @@ fn set_tolerance(state: &mut EditState, tolerance: f64) -> Result<(), EditorErro
 /// [`Command::SetAcceleration`].
 fn set_acceleration(state: &mut EditState, acceleration: Acceleration) {
     state.acceleration = acceleration;
+}
+
+/// A collider's values checked (its mesh file is read when the solver builds it).
+fn checked(spec: &ColliderSpec) -> Result<(), EditorError> {
+    spec.validate().map_err(|e| EditorError::BadValue(format!("{} collider: {e}", spec.kind())))
+}
+
+/// The collider at `index`.
+fn collider_mut(state: &mut EditState, index: usize) -> Result<&mut ColliderSpec, EditorError> {
+    let n = state.colliders.len();
+    state.colliders.get_mut(index).ok_or(EditorError::UnknownCollider(index, n))
 }
 
 /// A name for a new group no group uses, by the core's one rule for unnamed groups

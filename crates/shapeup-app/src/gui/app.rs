@@ -16,6 +16,7 @@ use super::dynamics_panel::{DynamicsAction, dynamics_panel};
 use super::files::FilesState;
 use super::metrics::{Metrics, SolveProgress, frame_busy, push_bounded};
 use super::panels::PanelOutput;
+use super::panels::contact::{ContactPanel, contact_panel};
 use super::panels::groups::{GroupsPanel, groups_panel, shape_model_panel};
 use super::panels::selection::{SelectionPanel, selection_panel};
 use super::panels::solver::solver_panel;
@@ -50,6 +51,9 @@ pub(super) struct View {
     /// Whether Tetrahedralize can be ticked for this mesh (computed once per mesh).
     pub(super) tetrahedralize: Result<(), TetrahedraError>,
     pub(super) energy_history: VecDeque<f64>,
+    /// Per vertex, whether it touches a collider or the surface itself (from the last solve or
+    /// simulation step; empty without contact).
+    pub(super) touching: Vec<bool>,
 }
 
 /// Options of the editor window.
@@ -69,6 +73,7 @@ pub struct EditorApp {
     pub(super) viewport: ViewportState,
     pub(super) selection: SelectionPanel,
     pub(super) groups: GroupsPanel,
+    pub(super) contact: ContactPanel,
     pub(super) files: FilesState,
     pub(super) worker: Option<SolverWorker>,
     options: WindowOptions,
@@ -109,10 +114,12 @@ impl EditorApp {
                 progress: SolveProgress::default(),
                 tetrahedralize: tetrahedralize_available(&document),
                 energy_history: VecDeque::new(),
+                touching: Vec::new(),
             },
             viewport,
             selection: SelectionPanel::default(),
             groups: GroupsPanel::default(),
+            contact: ContactPanel::default(),
             files: FilesState::new(&path),
             document,
             mesh_path: path,
@@ -207,12 +214,26 @@ impl EditorApp {
         self.end_drag = true;
     }
 
+    /// Per vertex, whether it touches a collider or the surface itself as last shown (empty
+    /// without contact).
+    pub fn touching(&self) -> &[bool] {
+        &self.view.touching
+    }
+
+    /// The collider the gizmo sits on (the Contact panel's selection), if any.
+    pub fn selected_collider(&self) -> Option<usize> {
+        self.contact.selected
+    }
+
     /// Applies the frame's commands to the document, in order; a change of the solve starts
-    /// a new convergence (and ends dynamic mode, built from the old constraints).
-    fn apply(&mut self, commands: Vec<Command>) {
+    /// a new convergence (and ends dynamic mode, built from the old constraints), but a
+    /// change of the colliders or contact settings alone goes to the running simulation.
+    pub(super) fn apply(&mut self, commands: Vec<Command>) {
         let mut changed = false;
+        let mut contact_only = true;
         for command in commands {
             let effect = command.effect();
+            let contact_edit = command.is_contact_edit();
             // Moving targets or changing weights changes nothing drawn until the solve returns.
             self.viewport.geometry_dirty |= effect.redraws;
             let solve = effect.changes_solve;
@@ -226,9 +247,11 @@ impl EditorApp {
                         self.view.status.clear();
                     }
                     changed |= solve;
+                    contact_only &= !solve || contact_edit;
                     if fixes {
                         // The new handle gets the gizmo.
                         self.groups.active_handle = self.document.handles().last().map(|h| h.key);
+                        self.contact.selected = None;
                     }
                 }
                 Err(e) => self.view.status = e.to_string(),
@@ -236,6 +259,16 @@ impl EditorApp {
         }
         if std::mem::take(&mut self.end_drag) {
             self.document.end_drag();
+        }
+        if changed && contact_only {
+            if let Some(runner) = &self.simulation {
+                // Colliders move under the running simulation; no static solve meanwhile.
+                runner.set_contact(self.document.colliders().to_vec(), self.document.contact_settings());
+                return;
+            }
+            // The next solve says what touches the new colliders.
+            self.view.touching.clear();
+            self.viewport.geometry_dirty = true;
         }
         if changed {
             // The simulation was built from the old constraints.
@@ -296,6 +329,7 @@ impl EditorApp {
         if !result.apply_to(&mut self.document) {
             return;
         }
+        self.view.touching.clone_from(&result.touching);
         self.view.banner = None;
         self.viewport.geometry_dirty = true;
         self.view.progress = SolveProgress {
@@ -324,6 +358,7 @@ impl EditorApp {
         if let Some(positions) = runner.poll()
             && self.document.accept_positions(self.document.epoch(), &positions)
         {
+            self.view.touching = runner.touching();
             self.viewport.geometry_dirty = true;
         }
     }
@@ -340,6 +375,7 @@ impl EditorApp {
                      ctrl+left drag: select visible vertices in a box (ctrl+alt adds, ctrl+shift removes)\n\
                      alt+left drag on a handle: move it · alt+right drag: rotate it\n\
                      gizmo on the active handle: drag an arrow, a square or a ring (shift snaps)\n\
+                     gizmo on the collider picked in Contact: move or turn it (also while simulating)\n\
                      dynamics running: alt+left drag grabs and pulls the mesh\n\
                      ctrl+z / ctrl+shift+z: undo / redo",
                 );
@@ -350,10 +386,16 @@ impl EditorApp {
             out.commands.extend(shape_model_panel(ui, &self.document));
             ui.separator();
             let hovered = self.groups.hovered;
+            let active = self.groups.active_handle;
             out.extend(groups_panel(ui, &self.document, &mut self.groups));
             if self.groups.hovered != hovered {
                 self.viewport.geometry_dirty = true;
             }
+            if self.groups.active_handle != active {
+                // A handle picked for the gizmo takes it from the collider.
+                self.contact.selected = None;
+            }
+
             ui.separator();
             out.extend(solver_panel(ui, &self.document, &self.view.progress));
             ui.separator();
@@ -361,6 +403,11 @@ impl EditorApp {
             self.path_row(ui, DialogPurpose::SaveScene);
             ui.separator();
             egui::CollapsingHeader::new("Dynamics").default_open(true).show(ui, |ui| self.dynamics_section(ui));
+            ui.separator();
+            egui::CollapsingHeader::new("Contact").default_open(true).show(ui, |ui| {
+                out.extend(contact_panel(ui, &self.document, &mut self.contact));
+                self.path_row(ui, DialogPurpose::ColliderMesh);
+            });
             ui.separator();
             ui.horizontal(|ui| {
                 ui.checkbox(&mut self.viewport.wireframe, "Wireframe");

@@ -1,4 +1,4 @@
-//! Native file dialogs (open, export, save scene) on their own thread, so the editor keeps
+//! Native file dialogs (open, export, save scene, a mesh collider) on their own thread, so the editor keeps
 //! drawing and solving while one is open. rfd talks to the XDG desktop portal and falls back to
 //! zenity; where neither exists the dialog returns nothing and the typed-path fields remain.
 
@@ -14,6 +14,8 @@ pub enum DialogPurpose {
     ExportMesh,
     /// Save the session as a scene file.
     SaveScene,
+    /// Add a mesh collider from a mesh file.
+    ColliderMesh,
 }
 
 const MESH_EXTENSIONS: [&str; 4] = ["obj", "ply", "stl", "off"];
@@ -70,11 +72,14 @@ impl FileDialogs {
                 .set_title("Save the session as a scene")
                 .add_filter("Scenes", &SCENE_EXTENSIONS)
                 .set_file_name(file_name),
+            DialogPurpose::ColliderMesh => {
+                dialog.set_title("Add a mesh collider").add_filter("Meshes", &MESH_EXTENSIONS)
+            }
         };
         let sender = self.sender.clone();
         let spawned = std::thread::Builder::new().name("shapeup-file-dialog".into()).spawn(move || {
             let path = match purpose {
-                DialogPurpose::Open => dialog.pick_file(),
+                DialogPurpose::Open | DialogPurpose::ColliderMesh => dialog.pick_file(),
                 DialogPurpose::ExportMesh | DialogPurpose::SaveScene => dialog.save_file(),
             };
             // The editor may have closed meanwhile; then nobody needs the answer.

@@ -123,8 +123,13 @@ pub fn dynamics_panel(
         let s = runner.stats();
         let tets =
             if runner.num_tetrahedra > 0 { format!(", {} tetrahedra", runner.num_tetrahedra) } else { String::new() };
+        let contact = if s.contact_ms > 0.0 {
+            format!(", contact {:.1} ms; {} vertices touching", s.contact_ms, s.contact_vertices)
+        } else {
+            String::new()
+        };
         ui.label(format!(
-            "{} steps, {:.0} steps/s, {:.1} ms per step (local {:.1} ms, global {:.1} ms){tets}",
+            "{} steps, {:.0} steps/s, {:.1} ms per step (local {:.1} ms, global {:.1} ms{contact}){tets}",
             s.steps, s.steps_per_second, s.step_ms, s.local_ms, s.global_ms
         ));
         if let Some(e) = s.error {

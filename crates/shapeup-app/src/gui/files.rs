@@ -33,6 +33,8 @@ pub(super) struct FilesState {
     pub(super) export_input: String,
     /// The Save row's path.
     pub(super) scene_input: String,
+    /// The mesh collider row's path.
+    pub(super) collider_input: String,
     /// A path to open once the user agrees to drop unsaved changes.
     pub(super) confirm_open: Option<PathBuf>,
     /// The window's close was asked for with unsaved changes: ask before closing.

@@ -7,6 +7,7 @@ use super::app::{EditorApp, spawn_worker};
 use super::dialogs::DialogPurpose;
 use super::files::{SAMPLES, file_name_of, open_document, sample_path, scene_name_for};
 use super::metrics::SolveProgress;
+use crate::command::Command;
 use crate::simulation::tetrahedralize_available;
 use eframe::egui;
 use std::path::PathBuf;
@@ -35,6 +36,8 @@ impl EditorApp {
                 self.viewport.show_new_mesh(self.document.positions(), self.document.triangles());
                 self.groups.hovered = None;
                 self.groups.active_handle = None;
+                self.contact.selected = None;
+                self.view.touching.clear();
                 self.view.banner = None;
                 self.view.progress = SolveProgress::default();
                 self.view.tetrahedralize = tetrahedralize_available(&self.document);
@@ -89,7 +92,7 @@ impl EditorApp {
     fn show_dialog(&mut self, ctx: &egui::Context, purpose: DialogPurpose) {
         let directory = std::fs::canonicalize(&self.mesh_path).ok().and_then(|p| p.parent().map(PathBuf::from));
         let proposed = match purpose {
-            DialogPurpose::Open => String::new(),
+            DialogPurpose::Open | DialogPurpose::ColliderMesh => String::new(),
             DialogPurpose::ExportMesh => file_name_of(&self.files.export_input),
             DialogPurpose::SaveScene => file_name_of(&self.files.scene_input),
         };
@@ -103,6 +106,19 @@ impl EditorApp {
             DialogPurpose::Open => self.request_open(path),
             DialogPurpose::ExportMesh => self.export_mesh(path),
             DialogPurpose::SaveScene => self.save_scene(path),
+            DialogPurpose::ColliderMesh => {
+                self.files.collider_input = path.display().to_string();
+                if path.as_os_str().is_empty() {
+                    self.view.status = "type the path of a mesh file first".into();
+                    return;
+                }
+                let index = self.document.colliders().len();
+                self.apply(vec![Command::AddCollider(crate::collider::mesh_collider(&path))]);
+                if self.document.colliders().len() > index {
+                    self.contact.selected = Some(index);
+                    self.view.status = format!("added the mesh collider {}", path.display());
+                }
+            }
         }
     }
 
@@ -126,6 +142,9 @@ impl EditorApp {
             DialogPurpose::SaveScene => {
                 ("Save…", "Save scene", "a scene file that `shapeup deform` replays to the converged shape")
             }
+            DialogPurpose::ColliderMesh => {
+                ("Mesh…", "Add mesh", "a collider from the typed mesh file (OBJ, PLY, STL, OFF)")
+            }
         };
         ui.horizontal(|ui| {
             let browse = ui.add_enabled(!self.files.dialogs.is_open(), egui::Button::new(browse_label));
@@ -136,6 +155,7 @@ impl EditorApp {
                 DialogPurpose::Open => &mut self.files.path_input,
                 DialogPurpose::ExportMesh => &mut self.files.export_input,
                 DialogPurpose::SaveScene => &mut self.files.scene_input,
+                DialogPurpose::ColliderMesh => &mut self.files.collider_input,
             };
             let edit = ui.add(egui::TextEdit::singleline(typed).desired_width(140.0)).labelled_by(browse.id);
             let entered = edit.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter));

@@ -6,11 +6,17 @@
 use super::gizmo::HandleGizmo;
 use super::renderer::MeshRenderer;
 use crate::camera::OrbitCamera;
+use crate::collider::outline;
 use crate::command::SelectMode;
 use crate::document::GroupKey;
 use eframe::egui;
 use egui::{Color32, Pos2, Rect};
 use glam::{DVec3, Vec3};
+use shapeup_core::contact::{ColliderSpec, ShapeSpec};
+use shapeup_core::mesh::Mesh;
+use std::collections::HashMap;
+use std::path::PathBuf;
+use std::sync::Arc;
 use std::time::Duration;
 
 /// A frame slower than this during an interaction (a software renderer: a GPU takes a few
@@ -52,6 +58,12 @@ pub(super) const SELECTED_FACE_COLOR: [f32; 3] = [0.1, 0.75, 0.8];
 pub const HANDLE_COLOR: [f32; 3] = [0.10, 0.70, 0.25];
 /// Colour of the vertices of the group whose row the pointer is over.
 pub const HOVER_COLOR: [f32; 3] = [0.95, 0.55, 0.10];
+/// Colour of vertices touching a collider or the surface itself.
+pub const CONTACT_COLOR: [f32; 3] = [0.85, 0.15, 0.20];
+/// Colour of colliders' outlines.
+pub(super) const COLLIDER_COLOR: Color32 = Color32::from_rgb(70, 80, 95);
+/// Colour of the selected collider's outline.
+pub(super) const SELECTED_COLLIDER_COLOR: Color32 = Color32::from_rgb(235, 130, 20);
 
 /// Viewport interaction in progress.
 #[derive(Debug, Clone, Copy)]
@@ -95,6 +107,10 @@ pub(super) struct ViewportState {
     /// and a buffer write: skip them on frames that only move the camera).
     pub(super) geometry_dirty: bool,
     pub(super) last_render: Option<RenderKey>,
+    /// Each collider's outline (input frame) with the description it was made from.
+    pub(super) outlines: Vec<(ColliderSpec, Vec<[DVec3; 2]>)>,
+    /// Mesh colliders' files as read for drawing (`None`: unreadable).
+    pub(super) collider_meshes: HashMap<PathBuf, Option<Arc<Mesh>>>,
 }
 
 impl ViewportState {
@@ -115,7 +131,39 @@ impl ViewportState {
             uploaded_epoch: None,
             geometry_dirty: true,
             last_render: None,
+            outlines: Vec::new(),
+            collider_meshes: HashMap::new(),
         }
+    }
+
+    /// The outlines of `colliders` (input frame), made again for those that changed; a plane
+    /// is drawn as a square `extent` across.
+    pub(super) fn collider_outlines(
+        &mut self,
+        colliders: &[ColliderSpec],
+        extent: f64,
+    ) -> &[(ColliderSpec, Vec<[DVec3; 2]>)] {
+        self.outlines.truncate(colliders.len());
+        for (i, spec) in colliders.iter().enumerate() {
+            if self.outlines.get(i).is_some_and(|(s, _)| s == spec) {
+                continue;
+            }
+            let mesh = match &spec.shape {
+                ShapeSpec::Mesh { path, .. } => self
+                    .collider_meshes
+                    .entry(path.clone())
+                    .or_insert_with(|| shapeup_core::io::read_mesh(path).ok().map(|m| Arc::new(m.mesh)))
+                    .clone(),
+                _ => None,
+            };
+            let lines = outline(spec, mesh.as_deref(), extent);
+            if i < self.outlines.len() {
+                self.outlines[i] = (spec.clone(), lines);
+            } else {
+                self.outlines.push((spec.clone(), lines));
+            }
+        }
+        &self.outlines
     }
 
     /// Whether a 3D renderer exists.
@@ -126,6 +174,7 @@ impl ViewportState {
     /// A new mesh: framed from the front, uploaded on the next paint, no gesture or grab.
     pub(super) fn show_new_mesh(&mut self, positions: &[DVec3], triangles: &[[u32; 3]]) {
         self.grabbed.clear();
+        self.outlines.clear();
         self.uploaded_epoch = None;
         self.geometry_dirty = true;
         self.gesture = None;

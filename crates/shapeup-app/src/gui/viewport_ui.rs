@@ -1,15 +1,19 @@
 //! The 3D view in the frame: camera gestures, picking and selection boxes, handle drags and
-//! the gizmo, grabs in dynamic mode, the error banner, and drawing the mesh. The view's state
+//! the gizmo (on the active handle, or on the collider picked in the Contact panel), grabs in
+//! dynamic mode, the colliders' outlines, the error banner, and drawing the mesh (vertices
+//! touching something in red). The view's state
 //! ([`ViewportState`]) lives in [`super::viewport`], beneath the app shell, so that no import
 //! runs back up from the shell's fields to the code that works on them.
 
 use super::app::EditorApp;
 use super::renderer::{BASE_COLOR, FrameParams};
 use super::viewport::{
-    Gesture, HANDLE_COLOR, HOVER_COLOR, RenderKey, SELECTED_COLOR, SELECTED_FACE_COLOR, ViewportSlot, render_scale,
+    COLLIDER_COLOR, CONTACT_COLOR, Gesture, HANDLE_COLOR, HOVER_COLOR, RenderKey, SELECTED_COLLIDER_COLOR,
+    SELECTED_COLOR, SELECTED_FACE_COLOR, ViewportSlot, render_scale,
 };
 use crate::command::{Command, SelectMode};
 use crate::document::GroupKey;
+use crate::gizmo::{COLLIDER_GIZMO, collider_command};
 use crate::picking::{box_select, faces_within, pick_face, pick_vertex, visible_vertices};
 use eframe::egui;
 use egui::{Color32, Pos2, Rect, Sense, Stroke};
@@ -50,6 +54,7 @@ impl EditorApp {
                 self.handle_under(to_local(start), viewport).map(|(handle, v)| {
                     self.document.begin_drag();
                     self.groups.active_handle = Some(handle);
+                    self.contact.selected = None;
                     Gesture::DragHandle { handle, anchor: positions[v as usize] }
                 })
             } else if response.drag_started_by(egui::PointerButton::Secondary) && modifiers.alt {
@@ -185,6 +190,7 @@ impl EditorApp {
                 egui::StrokeKind::Inside,
             );
         }
+        self.paint_colliders(ui, rect);
         commands.extend(self.gizmo(ui, rect));
         self.paint_banner(ui, rect);
         (commands, slot)
@@ -193,6 +199,9 @@ impl EditorApp {
     fn colors(&self) -> Vec<[f32; 3]> {
         let selection = self.document.selection();
         let mut colors = vec![BASE_COLOR; self.document.num_vertices()];
+        for (c, _) in colors.iter_mut().zip(&self.view.touching).filter(|(_, t)| **t) {
+            *c = CONTACT_COLOR;
+        }
         for handle in self.document.handles() {
             for &v in handle.vertices().unwrap_or(&[]) {
                 colors[v] = HANDLE_COLOR;
@@ -221,8 +230,58 @@ impl EditorApp {
         colors
     }
 
-    /// The gizmo on the active handle (static mode only).
+    /// The colliders' outlines over the mesh (the selected one highlighted).
+    fn paint_colliders(&mut self, ui: &egui::Ui, rect: Rect) {
+        if self.document.colliders().is_empty() {
+            return;
+        }
+        let viewport = Vec2::new(rect.width().max(1.0), rect.height().max(1.0));
+        let (lo, hi) = self.document.rest_mesh().bounding_box();
+        let extent = 3.0 * (hi - lo).length();
+        let painter = ui.painter_at(rect);
+        let selected = self.contact.selected;
+        let camera = self.viewport.camera;
+        let outlines = self.viewport.collider_outlines(self.document.colliders(), extent);
+        for (i, (_, lines)) in outlines.iter().enumerate() {
+            let stroke = if selected == Some(i) {
+                Stroke::new(1.5, SELECTED_COLLIDER_COLOR)
+            } else {
+                Stroke::new(1.0, COLLIDER_COLOR)
+            };
+            for [a, b] in lines {
+                // Segments with an end behind the camera are left out.
+                if let (Some((a, _)), Some((b, _))) =
+                    (camera.project(a.as_vec3(), viewport), camera.project(b.as_vec3(), viewport))
+                {
+                    let at = |p: Vec2| Pos2::new(rect.left() + p.x, rect.top() + p.y);
+                    painter.line_segment([at(a), at(b)], stroke);
+                }
+            }
+        }
+    }
+
+    /// The gizmo on the collider picked in the Contact panel (also while simulating), else on
+    /// the active handle (static mode only).
     fn gizmo(&mut self, ui: &egui::Ui, rect: Rect) -> Vec<Command> {
+        let box_select = matches!(self.viewport.gesture, Some(Gesture::BoxSelect { .. }));
+        let collider = self
+            .contact
+            .selected
+            .filter(|_| !box_select)
+            .and_then(|i| Some((i, crate::collider::center(self.document.colliders().get(i)?)?)));
+        if let Some((index, center)) = collider {
+            let (lo, hi) = self.document.rest_mesh().bounding_box();
+            let output =
+                self.viewport.gizmo.show(ui, rect, &self.viewport.camera, COLLIDER_GIZMO, center, (hi - lo).length());
+            if output.drag_started {
+                self.document.begin_drag();
+                self.viewport.gesture = None;
+            }
+            if output.drag_stopped {
+                self.end_drag = true;
+            }
+            return output.commands.into_iter().map(|c| collider_command(index, c)).collect();
+        }
         let handle = if self.simulation.is_none() && !matches!(self.viewport.gesture, Some(Gesture::BoxSelect { .. })) {
             let active = self.groups.active_handle.and_then(|k| self.document.handles().find(|h| h.key == k));
             active.or_else(|| self.document.handles().last()).and_then(|h| Some((h.key, h.target_centroid()?)))

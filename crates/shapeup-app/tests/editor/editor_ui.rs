@@ -749,3 +749,53 @@ fn dragging_a_weight_slider_is_one_undo_step() {
     assert!(undone == before, "a second undo restores the weight before the first drag: {undone}, not {before}");
     assert!(!harness.state().document().can_undo(), "each drag was a single undo step");
 }
+
+// ---- Contact ----
+
+#[test]
+fn the_contact_panel_adds_selects_edits_and_removes_colliders() {
+    let cloth = Document::new(shapeup_core::generate::cloth_grid(11, 11, 1.0, 1.0), ShapeModel::EdgeSprings).unwrap();
+    // Tall enough that the Contact section, under Dynamics, is on screen.
+    let mut harness = editor_at(cloth, Path::new("cloth.obj"), egui::vec2(1100.0, 1600.0));
+    harness.get_by_label("no colliders");
+    harness.get_by_role_and_label(Role::TextInput, "Mesh…");
+    harness.get_by_role_and_label(Role::Button, "Add sphere").click();
+    settle(&mut harness);
+    let colliders = harness.state().document().colliders().to_vec();
+    assert_eq!(colliders.len(), 1);
+    assert_eq!(colliders[0].kind(), "sphere");
+    assert_eq!(harness.state().selected_collider(), Some(0), "the new collider gets the gizmo");
+    harness.get_by_label("0: sphere");
+    harness.get_by_label_contains("radius");
+    // Its outline is drawn over the view in the selection's orange (the mesh has no orange).
+    let view = viewport_rect(&harness);
+    let orange = render(&mut harness).count(view, is_orange);
+    assert!(orange > 100, "{orange} orange pixels");
+    harness.get_by_label("0: sphere").click();
+    settle(&mut harness);
+    assert_eq!(harness.state().selected_collider(), None, "a second click deselects");
+    assert_eq!(render(&mut harness).count(view, is_orange), 0, "not selected: grey");
+    harness.get_by_label("0: sphere").click();
+    settle(&mut harness);
+
+    harness.get_by_role_and_label(Role::CheckBox, "Self-collision").click();
+    settle(&mut harness);
+    assert!(harness.state().document().contact_settings().self_collision);
+    harness.get_by_label("Undo").click();
+    settle(&mut harness);
+    assert!(!harness.state().document().contact_settings().self_collision, "undone");
+
+    harness.get_by_role_and_label(Role::Button, "Add plane").click();
+    settle(&mut harness);
+    assert_eq!(harness.state().document().colliders().len(), 2);
+    harness.get_by_label("1: plane");
+    harness.get_by_label("0: sphere").click();
+    settle(&mut harness);
+    assert_eq!(harness.state().selected_collider(), Some(0));
+    // The selected collider's row shows its numbers; its own "remove" is the first.
+    harness.get_all_by_role_and_label(Role::Button, "remove").next().unwrap().click();
+    settle(&mut harness);
+    let left: Vec<&str> = harness.state().document().colliders().iter().map(|c| c.kind()).collect();
+    assert_eq!(left, ["plane"]);
+    assert_eq!(harness.state().selected_collider(), None);
+}

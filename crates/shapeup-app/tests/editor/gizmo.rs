@@ -557,6 +557,52 @@ fn a_document_takes_gizmo_drags_as_single_undo_steps() {
     assert_eq!(targets(&doc), start);
 }
 
+#[test]
+fn the_gizmo_moves_and_turns_a_collider_in_single_undo_steps() {
+    use shapeup_app::collider::center as collider_center;
+    use shapeup_app::gizmo::{COLLIDER_GIZMO, collider_command};
+    use shapeup_core::contact::ShapeSpec;
+    let mut doc = Document::new(grid(6), ShapeModel::EdgeSprings).unwrap();
+    doc.apply(Command::AddCollider(doc.default_collider("box").unwrap())).unwrap();
+    let start = doc.colliders()[0].clone();
+    let center = |doc: &Document| collider_center(&doc.colliders()[0]).unwrap();
+    let mut c = OrbitCamera::with_angles(0.5, 0.25);
+    c.frame(Vec3::new(0.0, -0.5, 0.0), Vec3::new(1.0, 1.0, 0.0));
+    let mut g = GizmoController::new();
+    // What the app does: the gizmo on the collider's centre, its commands the collider's.
+    let run = |doc: &mut Document, g: &mut GizmoController, path: &[Vec2]| {
+        let gt = GizmoTarget { handle: COLLIDER_GIZMO, center: center(doc), scale_hint: 2f64.sqrt() };
+        let mut frame = |doc: &mut Document, pointer: PointerState| {
+            let mut out = g.update(&c, VIEWPORT, 1.0, gt, pointer);
+            out.commands = out.commands.into_iter().map(|cmd| collider_command(0, cmd)).collect();
+            apply(doc, out);
+        };
+        let at = |p: Vec2| PointerState { pos: Some(p), ..PointerState::default() };
+        frame(doc, at(path[0]));
+        frame(doc, PointerState { pressed: true, down: true, ..at(path[0]) });
+        for &p in &path[1..] {
+            frame(doc, PointerState { down: true, ..at(p) });
+        }
+        frame(doc, at(*path.last().unwrap()));
+    };
+
+    let from = center(&doc);
+    let grabbed = from + 45.0 * world_per_px(&c, from) * DVec3::X;
+    run(&mut doc, &mut g, &path(pixel(&c, grabbed), pixel(&c, grabbed + 0.2 * DVec3::X), 6, 4.0));
+    let moved = center(&doc) - from;
+    assert!((moved - 0.2 * DVec3::X).length() < 1e-3 && moved.y == 0.0 && moved.z == 0.0, "{moved}");
+
+    let ring = pixel(&c, ring_point(&c, center(&doc), DVec3::Y));
+    let turn = arc(ring, pixel(&c, center(&doc)), 0.6, 6);
+    run(&mut doc, &mut g, &turn);
+    let ShapeSpec::Box { rotate: Some(r), .. } = doc.colliders()[0].shape else { panic!("{:?}", doc.colliders()[0]) };
+    assert!(r.axis[1].abs() > 0.999 && r.angle_deg.abs() > 5.0, "turned about y: {r:?}");
+    assert!((center(&doc) - from - moved).length() < 1e-9, "about its centre");
+
+    assert!(doc.undo() && doc.undo(), "two drags, two steps");
+    assert_eq!(doc.colliders()[0], start);
+}
+
 /// The egui adapter in a headless egui (no rendering): pointer events in the viewport's frame
 /// reach the model, the viewport holds back its own drags while the gizmo claims the pointer,
 /// and windows over the viewport shield it.

@@ -4,6 +4,7 @@
 
 mod camera;
 mod catalogue;
+mod contact;
 mod document;
 #[cfg(feature = "gui")]
 mod editor_ui;

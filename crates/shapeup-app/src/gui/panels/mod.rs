@@ -3,6 +3,7 @@
 //! the UI pass, and the start and end of a slider drag ([`PanelOutput`]), as
 //! [`dynamics_panel`](super::dynamics_panel::dynamics_panel) returns its action.
 
+pub mod contact;
 pub mod groups;
 pub mod selection;
 pub mod solver;
