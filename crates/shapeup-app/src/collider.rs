@@ -258,14 +258,7 @@ pub fn outline(spec: &ColliderSpec, mesh: Option<&Mesh>, extent: f64) -> Vec<[DV
         }
         ShapeSpec::Mesh { .. } => {
             if let Some(mesh) = mesh {
-                let mut edges: Vec<[u32; 2]> = mesh
-                    .triangles
-                    .iter()
-                    .flat_map(|t| [[t[0], t[1]], [t[1], t[2]], [t[2], t[0]]])
-                    .map(|[a, b]| if a < b { [a, b] } else { [b, a] })
-                    .collect();
-                edges.sort_unstable();
-                edges.dedup();
+                let (edges, _) = shapeup_core::topology::unique_edges(&mesh.triangles);
                 let stride = edges.len().div_ceil(MAX_DRAWN_EDGES).max(1);
                 let p = &mesh.positions;
                 out.extend(edges.iter().step_by(stride).map(|&[a, b]| [p[a as usize], p[b as usize]]));

@@ -36,24 +36,10 @@ impl Surface {
     pub(crate) fn new(triangles: &[[u32; 3]], active: &[bool]) -> Self {
         let triangles: Vec<[u32; 3]> =
             triangles.iter().copied().filter(|t| t.iter().all(|&v| active.get(v as usize) == Some(&true))).collect();
-        let mut edges: Vec<[u32; 2]> = triangles
-            .iter()
-            .flat_map(|t| [[t[0], t[1]], [t[1], t[2]], [t[2], t[0]]])
-            .map(|[a, b]| if a < b { [a, b] } else { [b, a] })
-            .collect();
-        edges.sort_unstable();
-        edges.dedup();
+        let (edges, _, triangle_edges) = crate::topology::indexed_edges(&triangles);
         let mut vertices: Vec<u32> = triangles.iter().flatten().copied().collect();
         vertices.sort_unstable();
         vertices.dedup();
-        let edge_index = |a: u32, b: u32| {
-            let key = if a < b { [a, b] } else { [b, a] };
-            edges.binary_search(&key).map_or(u32::MAX, |i| i as u32)
-        };
-        let triangle_edges = triangles
-            .iter()
-            .map(|t| [edge_index(t[0], t[1]), edge_index(t[1], t[2]), edge_index(t[2], t[0])])
-            .collect();
         Surface { triangles, triangle_edges, edges, vertices, bvh: None, since_build: 0 }
     }
 
@@ -149,7 +135,7 @@ pub(crate) fn detect_self_contacts(
         let mut found: Vec<u32> = triangles
             .intersect_aabb(&query)
             .flat_map(|t| surface.triangle_edges[t as usize])
-            .filter(|&j| j != u32::MAX && j as usize > i)
+            .filter(|&j| j as usize > i)
             .collect();
         found.sort_unstable();
         found.dedup();

@@ -480,24 +480,7 @@ impl ColliderSpec {
 
 /// Whether every edge of `triangles` belongs to exactly two of them (a closed surface).
 fn every_edge_twice(triangles: &[[u32; 3]]) -> bool {
-    let mut edges: Vec<[u32; 2]> = triangles
-        .iter()
-        .flat_map(|t| [[t[0], t[1]], [t[1], t[2]], [t[2], t[0]]])
-        .map(|[a, b]| if a < b { [a, b] } else { [b, a] })
-        .collect();
-    edges.sort_unstable();
-    let mut i = 0;
-    while i < edges.len() {
-        let mut j = i;
-        while j < edges.len() && edges[j] == edges[i] {
-            j += 1;
-        }
-        if j - i != 2 {
-            return false;
-        }
-        i = j;
-    }
-    true
+    crate::topology::unique_edges(triangles).1.iter().all(|&count| count == 2)
 }
 
 #[cfg(test)]
