@@ -8,7 +8,7 @@
 //! thickness plus twice its relative predicted motion is a contact, with the normal from the
 //! second closest point to the first (the side it started on).
 
-use super::model::Contact;
+use super::gap::Contact;
 use glam::DVec3;
 use parry3d_f64::bounding_volume::Aabb;
 use parry3d_f64::partitioning::{Bvh, BvhBuildStrategy};
