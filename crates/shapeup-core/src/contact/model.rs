@@ -68,6 +68,11 @@ pub struct ContactModel {
     by_vertex: Vec<Vec<u32>>,
     /// Where the self contacts start in `contacts` (collider contacts come first).
     self_from: usize,
+    /// Per self contact, how its correction is shared: α_j W_j⁻¹ / Σ_k α_k² W_k⁻¹ (constant
+    /// over a step; empty until the step's first local step).
+    self_share: Vec<[f64; 4]>,
+    /// Per self contact, its correction at the current iterate (scratch).
+    self_push: Vec<Option<DVec3>>,
     scratch_sum: Vec<DVec3>,
     scratch_count: Vec<u32>,
 }
@@ -105,6 +110,8 @@ impl ContactModel {
             self_count: 0,
             by_vertex: vec![Vec::new(); n],
             self_from: 0,
+            self_share: Vec::new(),
+            self_push: Vec::new(),
             scratch_sum: Vec::new(),
             scratch_count: Vec::new(),
         }
@@ -184,6 +191,7 @@ impl ContactModel {
             self.by_vertex[c.vertices[0] as usize].push(i as u32);
         }
         self.self_from = contacts.len();
+        self.self_share.clear();
         if let Some(surface) = &mut self.surface {
             contacts.extend(detect_self_contacts(surface, start, predicted, thickness, self.params.friction));
         }
@@ -226,41 +234,49 @@ impl ContactModel {
         });
         // Self contacts: Jacobi, each vertex moved by the mean of its pairs' corrections, a
         // pair's correction shared by inverse weight (PBD's rule with W as the masses).
-        if self.self_from < contacts.len() {
-            let inverse = |v: usize| if weights[v] > 0.0 { 1.0 / weights[v] } else { 0.0 };
-            let corrections: Vec<Option<[DVec3; 4]>> = contacts[self.self_from..]
+        let pairs = &contacts[self.self_from..];
+        if !pairs.is_empty() {
+            if self.self_share.len() != pairs.len() {
+                let inverse = |v: usize| if weights[v] > 0.0 { 1.0 / weights[v] } else { 0.0 };
+                self.self_share.clear();
+                self.self_share.par_extend(pairs.par_iter().map(|c| {
+                    let w: f64 = c.terms().map(|(v, a)| a * a * inverse(v)).sum();
+                    let mut share = [0.0; 4];
+                    if w > 0.0 {
+                        for (k, (v, a)) in c.terms().enumerate() {
+                            share[k] = a * inverse(v) / w;
+                        }
+                    }
+                    share
+                }));
+            }
+            pairs
                 .par_iter()
                 .map(|c| {
                     let gap = c.gap(q);
                     if gap >= 0.0 {
                         return None;
                     }
-                    let w: f64 = c.terms().map(|(v, a)| a * a * inverse(v)).sum();
-                    if w <= 0.0 {
-                        return None;
-                    }
                     let mut push = -gap * c.normal;
                     if c.friction > 0.0 {
                         push -= coulomb(c.slip(q, start), c.friction * -gap);
                     }
-                    let mut out = [DVec3::ZERO; 4];
-                    for (k, (v, a)) in c.terms().enumerate() {
-                        out[k] = a * inverse(v) / w * push;
-                    }
-                    Some(out)
+                    Some(push)
                 })
-                .collect();
+                .collect_into_vec(&mut self.self_push);
             let n = q.len();
             let (sum, count) = (&mut self.scratch_sum, &mut self.scratch_count);
             sum.clear();
             sum.resize(n, DVec3::ZERO);
             count.clear();
             count.resize(n, 0);
-            for (c, d) in contacts[self.self_from..].iter().zip(&corrections) {
-                if let Some(d) = d {
+            for ((c, push), share) in pairs.iter().zip(&self.self_push).zip(&self.self_share) {
+                if let Some(push) = push {
                     for (k, (v, _)) in c.terms().enumerate() {
-                        sum[v] += d[k];
-                        count[v] += 1;
+                        if share[k] != 0.0 {
+                            sum[v] += share[k] * *push;
+                            count[v] += 1;
+                        }
                     }
                 }
             }

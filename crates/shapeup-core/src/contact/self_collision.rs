@@ -1,50 +1,48 @@
 //! Self-collision detection: vertex–triangle and edge–edge pairs of a surface that may come
 //! within the thickness during a step.
 //!
-//! Broad phase: parry3d's BVH over each triangle's (and each edge's) box swept from the step's
-//! start x_n to its prediction s, grown by the thickness, queried with each vertex's (each
-//! edge's) swept box. Narrow phase at x_n: the closest points (Ericson, "Real-Time Collision
-//! Detection", 2005, §5.1.5 point–triangle and §5.1.9 segment–segment); a pair closer than the
-//! thickness plus twice its relative predicted motion is a contact, with the normal from the
-//! second closest point to the first (the side it started on).
+//! Broad phase: parry3d's BVHs over the boxes of each vertex, edge and triangle swept from the
+//! step's start x_n to its prediction s and grown by half the thickness (two boxes meet when
+//! their gap is under the thickness), refitted each step. One simultaneous traversal of the
+//! vertex tree and the triangle tree gives the vertex–triangle candidates, one of the edge tree
+//! against itself the edge–edge ones: each pair once, without a query per element. Narrow
+//! phase at x_n: the closest points (Ericson, "Real-Time Collision Detection", 2005, §5.1.5
+//! point–triangle and §5.1.9 segment–segment); a pair closer than the thickness plus twice its
+//! relative predicted motion is a contact, with the normal from the second closest point to
+//! the first (the side it started on).
 
 use super::gap::Contact;
 use glam::DVec3;
 use parry3d_f64::bounding_volume::Aabb;
-use parry3d_f64::partitioning::{Bvh, BvhBuildStrategy};
+use parry3d_f64::partitioning::{Bvh, BvhBuildStrategy, BvhWorkspace};
 use rayon::prelude::*;
 
 /// The surface that collides with itself: its triangles, their edges and their vertices, and
-/// the BVH over the triangles' swept boxes (refitted each step, rebuilt every
-/// [`REBUILD_EVERY`] steps as the surface moves away from the tree's layout).
+/// a BVH over the swept boxes of each kind.
 #[derive(Debug, Clone)]
 pub(crate) struct Surface {
     triangles: Vec<[u32; 3]>,
-    /// For each triangle, the indices of its three edges in `edges`.
-    triangle_edges: Vec<[u32; 3]>,
     edges: Vec<[u32; 2]>,
     vertices: Vec<u32>,
+    triangle_tree: Tree,
+    edge_tree: Tree,
+    vertex_tree: Tree,
+}
+
+/// A BVH over boxes that move a little each step: refitted, and rebuilt every
+/// [`REBUILD_EVERY`] steps as the surface moves away from the tree's layout.
+#[derive(Debug, Clone, Default)]
+struct Tree {
     bvh: Option<Bvh>,
     since_build: u32,
 }
 
-/// Steps between two full builds of the triangle BVH (refits in between).
+/// Steps between two full builds of a BVH (refits in between).
 const REBUILD_EVERY: u32 = 20;
 
-impl Surface {
-    /// The triangles whose three vertices are all `active`.
-    pub(crate) fn new(triangles: &[[u32; 3]], active: &[bool]) -> Self {
-        let triangles: Vec<[u32; 3]> =
-            triangles.iter().copied().filter(|t| t.iter().all(|&v| active.get(v as usize) == Some(&true))).collect();
-        let (edges, _, triangle_edges) = crate::topology::indexed_edges(&triangles);
-        let mut vertices: Vec<u32> = triangles.iter().flatten().copied().collect();
-        vertices.sort_unstable();
-        vertices.dedup();
-        Surface { triangles, triangle_edges, edges, vertices, bvh: None, since_build: 0 }
-    }
-
-    /// The BVH of the triangles' boxes `boxes`: refitted, or rebuilt when due.
-    fn tree(&mut self, boxes: &[Aabb]) {
+impl Tree {
+    /// The BVH of `boxes`: refitted, or rebuilt when due.
+    fn update(&mut self, boxes: &[Aabb]) -> &Bvh {
         match &mut self.bvh {
             Some(bvh) if self.since_build < REBUILD_EVERY => {
                 for (i, b) in boxes.iter().enumerate() {
@@ -57,6 +55,27 @@ impl Surface {
                 self.bvh = Some(Bvh::from_leaves(BvhBuildStrategy::Binned, boxes));
                 self.since_build = 0;
             }
+        }
+        self.bvh.get_or_insert_with(Bvh::new)
+    }
+}
+
+impl Surface {
+    /// The triangles whose three vertices are all `active`.
+    pub(crate) fn new(triangles: &[[u32; 3]], active: &[bool]) -> Self {
+        let triangles: Vec<[u32; 3]> =
+            triangles.iter().copied().filter(|t| t.iter().all(|&v| active.get(v as usize) == Some(&true))).collect();
+        let (edges, _, _) = crate::topology::indexed_edges(&triangles);
+        let mut vertices: Vec<u32> = triangles.iter().flatten().copied().collect();
+        vertices.sort_unstable();
+        vertices.dedup();
+        Surface {
+            triangles,
+            edges,
+            vertices,
+            triangle_tree: Tree::default(),
+            edge_tree: Tree::default(),
+            vertex_tree: Tree::default(),
         }
     }
 }
@@ -101,62 +120,83 @@ pub(crate) fn detect_self_contacts(
     if surface.triangles.is_empty() {
         return Vec::new();
     }
-    let triangle_boxes: Vec<Aabb> =
-        surface.triangles.par_iter().map(|t| swept_box(t, start, predicted, thickness)).collect();
-    surface.tree(&triangle_boxes);
-    let surface = &*surface;
-    let Some(triangles) = &surface.bvh else { return Vec::new() };
-    let mut contacts: Vec<Contact> = surface
-        .vertices
+    // Boxes grown by half the thickness each: two meet when their gap is under the thickness.
+    let grow = 0.5 * thickness;
+    let boxes = |items: &[u32], size: usize| -> Vec<Aabb> {
+        items.par_chunks(size).map(|item| swept_box(item, start, predicted, grow)).collect()
+    };
+    let Surface { triangles, edges, vertices, triangle_tree, edge_tree, vertex_tree } = surface;
+    let (triangles, edges, vertices) = (&*triangles, &*edges, &*vertices);
+    let ((triangle_bvh, edge_bvh), vertex_bvh) = rayon::join(
+        || {
+            rayon::join(
+                || triangle_tree.update(&boxes(triangles.as_flattened(), 3)),
+                || edge_tree.update(&boxes(edges.as_flattened(), 2)),
+            )
+        },
+        || vertex_tree.update(&boxes(vertices, 1)),
+    );
+    // Candidates: vertex–triangle pairs from one traversal of the vertex tree against the
+    // triangle tree, edge–edge pairs from one of the edge tree against itself, less those that
+    // share a vertex.
+    let (vertex_triangle, edge_edge) = rayon::join(
+        || -> Vec<(u32, u32)> {
+            vertex_bvh
+                .leaf_pairs(triangle_bvh, |a, b| a.intersects(b))
+                .map(|(i, k)| (vertices[i as usize], k))
+                .filter(|&(v, k)| !triangles[k as usize].contains(&v))
+                .collect()
+        },
+        || {
+            let mut pairs: Vec<(u32, u32)> = Vec::new();
+            edge_bvh.traverse_bvtt_single_tree::<false>(&mut BvhWorkspace::default(), &mut |i, j| {
+                let (e, f) = (edges[i as usize], edges[j as usize]);
+                if !(f.contains(&e[0]) || f.contains(&e[1])) {
+                    pairs.push((i, j));
+                }
+            });
+            pairs
+        },
+    );
+    // Narrow phase at x_n.
+    let mut contacts: Vec<Contact> = vertex_triangle
         .par_iter()
-        .flat_map_iter(|&v| {
-            let query = swept_box(&[v], start, predicted, 0.0);
-            let found: Vec<u32> = triangles.intersect_aabb(&query).collect();
-            found.into_iter().filter_map(move |k| {
-                let t = surface.triangles[k as usize];
-                if t.contains(&v) {
-                    return None;
-                }
-                let x = start[v as usize];
-                let (c, b) = closest_on_triangle(x, t.map(|i| start[i as usize]));
-                let distance = (x - c).length();
-                let margin = thickness + 2.0 * relative_motion(&[v], &t, start, predicted);
-                if distance >= margin || distance < 1e-12 {
-                    return None;
-                }
-                let normal = (x - c) / distance;
-                Some(Contact::new(&[v, t[0], t[1], t[2]], &[1.0, -b[0], -b[1], -b[2]], normal, thickness, friction))
-            })
+        .filter_map(|&(v, k)| {
+            let t = triangles[k as usize];
+            let x = start[v as usize];
+            let (c, b) = closest_on_triangle(x, t.map(|i| start[i as usize]));
+            let normal = separation(x - c, thickness, || relative_motion(&[v], &t, start, predicted))?;
+            Some(Contact::new(&[v, t[0], t[1], t[2]], &[1.0, -b[0], -b[1], -b[2]], normal, thickness, friction))
         })
         .collect();
-    // Edge–edge: each edge against the edges of the triangles its swept box meets.
-    contacts.par_extend(surface.edges.par_iter().enumerate().flat_map_iter(|(i, &e)| {
-        let query = swept_box(&e, start, predicted, 0.0);
-        let mut found: Vec<u32> = triangles
-            .intersect_aabb(&query)
-            .flat_map(|t| surface.triangle_edges[t as usize])
-            .filter(|&j| j as usize > i)
-            .collect();
-        found.sort_unstable();
-        found.dedup();
-        found.into_iter().filter_map(move |j| {
-            let f = surface.edges[j as usize];
-            if f.contains(&e[0]) || f.contains(&e[1]) {
-                return None;
-            }
-            let p = e.map(|v| start[v as usize]);
-            let r = f.map(|v| start[v as usize]);
-            let (s, t, a, b) = closest_between_segments(p[0], p[1], r[0], r[1]);
-            let distance = (a - b).length();
-            let margin = thickness + 2.0 * relative_motion(&e, &f, start, predicted);
-            if distance >= margin || distance < 1e-12 {
-                return None;
-            }
-            let normal = (a - b) / distance;
-            Some(Contact::new(&[e[0], e[1], f[0], f[1]], &[1.0 - s, s, -(1.0 - t), -t], normal, thickness, friction))
-        })
+    contacts.par_extend(edge_edge.par_iter().filter_map(|&(i, j)| {
+        let (e, f) = (edges[i as usize], edges[j as usize]);
+        let (p, r) = (e.map(|v| start[v as usize]), f.map(|v| start[v as usize]));
+        let (s, t, a, b) = closest_between_segments(p[0], p[1], r[0], r[1]);
+        if !interior(s) || !interior(t) {
+            // A vertex near an edge or a vertex: the vertex–triangle pairs hold it.
+            return None;
+        }
+        let normal = separation(a - b, thickness, || relative_motion(&e, &f, start, predicted))?;
+        Some(Contact::new(&[e[0], e[1], f[0], f[1]], &[1.0 - s, s, -(1.0 - t), -t], normal, thickness, friction))
     }));
     contacts
+}
+
+/// Whether a segment parameter is strictly inside (0, 1).
+fn interior(s: f64) -> bool {
+    s > 0.0 && s < 1.0
+}
+
+/// The unit normal of a pair whose closest points are `d` apart, when it is a contact: closer
+/// than the thickness plus twice its relative predicted motion (computed only when needed),
+/// and not touching exactly (no normal then).
+fn separation(d: DVec3, thickness: f64, relative_motion: impl FnOnce() -> f64) -> Option<DVec3> {
+    let distance = d.length();
+    if distance < 1e-12 || (distance >= thickness && distance >= thickness + 2.0 * relative_motion()) {
+        return None;
+    }
+    Some(d / distance)
 }
 
 /// The closest point of triangle `p` to `x` and its barycentric coordinates (Ericson §5.1.5).
@@ -291,6 +331,73 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn the_broad_phase_misses_no_pair_a_brute_force_search_finds() {
+        // A 9 × 9 sheet folded over itself with noise (so the layers nearly touch), at rest
+        // (the margin is then the thickness, and a pair within it always has meeting boxes):
+        // the contacts are exactly those of testing every vertex–triangle and edge–edge pair.
+        let mut seed = 3;
+        let n = 9;
+        let mut start = Vec::new();
+        for i in 0..n {
+            for j in 0..n {
+                let x = i as f64 / (n - 1) as f64;
+                let (x, y) = if x < 0.5 { (x, 0.0) } else { (1.0 - x, 0.04) };
+                start.push(DVec3::new(x, y, j as f64 / (n - 1) as f64) + 0.02 * v(&mut seed));
+            }
+        }
+        let mut triangles = Vec::new();
+        for i in 0..n - 1 {
+            for j in 0..n - 1 {
+                let k = (i * n + j) as u32;
+                triangles.push([k, k + n as u32, k + 1]);
+                triangles.push([k + 1, k + n as u32, k + n as u32 + 1]);
+            }
+        }
+        let thickness = 0.05;
+        let mut surface = Surface::new(&triangles, &vec![true; start.len()]);
+        let key = |c: &Contact| {
+            let mut k = c.vertices;
+            k[..c.len as usize].sort_unstable();
+            (c.len, k)
+        };
+        let mut found: Vec<_> =
+            detect_self_contacts(&mut surface, &start, &start, thickness, 0.0).iter().map(key).collect();
+        found.sort_unstable();
+        let mut brute = Vec::new();
+        for (v, &x) in start.iter().enumerate() {
+            for t in &triangles {
+                let (c, _) = closest_on_triangle(x, t.map(|i| start[i as usize]));
+                let d = (x - c).length();
+                if !t.contains(&(v as u32)) && d < thickness && d >= 1e-12 {
+                    let mut k = [v as u32, t[0], t[1], t[2]];
+                    k.sort_unstable();
+                    brute.push((4, k));
+                }
+            }
+        }
+        let edges = crate::topology::indexed_edges(&triangles).0;
+        for (i, e) in edges.iter().enumerate() {
+            for f in &edges[i + 1..] {
+                if f.contains(&e[0]) || f.contains(&e[1]) {
+                    continue;
+                }
+                let p = |v: u32| start[v as usize];
+                let (s, t, a, b) = closest_between_segments(p(e[0]), p(e[1]), p(f[0]), p(f[1]));
+                let d = (a - b).length();
+                if d < thickness && d >= 1e-12 && interior(s) && interior(t) {
+                    let mut k = [e[0], e[1], f[0], f[1]];
+                    k.sort_unstable();
+                    brute.push((4, k));
+                }
+            }
+        }
+        brute.sort_unstable();
+        assert!(brute.len() > 100, "the fold should bring the layers within the thickness: {}", brute.len());
+        let missing: Vec<_> = brute.iter().filter(|k| found.binary_search(k).is_err()).take(4).collect();
+        assert!(found == brute, "{} contacts, {} by brute force; missing e.g. {missing:?}", found.len(), brute.len());
     }
 
     #[test]
