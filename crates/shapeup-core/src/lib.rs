@@ -59,6 +59,7 @@ pub mod inspect;
 pub mod io;
 pub mod linalg;
 pub mod mesh;
+pub mod motion;
 pub mod scene;
 pub mod solver;
 #[cfg(feature = "tetgen")]

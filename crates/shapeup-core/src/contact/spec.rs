@@ -5,7 +5,7 @@
 use super::collider::{Collider, Motion};
 use super::shape::{MeshShape, Shape, rotation};
 use crate::geometry::WorkingFrame;
-use crate::scene::{Rotate, Spin};
+use crate::motion::{Rotate, Spin};
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 use serde_json::{Map, Value};

@@ -504,7 +504,7 @@ impl LoadedScene {
                 message: e.to_string(),
             };
             let (picked, targets) = spec.input_targets(&self.mesh).map_err(invalid)?;
-            let (axis, center) = spin.pivot(&targets).map_err(invalid)?;
+            let (axis, center) = spin.pivot(&targets).map_err(|e| invalid(e.into()))?;
             // In the order the group holds its vertices (what `set_targets` takes).
             let at: std::collections::HashMap<u32, DVec3> =
                 picked.iter().zip(&targets).map(|(&v, &t)| (v as u32, t)).collect();

@@ -6,8 +6,10 @@ use crate::geometry::{RestGeometry, WorkingFrame};
 use crate::mesh::Mesh;
 use crate::solver::ConstraintGroup;
 use glam::DVec3;
-use serde::{Deserialize, Serialize};
+use serde::Deserialize;
 use serde_json::{Map, Value};
+
+pub use crate::motion::{Rotate, Spin};
 
 /// Why a group entry cannot be read, or resolved against a mesh. Each message is one line
 /// naming the key or the index.
@@ -94,48 +96,6 @@ impl SelectionSpec {
                 inside(&|p| (p - c).length() <= *radius)
             }
         })
-    }
-}
-
-/// A rotation of a handle's targets about an axis, applied before its translation.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Rotate {
-    /// Rotation axis (normalized on use; must be non-zero).
-    pub axis: [f64; 3],
-    /// Angle in degrees, right-handed about the axis.
-    pub angle_deg: f64,
-    /// Centre; default the centroid of the selected vertices.
-    #[serde(default)]
-    pub center: Option<[f64; 3]>,
-}
-
-/// A handle turning at a constant rate in dynamic mode (an extension of the contract): at time
-/// t its targets are the static ones turned by `deg_per_s` · t about the axis through `center`.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Spin {
-    /// Rotation axis (normalized on use; must be non-zero).
-    pub axis: [f64; 3],
-    /// Turning rate in degrees per second, right-handed about the axis.
-    pub deg_per_s: f64,
-    /// Centre; default the centroid of the static targets.
-    #[serde(default)]
-    pub center: Option<[f64; 3]>,
-}
-
-impl Spin {
-    /// The unit axis and the centre it turns about (default: the centroid of `targets`).
-    ///
-    /// # Errors
-    /// A zero axis.
-    pub fn pivot(&self, targets: &[glam::DVec3]) -> Result<(glam::DVec3, glam::DVec3), SpecError> {
-        let axis = DVec3::from(self.axis).try_normalize().ok_or("spin axis must be non-zero")?;
-        let center = self
-            .center
-            .map(DVec3::from)
-            .unwrap_or_else(|| targets.iter().copied().sum::<DVec3>() / targets.len().max(1) as f64);
-        Ok((axis, center))
     }
 }
 
