@@ -32,7 +32,9 @@ class _Contact:
         - ``type="mesh"``: ``path`` (any mesh file shapeup reads, relative to the current
           directory; a str or os.PathLike), ``closed`` (default: whether every edge has two
           triangles), ``thickness`` (an open mesh's depth behind its front; default the
-          contact thickness).
+          contact thickness), ``translate`` and ``rotate={"axis": ..., "angle_deg": ...,
+          "center": ...}`` (its placement: p ↦ c + R (p − c) + translate, c in the file's
+          coordinates, default its origin).
 
         Every type takes ``friction`` (Coulomb μ ≥ 0, default 0) and, in a
         :class:`Simulation`, ``velocity`` (units/s, default 0) and ``spin={"axis": ...,

@@ -62,7 +62,7 @@ pub fn default_collider(kind: &str, lo: DVec3, hi: DVec3) -> Option<ColliderSpec
 pub fn mesh_collider(path: &Path) -> ColliderSpec {
     let path = std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
     ColliderSpec {
-        shape: ShapeSpec::Mesh { path, closed: None, thickness: None },
+        shape: ShapeSpec::Mesh { path, closed: None, thickness: None, translate: [0.0; 3], rotate: None },
         friction: 0.3,
         velocity: [0.0; 3],
         spin: None,
@@ -97,30 +97,24 @@ fn box_shape(center: DVec3, half: DVec3, turn: DQuat) -> ShapeSpec {
 }
 
 /// Where the gizmo sits on a collider and what it turns about (input frame): a sphere's
-/// centre, a capsule's midpoint, a box's centre, a plane's point; `None` for a mesh, which
-/// its file places.
-pub fn center(spec: &ColliderSpec) -> Option<DVec3> {
+/// centre, a capsule's midpoint, a box's centre, a plane's point, a mesh's placed origin (its
+/// rotation centre, moved by its translation: where a DCC tool shows an object's origin).
+pub fn center(spec: &ColliderSpec) -> DVec3 {
     match &spec.shape {
-        ShapeSpec::Sphere { center, .. } => Some(DVec3::from(*center)),
-        ShapeSpec::Capsule { a, b, .. } => Some(0.5 * (DVec3::from(*a) + DVec3::from(*b))),
-        ShapeSpec::Box { min, max, rotate } => Some(box_pose(*min, *max, rotate.as_ref()).0),
-        ShapeSpec::Plane { point, .. } => Some(DVec3::from(*point)),
-        ShapeSpec::Mesh { .. } => None,
+        ShapeSpec::Sphere { center, .. } => DVec3::from(*center),
+        ShapeSpec::Capsule { a, b, .. } => 0.5 * (DVec3::from(*a) + DVec3::from(*b)),
+        ShapeSpec::Box { min, max, rotate } => box_pose(*min, *max, rotate.as_ref()).0,
+        ShapeSpec::Plane { point, .. } => DVec3::from(*point),
+        ShapeSpec::Mesh { translate, rotate, .. } => {
+            rotate.and_then(|r| r.center).map_or(DVec3::ZERO, DVec3::from) + DVec3::from(*translate)
+        }
     }
-}
-
-/// Why a mesh collider cannot be moved or turned.
-fn fixed_mesh() -> EditorError {
-    EditorError::BadValue(
-        "a mesh collider stays where its file puts it (scenes give mesh colliders no placement): move the mesh in its file"
-            .into(),
-    )
 }
 
 /// `spec` moved by `delta` (input frame); an explicit spin centre moves with it.
 ///
 /// # Errors
-/// [`EditorError::BadValue`] for a non-finite translation or a mesh collider.
+/// [`EditorError::BadValue`] for a non-finite translation.
 pub fn translated(spec: &ColliderSpec, delta: DVec3) -> Result<ColliderSpec, EditorError> {
     if !delta.is_finite() {
         return Err(EditorError::BadValue(format!("translation must be finite, found {delta}")));
@@ -135,7 +129,14 @@ pub fn translated(spec: &ColliderSpec, delta: DVec3) -> Result<ColliderSpec, Edi
             rotate: rotate.map(|r| Rotate { center: r.center.map(shift), ..r }),
         },
         ShapeSpec::Plane { point, normal } => ShapeSpec::Plane { point: shift(*point), normal: *normal },
-        ShapeSpec::Mesh { .. } => return Err(fixed_mesh()),
+        // The rotation centre is in the file's coordinates: only the translation moves.
+        ShapeSpec::Mesh { path, closed, thickness, translate, rotate } => ShapeSpec::Mesh {
+            path: path.clone(),
+            closed: *closed,
+            thickness: *thickness,
+            translate: shift(*translate),
+            rotate: *rotate,
+        },
     };
     let spin = spec.spin.map(|s| shapeup_core::scene::Spin { center: s.center.map(shift), ..s });
     Ok(ColliderSpec { shape, spin, ..spec.clone() })
@@ -146,12 +147,12 @@ pub fn translated(spec: &ColliderSpec, delta: DVec3) -> Result<ColliderSpec, Edi
 /// is); an explicit spin centre turns with it.
 ///
 /// # Errors
-/// [`EditorError::BadValue`] for a zero axis, a non-finite angle or a mesh collider.
+/// [`EditorError::BadValue`] for a zero axis or a non-finite angle.
 pub fn turned(spec: &ColliderSpec, axis: DVec3, angle: f64) -> Result<ColliderSpec, EditorError> {
     let axis = axis.try_normalize().filter(|_| angle.is_finite()).ok_or_else(|| {
         EditorError::BadValue(format!("rotation needs a non-zero axis and a finite angle ({axis}, {angle})"))
     })?;
-    let pivot = center(spec).ok_or_else(fixed_mesh)?;
+    let pivot = center(spec);
     let turn = DQuat::from_axis_angle(axis, angle);
     let about = |p: [f64; 3]| (pivot + turn * (DVec3::from(p) - pivot)).to_array();
     let shape = match &spec.shape {
@@ -164,7 +165,25 @@ pub fn turned(spec: &ColliderSpec, axis: DVec3, angle: f64) -> Result<ColliderSp
         ShapeSpec::Plane { point, normal } => {
             ShapeSpec::Plane { point: *point, normal: (turn * DVec3::from(*normal)).to_array() }
         }
-        ShapeSpec::Mesh { .. } => return Err(fixed_mesh()),
+        // About its placed origin c + t: p ↦ c + t + T R (p − c), so R becomes T R.
+        ShapeSpec::Mesh { path, closed, thickness, translate, rotate } => {
+            let old = rotate.map_or(DQuat::IDENTITY, |r| {
+                DQuat::from_axis_angle(DVec3::from(r.axis).normalize_or(DVec3::Y), r.angle_deg.to_radians())
+            });
+            let (axis, angle) = (turn * old).to_axis_angle();
+            let center = rotate.and_then(|r| r.center);
+            ShapeSpec::Mesh {
+                path: path.clone(),
+                closed: *closed,
+                thickness: *thickness,
+                translate: *translate,
+                rotate: (angle.abs() > 1e-12).then(|| Rotate {
+                    axis: axis.to_array(),
+                    angle_deg: angle.to_degrees(),
+                    center,
+                }),
+            }
+        }
     };
     let spin = spec.spin.map(|s| shapeup_core::scene::Spin { center: s.center.map(about), ..s });
     Ok(ColliderSpec { shape, spin, ..spec.clone() })
@@ -256,12 +275,13 @@ pub fn outline(spec: &ColliderSpec, mesh: Option<&Mesh>, extent: f64) -> Vec<[DV
                 out.push([p - h * u + t * v, p + h * u + t * v]);
             }
         }
-        ShapeSpec::Mesh { .. } => {
+        ShapeSpec::Mesh { translate, rotate, .. } => {
             if let Some(mesh) = mesh {
                 let (edges, _) = shapeup_core::topology::unique_edges(&mesh.triangles);
                 let stride = edges.len().div_ceil(MAX_DRAWN_EDGES).max(1);
+                let place = shapeup_core::contact::mesh_placement(*translate, rotate.as_ref());
                 let p = &mesh.positions;
-                out.extend(edges.iter().step_by(stride).map(|&[a, b]| [p[a as usize], p[b as usize]]));
+                out.extend(edges.iter().step_by(stride).map(|&[a, b]| [place(p[a as usize]), place(p[b as usize])]));
             }
         }
     }
@@ -318,7 +338,7 @@ mod tests {
             let spec = default_collider(kind, lo, hi).unwrap();
             spec.validate().unwrap();
             assert_eq!(spec.kind(), kind);
-            let c = center(&spec).unwrap();
+            let c = center(&spec);
             assert!(c.y < lo.y, "{kind} below the mesh: {c}");
         }
         assert!(default_collider("mesh", lo, hi).is_none());
@@ -327,19 +347,19 @@ mod tests {
     #[test]
     fn a_turned_box_turns_about_its_centre_and_moves_with_its_rotation() {
         let spec = default_collider("box", DVec3::splat(-1.0), DVec3::splat(1.0)).unwrap();
-        let c = center(&spec).unwrap();
+        let c = center(&spec);
         let turned = turned(&spec, DVec3::Y, std::f64::consts::FRAC_PI_2).unwrap();
-        assert!((center(&turned).unwrap() - c).length() < 1e-12, "same centre");
+        assert!((center(&turned) - c).length() < 1e-12, "same centre");
         let ShapeSpec::Box { rotate: Some(r), .. } = &turned.shape else { panic!("{turned:?}") };
         assert!((r.angle_deg - 90.0).abs() < 1e-9 && close(r.axis, [0.0, 1.0, 0.0]), "{r:?}");
         let back = self::turned(&turned, DVec3::Y, -std::f64::consts::FRAC_PI_2).unwrap();
         assert!(matches!(back.shape, ShapeSpec::Box { rotate: None, .. }), "{back:?}");
         let moved = translated(&turned, DVec3::X).unwrap();
-        assert!((center(&moved).unwrap() - c - DVec3::X).length() < 1e-12);
+        assert!((center(&moved) - c - DVec3::X).length() < 1e-12);
     }
 
     #[test]
-    fn a_capsule_and_a_plane_turn_a_sphere_does_not_and_a_mesh_refuses() {
+    fn a_capsule_and_a_plane_turn_and_a_sphere_does_not() {
         let capsule = ColliderSpec {
             shape: ShapeSpec::Capsule { a: [0.0, 0.0, -1.0], b: [0.0, 0.0, 1.0], radius: 0.1 },
             friction: 0.0,
@@ -355,9 +375,30 @@ mod tests {
         assert!(close(normal, [0.0, 0.0, 1.0]), "{normal:?}");
         let sphere = default_collider("sphere", DVec3::ZERO, DVec3::ONE).unwrap();
         assert_eq!(turned(&sphere, DVec3::X, 1.0).unwrap(), sphere);
-        let mesh = mesh_collider(Path::new("/tmp/terrain.obj"));
-        assert!(translated(&mesh, DVec3::X).is_err() && turned(&mesh, DVec3::X, 1.0).is_err());
         assert!(translated(&sphere, DVec3::NAN).is_err() && turned(&sphere, DVec3::ZERO, 1.0).is_err());
+    }
+
+    #[test]
+    fn a_mesh_collider_moves_and_turns_about_its_placed_origin() {
+        // Its outline (the placed mesh) follows: moved by X, then turned a quarter about Y
+        // through the moved origin, a vertex p of the file lands at X + R_y(90°) p.
+        let grid = shapeup_core::generate::cloth_grid(3, 3, 1.0, 1.0);
+        let mesh = mesh_collider(Path::new("/tmp/terrain.obj"));
+        assert!(center(&mesh).length() < 1e-12);
+        let moved = translated(&mesh, DVec3::X).unwrap();
+        assert!((center(&moved) - DVec3::X).length() < 1e-12);
+        let turned = turned(&moved, DVec3::Y, std::f64::consts::FRAC_PI_2).unwrap();
+        let q = DQuat::from_rotation_y(std::f64::consts::FRAC_PI_2);
+        let expected: Vec<[DVec3; 2]> =
+            outline(&mesh, Some(&grid), 1.0).iter().map(|s| s.map(|p| DVec3::X + q * p)).collect();
+        let found = outline(&turned, Some(&grid), 1.0);
+        assert_eq!(found.len(), expected.len());
+        for (a, b) in found.iter().zip(&expected) {
+            assert!((a[0] - b[0]).length() < 1e-12 && (a[1] - b[1]).length() < 1e-12, "{a:?} {b:?}");
+        }
+        // Turning back leaves no rotation.
+        let back = self::turned(&turned, DVec3::Y, -std::f64::consts::FRAC_PI_2).unwrap();
+        assert!(matches!(back.shape, ShapeSpec::Mesh { rotate: None, .. }), "{back:?}");
     }
 
     #[test]

@@ -268,7 +268,7 @@ impl EditorApp {
             .contact
             .selected
             .filter(|_| !box_select)
-            .and_then(|i| Some((i, crate::collider::center(self.document.colliders().get(i)?)?)));
+            .and_then(|i| Some((i, crate::collider::center(self.document.colliders().get(i)?))));
         if let Some((index, center)) = collider {
             let (lo, hi) = self.document.rest_mesh().bounding_box();
             let output =

@@ -19,7 +19,9 @@ pub mod spec;
 pub use collider::{Collider, Motion};
 pub use model::{ContactModel, ContactParams, ContactStats};
 pub use shape::{MeshShape, Proximity, Shape};
-pub use spec::{COLLIDER_TYPES, ColliderError, ColliderSpec, ContactSettings, DEFAULT_THICKNESS_FRACTION, ShapeSpec};
+pub use spec::{
+    COLLIDER_TYPES, ColliderError, ColliderSpec, ContactSettings, DEFAULT_THICKNESS_FRACTION, ShapeSpec, mesh_placement,
+};
 
 use crate::solver::{SolveError, SolveReport, System};
 use glam::DVec3;

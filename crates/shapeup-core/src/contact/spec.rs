@@ -100,6 +100,12 @@ pub enum ShapeSpec {
         /// An open mesh's thickness behind its front (input units ≥ 0; default the contact
         /// thickness).
         thickness: Option<f64>,
+        /// Where the file's mesh is placed: p ↦ c + R (p − c) + translate, R the `rotate`
+        /// about its centre c (file coordinates; default the file's origin), as a DCC tool
+        /// places an object about its origin. Default: where the file puts it.
+        translate: [f64; 3],
+        /// See `translate`.
+        rotate: Option<Rotate>,
     },
 }
 
@@ -141,8 +147,33 @@ pub const COLLIDER_TYPES: [(&str, &[&str]); 5] = [
     ("sphere", &["center", "radius"]),
     ("capsule", &["a", "b", "radius"]),
     ("box", &["min", "max", "rotate"]),
-    ("mesh", &["path", "closed", "thickness"]),
+    ("mesh", &["path", "closed", "thickness", "translate", "rotate"]),
 ];
+
+/// A mesh collider's placement as a map of file coordinates to the scene's: p ↦ c + R (p − c)
+/// + translate (see [`ShapeSpec::Mesh`]).
+pub fn mesh_placement(translate: [f64; 3], rotate: Option<&Rotate>) -> impl Fn(DVec3) -> DVec3 {
+    let (turn, center) = match rotate {
+        Some(r) => (rotation(direction(r.axis), r.angle_deg), r.center.map_or(DVec3::ZERO, DVec3::from)),
+        None => (glam::DQuat::IDENTITY, DVec3::ZERO),
+    };
+    let shift = DVec3::from(translate);
+    move |p| center + turn * (p - center) + shift
+}
+
+/// Checks a `rotate` table's values.
+fn check_rotate(r: &Rotate) -> Result<(), ColliderError> {
+    if finite3("rotate.axis", r.axis)?.length() == 0.0 {
+        return Err(invalid("`rotate.axis` must be non-zero"));
+    }
+    if !(r.angle_deg.is_finite() && r.angle_deg.abs() <= MAX_MAGNITUDE) {
+        return Err(invalid("`rotate.angle_deg` must be a finite number within ±1e12"));
+    }
+    if let Some(c) = r.center {
+        finite3("rotate.center", c)?;
+    }
+    Ok(())
+}
 
 fn invalid(message: impl Into<String>) -> ColliderError {
     ColliderError::Invalid(message.into())
@@ -256,6 +287,8 @@ impl ColliderSpec {
                 path: required(&mut entry, "path", &kind)?,
                 closed: take(&mut entry, "closed")?,
                 thickness: take(&mut entry, "thickness")?,
+                translate: take(&mut entry, "translate")?.unwrap_or([0.0; 3]),
+                rotate: take(&mut entry, "rotate")?,
             },
         };
         let spec = ColliderSpec {
@@ -299,7 +332,7 @@ impl ColliderSpec {
                     put("rotate", without_nulls(serde_json::json!(r)));
                 }
             }
-            ShapeSpec::Mesh { path, closed, thickness } => {
+            ShapeSpec::Mesh { path, closed, thickness, translate, rotate } => {
                 put("type", "mesh".into());
                 put("path", serde_json::json!(path));
                 if let Some(c) = closed {
@@ -307,6 +340,12 @@ impl ColliderSpec {
                 }
                 if let Some(t) = thickness {
                     put("thickness", serde_json::json!(t));
+                }
+                if *translate != [0.0; 3] {
+                    put("translate", serde_json::json!(translate));
+                }
+                if let Some(r) = rotate {
+                    put("rotate", without_nulls(serde_json::json!(r)));
                 }
             }
         }
@@ -361,18 +400,14 @@ impl ColliderSpec {
                     return Err(invalid(format!("`min` > `max` along {} ({} > {})", ["x", "y", "z"][k], lo[k], hi[k])));
                 }
                 if let Some(r) = rotate {
-                    if finite3("rotate.axis", r.axis)?.length() == 0.0 {
-                        return Err(invalid("`rotate.axis` must be non-zero"));
-                    }
-                    if !(r.angle_deg.is_finite() && r.angle_deg.abs() <= MAX_MAGNITUDE) {
-                        return Err(invalid("`rotate.angle_deg` must be a finite number within ±1e12"));
-                    }
-                    if let Some(c) = r.center {
-                        finite3("rotate.center", c)?;
-                    }
+                    check_rotate(r)?;
                 }
             }
-            ShapeSpec::Mesh { path, thickness, .. } => {
+            ShapeSpec::Mesh { path, thickness, translate, rotate, .. } => {
+                finite3("translate", *translate)?;
+                if let Some(r) = rotate {
+                    check_rotate(r)?;
+                }
                 if path.as_os_str().is_empty() {
                     return Err(invalid("`path` is empty"));
                 }
@@ -440,7 +475,7 @@ impl ColliderSpec {
                 let center = frame.to_working(center);
                 (Shape::Box { center, half: 0.5 * (hi - lo) * frame.scale, rotation: turn }, center)
             }
-            ShapeSpec::Mesh { path, closed, thickness: own } => {
+            ShapeSpec::Mesh { path, closed, thickness: own, translate, rotate } => {
                 let file = base_dir.join(path);
                 let fail = |message: String| ColliderError::Mesh { path: file.clone(), message };
                 // The reader's error names the file itself.
@@ -456,7 +491,8 @@ impl ColliderSpec {
                             .into(),
                     ));
                 }
-                let positions: Vec<DVec3> = mesh.positions.iter().map(|&p| frame.to_working(p)).collect();
+                let place = mesh_placement(*translate, rotate.as_ref());
+                let positions: Vec<DVec3> = mesh.positions.iter().map(|&p| frame.to_working(place(p))).collect();
                 let centroid = positions.iter().copied().sum::<DVec3>() / positions.len().max(1) as f64;
                 let use_closed = closed.unwrap_or(is_closed);
                 let behind = own.map_or(thickness, length);
@@ -502,6 +538,7 @@ mod tests {
             r#"{"type": "capsule", "a": [0, 0, 0], "b": [1, 0, 0], "radius": 0.2}"#,
             r#"{"type": "box", "min": [0, 0, 0], "max": [1, 1, 1], "rotate": {"axis": [0, 1, 0], "angle_deg": 30}}"#,
             r#"{"type": "mesh", "path": "terrain.obj", "spin": {"axis": [0, 1, 0], "deg_per_s": 90}}"#,
+            r#"{"type": "mesh", "path": "t.obj", "translate": [1, 2, 3], "rotate": {"axis": [1, 0, 0], "angle_deg": 45, "center": [0, 1, 0]}}"#,
         ] {
             let spec = ColliderSpec::from_entry(entry(text)).expect(text);
             assert_eq!(ColliderSpec::from_entry(spec.to_entry()).expect("written back"), spec, "{text}");
@@ -520,6 +557,9 @@ mod tests {
             (r#"{"type": "box", "min": [0, 2, 0], "max": [1, 1, 1]}"#, "`min` > `max` along y"),
             (r#"{"type": "sphere", "center": [0, 0, 0], "radius": 1, "friction": -0.1}"#, "`friction`"),
             (r#"{"type": "mesh", "path": "a.obj", "thickness": -1}"#, "`thickness`"),
+            (r#"{"type": "mesh", "path": "a.obj", "translate": [0, 1e300, 0]}"#, "`translate` is too large"),
+            (r#"{"type": "mesh", "path": "a.obj", "rotate": {"axis": [0, 0, 0], "angle_deg": 9}}"#, "`rotate.axis`"),
+            (r#"{"type": "mesh", "path": "a.obj", "rotate": {"axis": [0, 1, 0]}}"#, "`rotate`"),
             (r#"{"radius": 1}"#, "missing `type`"),
             (r#"{"type": "sphere", "center": [0, 0, 0], "radius": 1e300}"#, "`radius` is too large"),
             (r#"{"type": "box", "min": [-1e300, -1, -1], "max": [1, 1, 1]}"#, "`min` is too large"),
@@ -542,6 +582,37 @@ mod tests {
 #[cfg(test)]
 mod direction_tests {
     use super::*;
+
+    #[test]
+    fn a_placed_mesh_collider_is_the_mesh_moved_by_its_placement() {
+        // A closed box mesh written as it is, and placed: turned 90° about z through (1, 0, 0)
+        // (file coordinates), then moved by (0, 2, 0). Every query of the placed collider is the
+        // plain one's at the query point mapped back.
+        let dir = tempfile::tempdir().expect("a temporary folder");
+        let cube = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n\
+                    f 1 3 2\nf 1 4 3\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\n\
+                    f 4 7 3\nf 4 8 7\nf 1 5 8\nf 1 8 4\nf 2 3 7\nf 2 7 6\n";
+        std::fs::write(dir.path().join("cube.obj"), cube).expect("written");
+        let mesh = |translate, rotate| ColliderSpec {
+            shape: ShapeSpec::Mesh { path: "cube.obj".into(), closed: None, thickness: None, translate, rotate },
+            friction: 0.0,
+            velocity: [0.0; 3],
+            spin: None,
+        };
+        let build =
+            |spec: ColliderSpec| spec.build(&WorkingFrame::IDENTITY, dir.path(), 0.01).expect("a mesh collider");
+        let plain = build(mesh([0.0; 3], None));
+        let rotate = Rotate { axis: [0.0, 0.0, 1.0], angle_deg: 90.0, center: Some([1.0, 0.0, 0.0]) };
+        let placed = build(mesh([0.0, 2.0, 0.0], Some(rotate)));
+        let place = mesh_placement([0.0, 2.0, 0.0], Some(&rotate));
+        let turn = glam::DQuat::from_rotation_z(std::f64::consts::FRAC_PI_2);
+        assert!((place(DVec3::ZERO) - DVec3::new(1.0, 1.0, 0.0)).length() < 1e-12, "{}", place(DVec3::ZERO));
+        for p in [DVec3::new(0.2, 0.3, 0.1), DVec3::new(2.0, -1.0, 0.5), DVec3::new(0.5, 0.5, 0.5)] {
+            let (a, b) = (plain.closest_at(p, 0.0), placed.closest_at(place(p), 0.0));
+            assert!((a.distance - b.distance).abs() < 1e-12, "{p}: {} against {}", a.distance, b.distance);
+            assert!((place(a.point) - b.point).length() < 1e-12 && (turn * a.normal - b.normal).length() < 1e-12);
+        }
+    }
 
     #[test]
     fn a_long_normal_is_a_unit_normal() {

@@ -4,7 +4,7 @@
 //! "Mesh…" row under this section (a native dialog or a typed path).
 
 use super::PanelOutput;
-use crate::collider::{PRIMITIVES, center};
+use crate::collider::PRIMITIVES;
 use crate::command::Command;
 use crate::document::Document;
 use eframe::egui;
@@ -48,11 +48,7 @@ pub fn contact_panel(ui: &mut egui::Ui, document: &Document, state: &mut Contact
     for (i, spec) in document.colliders().iter().enumerate() {
         ui.horizontal(|ui| {
             let selected = state.selected == Some(i);
-            let hint = if center(spec).is_some() {
-                "show its numbers and put the gizmo on it"
-            } else {
-                "show its numbers (a mesh collider stays where its file puts it)"
-            };
+            let hint = "show its numbers and put the gizmo on it";
             if ui.selectable_label(selected, format!("{i}: {}", spec.kind())).on_hover_text(hint).clicked() {
                 state.selected = if selected { None } else { Some(i) };
             }
@@ -162,8 +158,9 @@ fn collider_rows(ui: &mut egui::Ui, spec: &mut ColliderSpec, speed: f64, out: &m
             changed |= vector(ui, "point", point, speed, out);
             changed |= vector(ui, "normal", normal, 0.01, out);
         }
-        ShapeSpec::Mesh { path, closed, thickness } => {
+        ShapeSpec::Mesh { path, closed, thickness, translate, .. } => {
             ui.label(path.display().to_string());
+            changed |= vector(ui, "translate", translate, speed, out);
             ui.horizontal(|ui| {
                 ui.label("closed:");
                 for (label, value) in [("auto", None), ("yes", Some(true)), ("no (one-sided)", Some(false))] {
