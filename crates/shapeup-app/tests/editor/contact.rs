@@ -118,7 +118,12 @@ fn a_scene_with_colliders_opens_and_saves_them() {
     assert_eq!(*path, dir.path().join("ground.obj"), "resolved against the scene's folder");
     assert_eq!(doc.contact_settings(), scene.contact);
 
+    // The gizmo's commands move and turn the mesh collider too; the placement is saved.
     let mut doc = doc;
+    doc.apply(Command::MoveCollider { index: 1, delta: DVec3::new(0.0, 0.1, 0.0) }).unwrap();
+    doc.apply(Command::RotateCollider { index: 1, axis: DVec3::Y, angle: 0.3 }).unwrap();
+    let ShapeSpec::Mesh { translate, rotate: Some(r), .. } = &doc.colliders()[1].shape else { panic!() };
+    assert!(translate[1] == 0.1 && (r.angle_deg - 0.3f64.to_degrees()).abs() < 1e-9, "{translate:?} {r:?}");
     let saved = dir.path().join("saved.toml");
     doc.save_scene_with_mesh(&saved).unwrap();
     let again = Scene::from_file(&saved).unwrap();
