@@ -777,6 +777,12 @@ fn the_contact_panel_adds_selects_edits_and_removes_colliders() {
     assert_eq!(render(&mut harness).count(view, is_orange), 0, "not selected: grey");
     harness.get_by_label("0: sphere").click();
     settle(&mut harness);
+    // A spin is switched on and edited from the panel.
+    harness.get_by_role_and_label(Role::CheckBox, "spins").click();
+    settle(&mut harness);
+    let spin = harness.state().document().colliders()[0].spin;
+    assert!(spin.is_some_and(|s| s.deg_per_s == 30.0 && s.axis == [0.0, 1.0, 0.0]), "{spin:?}");
+    harness.get_by_label_contains("spin (°/s)");
 
     harness.get_by_role_and_label(Role::CheckBox, "Self-collision").click();
     settle(&mut harness);

@@ -9,7 +9,7 @@ use crate::command::Command;
 use crate::document::Document;
 use eframe::egui;
 use shapeup_core::contact::{ColliderSpec, ContactSettings, DEFAULT_THICKNESS_FRACTION, ShapeSpec};
-use shapeup_core::scene::Rotate;
+use shapeup_core::motion::{Rotate, Spin};
 
 /// The section's own state, which the viewport reads too (the gizmo sits on the selected
 /// collider).
@@ -146,21 +146,16 @@ fn collider_rows(ui: &mut egui::Ui, spec: &mut ColliderSpec, speed: f64, out: &m
         ShapeSpec::Box { min, max, rotate } => {
             changed |= vector(ui, "min", min, speed, out);
             changed |= vector(ui, "max", max, speed, out);
-            let mut r = rotate.unwrap_or(Rotate { axis: [0.0, 1.0, 0.0], angle_deg: 0.0, center: None });
-            let turned = vector(ui, "turn axis", &mut r.axis, 0.01, out)
-                | number(ui, "turn (°) ", &mut r.angle_deg, 0.5, f64::MIN, out);
-            if turned {
-                *rotate = (r.angle_deg != 0.0).then_some(r);
-                changed = true;
-            }
+            changed |= rotation_rows(ui, rotate, out);
         }
         ShapeSpec::Plane { point, normal } => {
             changed |= vector(ui, "point", point, speed, out);
             changed |= vector(ui, "normal", normal, 0.01, out);
         }
-        ShapeSpec::Mesh { path, closed, thickness, translate, .. } => {
+        ShapeSpec::Mesh { path, closed, thickness, translate, rotate } => {
             ui.label(path.display().to_string());
             changed |= vector(ui, "translate", translate, speed, out);
+            changed |= rotation_rows(ui, rotate, out);
             ui.horizontal(|ui| {
                 ui.label("closed:");
                 for (label, value) in [("auto", None), ("yes", Some(true)), ("no (one-sided)", Some(false))] {
@@ -179,8 +174,26 @@ fn collider_rows(ui: &mut egui::Ui, spec: &mut ColliderSpec, speed: f64, out: &m
     }
     changed |= number(ui, "friction ", &mut spec.friction, 0.01, 0.0, out);
     changed |= vector(ui, "velocity", &mut spec.velocity, speed, out);
-    if spec.spin.is_some() {
-        ui.label("spins (kept from the scene)");
+    // A constant spin (dynamic mode) about the shape's centre unless the scene gave one.
+    let mut spins = spec.spin.is_some();
+    if ui.checkbox(&mut spins, "spins").on_hover_text("turns at a constant rate while simulating").changed() {
+        spec.spin = spins.then_some(Spin { axis: [0.0, 1.0, 0.0], deg_per_s: 30.0, center: None });
+        changed = true;
+    }
+    if let Some(spin) = &mut spec.spin {
+        changed |= vector(ui, "spin axis", &mut spin.axis, 0.01, out);
+        changed |= number(ui, "spin (°/s) ", &mut spin.deg_per_s, 1.0, f64::MIN, out);
     }
     changed
+}
+
+/// The turn axis and angle of an optional rotation (none at 0°); whether one changed.
+fn rotation_rows(ui: &mut egui::Ui, rotate: &mut Option<Rotate>, out: &mut PanelOutput) -> bool {
+    let mut r = rotate.unwrap_or(Rotate { axis: [0.0, 1.0, 0.0], angle_deg: 0.0, center: None });
+    let turned =
+        vector(ui, "turn axis", &mut r.axis, 0.01, out) | number(ui, "turn (°) ", &mut r.angle_deg, 0.5, f64::MIN, out);
+    if turned {
+        *rotate = (r.angle_deg != 0.0).then_some(r);
+    }
+    turned
 }
