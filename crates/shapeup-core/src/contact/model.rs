@@ -27,7 +27,9 @@
 //!    Gauss–Seidel position corrections; then what is left inside a collider (the contact term
 //!    is a penalty at a finite weight, and a step runs a finite number of iterations) is moved
 //!    out along the normal, which also removes the velocity into it, and a path that crossed a
-//!    collider is stopped where it entered. Colliders come last, so their thickness holds.
+//!    collider is stopped where it entered. When a collider moved something and there are self
+//!    contacts, both once more: a collider's push can carry one layer into the next. Colliders
+//!    come last, so their thickness holds.
 
 use super::collider::Collider;
 use super::gap::Contact;
@@ -198,6 +200,17 @@ impl ContactModel {
         self.contacts = contacts;
     }
 
+    /// How many self-collision pairs (vertex–triangle and edge–edge, not neighbours) of the
+    /// surface at rest `positions` are already closer than the thickness: a thickness near the
+    /// edge length or above makes such pairs of a flat sheet, which then push apart.
+    pub fn self_pairs_at_rest(&mut self, positions: &[DVec3]) -> usize {
+        let (thickness, friction) = (self.params.thickness, self.params.friction);
+        self.surface.as_mut().map_or(0, |surface| {
+            let mut fresh = surface.clone();
+            detect_self_contacts(&mut fresh, positions, positions, thickness, friction).len()
+        })
+    }
+
     /// The contact weight W_v of every vertex, given the weight scale of each (its inertia
     /// μ_v in dynamic mode, its diagonal entry in static mode): [`CONTACT_WEIGHT`] × that for
     /// a vertex that takes part, 0 for the others. Constant for a run: the matrix is factored
@@ -318,17 +331,44 @@ impl ContactModel {
             .sum()
     }
 
-    /// The end of the step: corrects self contacts still too close, then moves `q` out of
-    /// colliders and stops paths that crossed one (colliders last: their thickness holds); records what touches (see the
-    /// [module docs](self)). `inverse_mass` weighs how a self contact's correction is shared
-    /// (per vertex, 0 for a vertex that must not move).
+    /// The end of the step: corrects self contacts still too close, moves `q` out of colliders
+    /// and stops paths that crossed one; when a collider moved anything, both once more (a
+    /// collider's push can carry one layer into the next: the second pass of self corrections
+    /// takes it back out, the last projection keeps the colliders' thickness); records what
+    /// touches (see the [module docs](self)). `inverse_mass` weighs how a self contact's
+    /// correction is shared (per vertex, 0 for a vertex that must not move).
     pub fn finish_step(&mut self, q: &mut [DVec3], inverse_mass: &[f64]) {
+        let has_self = self.self_from < self.contacts.len();
+        if has_self {
+            self.separate_self_contacts(q, inverse_mass);
+        }
+        if self.project_out_of_colliders(q) > 0 && has_self {
+            self.separate_self_contacts(q, inverse_mass);
+            self.project_out_of_colliders(q);
+        }
+        // What touches at the end: a force on, or within the thickness (plus round-off).
+        self.touching.fill(false);
+        let tolerance = 1e-3 * self.params.thickness.max(1e-9);
+        self.touching_count = 0;
+        self.self_count = 0;
+        for c in &self.contacts {
+            if c.gap(q) <= tolerance {
+                self.touching_count += 1;
+                if c.collider == u32::MAX {
+                    self.self_count += 1;
+                }
+                for (v, _) in c.terms() {
+                    self.touching[v] = true;
+                }
+            }
+        }
+        self.forces.fill(DVec3::ZERO);
+    }
+
+    /// Up to 4 Gauss–Seidel passes of position corrections over the self contacts still too
+    /// close, each shared by `inverse_mass`.
+    fn separate_self_contacts(&self, q: &mut [DVec3], inverse_mass: &[f64]) {
         let thickness = self.params.thickness;
-        let (t0, t1) = self.times;
-        let colliders = &self.colliders;
-        let active = &self.active;
-        let start = &self.start;
-        // Self contacts: Gauss–Seidel position corrections, sharing by inverse mass.
         for _ in 0..4 {
             let mut worst = 0.0f64;
             for c in self.contacts.iter().filter(|c| c.collider == u32::MAX) {
@@ -350,62 +390,64 @@ impl ContactModel {
                 break;
             }
         }
-        // Colliders: each vertex on its own, in parallel.
+    }
+
+    /// Moves every active vertex of `q` out of its contacts' half-spaces and of every collider
+    /// (as it is at the step's end) to the thickness, with Coulomb friction on the push, and
+    /// stops a path that crossed a collider where it entered. Returns how many moved.
+    fn project_out_of_colliders(&self, q: &mut [DVec3]) -> usize {
+        let thickness = self.params.thickness;
+        let (t0, t1) = self.times;
+        let colliders = &self.colliders;
+        let active = &self.active;
+        let start = &self.start;
         let by_vertex = &self.by_vertex;
         let contacts = &self.contacts;
-        q.par_iter_mut().enumerate().filter(|(v, _)| active[*v]).for_each(|(v, p)| {
-            for _ in 0..2 {
-                let before = *p;
-                // The step's own contacts first: the side each started on.
-                for &i in &by_vertex[v] {
-                    let c = &contacts[i as usize];
-                    let g = c.normal.dot(*p) - c.offset;
-                    if g < 0.0 {
-                        *p -= g * c.normal;
-                        // The push out is a normal impulse too: Coulomb friction with it.
-                        if c.friction > 0.0 {
-                            let slip = *p - start[v] - c.shift;
-                            *p -= coulomb(slip - c.normal.dot(slip) * c.normal, c.friction * -g);
+        q.par_iter_mut()
+            .enumerate()
+            .map(|(v, p)| {
+                if !active[v] {
+                    return false;
+                }
+                let first = *p;
+                for _ in 0..2 {
+                    let before = *p;
+                    // The step's own contacts first: the side each started on.
+                    for &i in &by_vertex[v] {
+                        let c = &contacts[i as usize];
+                        let g = c.normal.dot(*p) - c.offset;
+                        if g < 0.0 {
+                            *p -= g * c.normal;
+                            // The push out is a normal impulse too: Coulomb friction with it.
+                            if c.friction > 0.0 {
+                                let slip = *p - start[v] - c.shift;
+                                *p -= coulomb(slip - c.normal.dot(slip) * c.normal, c.friction * -g);
+                            }
                         }
                     }
-                }
-                for c in colliders {
-                    if let Some((t, normal)) = c.segment_entry_at(start[v], *p, t1) {
-                        let entry = start[v] + t * (*p - start[v]);
-                        *p = entry + thickness * normal;
-                    }
-                    let near = c.closest_at(*p, t1);
-                    if near.distance < thickness {
-                        let depth = thickness - near.distance;
-                        *p = near.point + thickness * near.normal;
-                        if c.friction > 0.0 {
-                            let slip = *p - start[v] - c.displacement(*p, t0, t1);
-                            *p -= coulomb(slip - near.normal.dot(slip) * near.normal, c.friction * depth);
+                    for c in colliders {
+                        if let Some((t, normal)) = c.segment_entry_at(start[v], *p, t1) {
+                            let entry = start[v] + t * (*p - start[v]);
+                            *p = entry + thickness * normal;
+                        }
+                        let near = c.closest_at(*p, t1);
+                        if near.distance < thickness {
+                            let depth = thickness - near.distance;
+                            *p = near.point + thickness * near.normal;
+                            if c.friction > 0.0 {
+                                let slip = *p - start[v] - c.displacement(*p, t0, t1);
+                                *p -= coulomb(slip - near.normal.dot(slip) * near.normal, c.friction * depth);
+                            }
                         }
                     }
+                    if *p == before {
+                        break;
+                    }
                 }
-                if *p == before {
-                    break;
-                }
-            }
-        });
-        // What touches at the end: a force on, or within the thickness (plus round-off).
-        self.touching.fill(false);
-        let tolerance = 1e-3 * thickness.max(1e-9);
-        self.touching_count = 0;
-        self.self_count = 0;
-        for c in &self.contacts {
-            if c.gap(q) <= tolerance {
-                self.touching_count += 1;
-                if c.collider == u32::MAX {
-                    self.self_count += 1;
-                }
-                for (v, _) in c.terms() {
-                    self.touching[v] = true;
-                }
-            }
-        }
-        self.forces.fill(DVec3::ZERO);
+                *p != first
+            })
+            .filter(|&moved| moved)
+            .count()
     }
 }
 

@@ -215,7 +215,21 @@ impl Scene {
         };
         let params =
             ContactParams { thickness, friction: self.contact.friction, self_collision: self.contact.self_collision };
-        Ok(Some(ContactModel::new(colliders, params, &surface, active)))
+        let mut model = ContactModel::new(colliders, params, &surface, active);
+        let close = model.self_pairs_at_rest(&rest.positions);
+        warnings.add_many(
+            "self_contact_at_rest",
+            "pairs of the rest shape (a vertex and a triangle, or two edges, not neighbours) are closer than the self-collision thickness: they start in contact and push apart (give [contact] a thickness well under the mean edge length)",
+            close,
+            || {
+                format!(
+                    "thickness {:.4e}, mean edge length {:.4e} (input units)",
+                    thickness / frame.scale,
+                    crate::geometry::mean_edge_length(rest) / frame.scale
+                )
+            },
+        );
+        Ok(Some(model))
     }
 }
 

@@ -187,7 +187,12 @@ impl LoadedScene {
             "simulated_s": simulation.time(),
             "energy": totals.energies,
             "kinetic_energy_end": simulation.kinetic_energy(),
-            "acceleration": system.params().acceleration.name(),
+            // Contact iterates plainly (crate::contact::solve_with_contact).
+            "acceleration": if simulation.contact().is_some_and(|c| c.is_active()) {
+                crate::solver::Acceleration::None.name()
+            } else {
+                system.params().acceleration.name()
+            },
             "factorizations": system.factorizations(),
             "contacts": totals.contacts,
             "self_contacts": totals.self_contacts,

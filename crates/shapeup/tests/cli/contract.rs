@@ -1376,6 +1376,7 @@ fn a_drape_reports_one_factorization_and_contacts_per_step() {
     assert_eq!(out.code, Some(0), "{}", out.describe());
     let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&r).unwrap()).unwrap();
     assert_eq!(report["factorizations"], 1, "{report}");
+    assert_eq!(report["acceleration"], "none", "contact iterates plainly: {report}");
     let contacts = report["contacts"].as_array().unwrap();
     assert_eq!(contacts.len(), 60);
     assert!(contacts.last().unwrap().as_u64().unwrap() > 0, "{contacts:?}");
