@@ -161,18 +161,30 @@ pub fn mesh_placement(translate: [f64; 3], rotate: Option<&Rotate>) -> impl Fn(D
     move |p| center + turn * (p - center) + shift
 }
 
-/// Checks a `rotate` table's values.
-fn check_rotate(r: &Rotate) -> Result<(), ColliderError> {
-    if finite3("rotate.axis", r.axis)?.length() == 0.0 {
-        return Err(invalid("`rotate.axis` must be non-zero"));
+/// Checks a turn table's values (`rotate`: `angle_deg`; `spin`: `deg_per_s`): a non-zero
+/// finite axis, a finite amount within ±1e12, a finite centre.
+fn check_turn(
+    table: &str,
+    axis: [f64; 3],
+    amount_key: &str,
+    amount: f64,
+    center: Option<[f64; 3]>,
+) -> Result<(), ColliderError> {
+    if finite3(&format!("{table}.axis"), axis)?.length() == 0.0 {
+        return Err(invalid(format!("`{table}.axis` must be non-zero")));
     }
-    if !(r.angle_deg.is_finite() && r.angle_deg.abs() <= MAX_MAGNITUDE) {
-        return Err(invalid("`rotate.angle_deg` must be a finite number within ±1e12"));
+    if !(amount.is_finite() && amount.abs() <= MAX_MAGNITUDE) {
+        return Err(invalid(format!("`{table}.{amount_key}` must be a finite number within ±1e12")));
     }
-    if let Some(c) = r.center {
-        finite3("rotate.center", c)?;
+    if let Some(c) = center {
+        finite3(&format!("{table}.center"), c)?;
     }
     Ok(())
+}
+
+/// Checks a `rotate` table's values.
+fn check_rotate(r: &Rotate) -> Result<(), ColliderError> {
+    check_turn("rotate", r.axis, "angle_deg", r.angle_deg, r.center)
 }
 
 fn invalid(message: impl Into<String>) -> ColliderError {
@@ -423,15 +435,7 @@ impl ColliderSpec {
         }
         finite3("velocity", self.velocity)?;
         if let Some(s) = &self.spin {
-            if finite3("spin.axis", s.axis)?.length() == 0.0 {
-                return Err(invalid("`spin.axis` must be non-zero"));
-            }
-            if !(s.deg_per_s.is_finite() && s.deg_per_s.abs() <= MAX_MAGNITUDE) {
-                return Err(invalid("`spin.deg_per_s` must be a finite number within ±1e12"));
-            }
-            if let Some(c) = s.center {
-                finite3("spin.center", c)?;
-            }
+            check_turn("spin", s.axis, "deg_per_s", s.deg_per_s, s.center)?;
         }
         Ok(())
     }
