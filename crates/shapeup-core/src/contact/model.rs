@@ -32,7 +32,7 @@
 //!    come last, so their thickness holds.
 
 use super::collider::Collider;
-use super::gap::Contact;
+use super::gap::{Contact, Pair};
 use super::self_collision::{Surface, detect_self_contacts};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -57,7 +57,10 @@ pub struct ContactModel {
     surface: Option<Surface>,
     /// Vertices that take part (simulated, with mass or in the system).
     active: Vec<bool>,
+    /// Collider contacts of the current step (one vertex each).
     contacts: Vec<Contact>,
+    /// Self contacts of the current step.
+    pairs: Vec<Pair>,
     forces: Vec<DVec3>,
     start: Vec<DVec3>,
     /// Step interval [t0, t1] the contacts were detected for.
@@ -68,15 +71,16 @@ pub struct ContactModel {
     self_count: usize,
     /// Per vertex, its collider contacts (indices into `contacts`).
     by_vertex: Vec<Vec<u32>>,
-    /// Where the self contacts start in `contacts` (collider contacts come first).
-    self_from: usize,
-    /// Per self contact, how its correction is shared: α_j W_j⁻¹ / Σ_k α_k² W_k⁻¹ (constant
-    /// over a step; empty until the step's first local step).
-    self_share: Vec<[f64; 4]>,
-    /// Per self contact, its correction at the current iterate (scratch).
-    self_push: Vec<Option<DVec3>>,
-    scratch_sum: Vec<DVec3>,
-    scratch_count: Vec<u32>,
+    /// Per vertex v, its self contacts and its share of each one's correction,
+    /// `pair_shares[pair_ptr[v]..pair_ptr[v + 1]]` as (pair, its copies, copies × α_v W_v⁻¹ /
+    /// Σ_k α_k² W_k⁻¹), a pair counting as many times as it has copies in the mean:
+    /// constant over a step, built at its first local step (empty until then), so that each
+    /// iteration gathers per vertex, in parallel, instead of scattering per pair.
+    pair_ptr: Vec<u32>,
+    pair_shares: Vec<(u32, u32, f64)>,
+    /// Per self contact, its correction at the current iterate, zero when it does not push
+    /// (scratch).
+    pair_push: Vec<DVec3>,
 }
 
 /// What the last step's contact did.
@@ -104,6 +108,7 @@ impl ContactModel {
             surface,
             active,
             contacts: Vec::new(),
+            pairs: Vec::new(),
             forces: vec![DVec3::ZERO; n],
             start: Vec::new(),
             times: (0.0, 0.0),
@@ -111,11 +116,9 @@ impl ContactModel {
             touching_count: 0,
             self_count: 0,
             by_vertex: vec![Vec::new(); n],
-            self_from: 0,
-            self_share: Vec::new(),
-            self_push: Vec::new(),
-            scratch_sum: Vec::new(),
-            scratch_count: Vec::new(),
+            pair_ptr: Vec::new(),
+            pair_shares: Vec::new(),
+            pair_push: Vec::new(),
         }
     }
 
@@ -136,7 +139,7 @@ impl ContactModel {
 
     /// Contacts detected for the current step.
     pub fn num_candidates(&self) -> usize {
-        self.contacts.len()
+        self.contacts.len() + self.pairs.len()
     }
 
     /// Per vertex: whether it touched something at the end of the last step.
@@ -147,7 +150,7 @@ impl ContactModel {
     /// Counts of the last step.
     pub fn stats(&self) -> ContactStats {
         ContactStats {
-            candidates: self.contacts.len(),
+            candidates: self.num_candidates(),
             touching: self.touching_count,
             self_touching: self.self_count,
             vertices: self.touching.iter().filter(|&&t| t).count(),
@@ -163,7 +166,7 @@ impl ContactModel {
         let thickness = self.params.thickness;
         let colliders = &self.colliders;
         let active = &self.active;
-        let mut contacts: Vec<Contact> = (0..start.len())
+        let contacts: Vec<Contact> = (0..start.len())
             .into_par_iter()
             .filter(|&v| active[v])
             .flat_map_iter(|v| {
@@ -192,22 +195,22 @@ impl ContactModel {
         for (i, c) in contacts.iter().enumerate() {
             self.by_vertex[c.vertices[0] as usize].push(i as u32);
         }
-        self.self_from = contacts.len();
-        self.self_share.clear();
-        if let Some(surface) = &mut self.surface {
-            contacts.extend(detect_self_contacts(surface, start, predicted, thickness, self.params.friction));
-        }
         self.contacts = contacts;
+        self.pair_ptr.clear();
+        self.pairs.clear();
+        if let Some(surface) = &mut self.surface {
+            self.pairs = detect_self_contacts(surface, start, predicted, thickness);
+        }
     }
 
     /// How many self-collision pairs (vertex–triangle and edge–edge, not neighbours) of the
     /// surface at rest `positions` are already closer than the thickness: a thickness near the
     /// edge length or above makes such pairs of a flat sheet, which then push apart.
     pub fn self_pairs_at_rest(&mut self, positions: &[DVec3]) -> usize {
-        let (thickness, friction) = (self.params.thickness, self.params.friction);
+        let thickness = self.params.thickness;
         self.surface.as_mut().map_or(0, |surface| {
             let mut fresh = surface.clone();
-            detect_self_contacts(&mut fresh, positions, positions, thickness, friction).len()
+            detect_self_contacts(&mut fresh, positions, positions, thickness).len()
         })
     }
 
@@ -224,11 +227,34 @@ impl ContactModel {
     /// [module docs](self)), returned as W_v p_v, its share of the global step's right-hand
     /// side. `weights` are [`ContactModel::weights`].
     pub fn targets(&mut self, q: &[DVec3], weights: &[f64]) -> &[DVec3] {
+        // Self contacts: each pair's correction at q, in parallel; a vertex then moves by the
+        // mean of its pairs' corrections (Jacobi), a pair's correction shared by inverse
+        // weight (PBD's rule with W as the masses).
+        if !self.pairs.is_empty() {
+            if self.pair_ptr.is_empty() {
+                self.share_pairs(weights);
+            }
+            let (start, friction) = (&self.start, self.params.friction);
+            self.pairs
+                .par_iter()
+                .with_min_len(PAIRS_PER_TASK)
+                .map(|c| {
+                    let gap = c.gap(q);
+                    if gap >= 0.0 {
+                        return DVec3::ZERO;
+                    }
+                    let push = -gap * c.normal;
+                    if friction > 0.0 { push - coulomb(c.slip(q, start), friction * -gap) } else { push }
+                })
+                .collect_into_vec(&mut self.pair_push);
+        }
         let start = &self.start;
         let contacts = &self.contacts;
         let by_vertex = &self.by_vertex;
-        // Colliders: each vertex on its own (in parallel), its contacts one after the other.
-        self.forces.par_iter_mut().enumerate().for_each(|(v, target)| {
+        let (ptr, shares, push) = (&self.pair_ptr, &self.pair_shares, &self.pair_push);
+        // Per vertex, in parallel: its collider contacts one after the other, then the mean of
+        // its self contacts' corrections; times W_v.
+        self.forces.par_iter_mut().enumerate().with_min_len(VERTICES_PER_TASK).for_each(|(v, target)| {
             let mut p = q[v];
             for &i in &by_vertex[v] {
                 let c = &contacts[i as usize];
@@ -243,66 +269,64 @@ impl ContactModel {
                     p -= coulomb(slip, c.friction * -gap);
                 }
             }
-            *target = p;
+            if let (Some(&from), Some(&to)) = (ptr.get(v), ptr.get(v + 1)) {
+                let (mut sum, mut count) = (DVec3::ZERO, 0u32);
+                for &(pair, copies, share) in &shares[from as usize..to as usize] {
+                    let x = push[pair as usize];
+                    if x != DVec3::ZERO {
+                        sum += share * x;
+                        count += copies;
+                    }
+                }
+                if count > 0 {
+                    p += sum / f64::from(count);
+                }
+            }
+            *target = weights[v] * p;
         });
-        // Self contacts: Jacobi, each vertex moved by the mean of its pairs' corrections, a
-        // pair's correction shared by inverse weight (PBD's rule with W as the masses).
-        let pairs = &contacts[self.self_from..];
-        if !pairs.is_empty() {
-            if self.self_share.len() != pairs.len() {
-                let inverse = |v: usize| if weights[v] > 0.0 { 1.0 / weights[v] } else { 0.0 };
-                self.self_share.clear();
-                self.self_share.par_extend(pairs.par_iter().map(|c| {
-                    let w: f64 = c.terms().map(|(v, a)| a * a * inverse(v)).sum();
-                    let mut share = [0.0; 4];
-                    if w > 0.0 {
-                        for (k, (v, a)) in c.terms().enumerate() {
-                            share[k] = a * inverse(v) / w;
-                        }
-                    }
-                    share
-                }));
-            }
-            pairs
-                .par_iter()
-                .map(|c| {
-                    let gap = c.gap(q);
-                    if gap >= 0.0 {
-                        return None;
-                    }
-                    let mut push = -gap * c.normal;
-                    if c.friction > 0.0 {
-                        push -= coulomb(c.slip(q, start), c.friction * -gap);
-                    }
-                    Some(push)
-                })
-                .collect_into_vec(&mut self.self_push);
-            let n = q.len();
-            let (sum, count) = (&mut self.scratch_sum, &mut self.scratch_count);
-            sum.clear();
-            sum.resize(n, DVec3::ZERO);
-            count.clear();
-            count.resize(n, 0);
-            for ((c, push), share) in pairs.iter().zip(&self.self_push).zip(&self.self_share) {
-                if let Some(push) = push {
-                    for (k, (v, _)) in c.terms().enumerate() {
-                        if share[k] != 0.0 {
-                            sum[v] += share[k] * *push;
-                            count[v] += 1;
-                        }
-                    }
-                }
-            }
-            for ((t, s), &k) in self.forces.iter_mut().zip(sum.iter()).zip(count.iter()) {
-                if k > 0 {
-                    *t += *s / k as f64;
-                }
-            }
-        }
-        for (t, w) in self.forces.iter_mut().zip(weights) {
-            *t *= *w;
-        }
         &self.forces
+    }
+
+    /// [`ContactModel::pair_ptr`](Self) and its shares for this step's pairs: vertex j of a
+    /// pair takes α_j W_j⁻¹ / Σ_k α_k² W_k⁻¹ of its correction (none when W_j = 0: it is held).
+    fn share_pairs(&mut self, weights: &[f64]) {
+        let inverse = |v: usize| if weights[v] > 0.0 { 1.0 / weights[v] } else { 0.0 };
+        let n = weights.len();
+        let share = |c: &Pair| -> [f64; 4] {
+            let w: f64 = c.terms().map(|(v, a)| a * a * inverse(v)).sum();
+            let mut share = [0.0; 4];
+            if w > 0.0 {
+                for (k, (v, a)) in c.terms().enumerate() {
+                    share[k] = a * inverse(v) / w;
+                }
+            }
+            share
+        };
+        let all: Vec<[f64; 4]> = self.pairs.par_iter().map(share).collect();
+        let mut count = vec![0u32; n + 1];
+        for (c, s) in self.pairs.iter().zip(&all) {
+            for (&v, &x) in c.vertices.iter().zip(s) {
+                if x != 0.0 {
+                    count[v as usize + 1] += 1;
+                }
+            }
+        }
+        for v in 0..n {
+            count[v + 1] += count[v];
+        }
+        let mut next = count.clone();
+        self.pair_shares.clear();
+        self.pair_shares.resize(count[n] as usize, (0, 0, 0.0));
+        for (i, (c, s)) in self.pairs.iter().zip(&all).enumerate() {
+            for (&v, &x) in c.vertices.iter().zip(s) {
+                if x != 0.0 {
+                    let at = &mut next[v as usize];
+                    self.pair_shares[*at as usize] = (i as u32, c.copies, f64::from(c.copies) * x);
+                    *at += 1;
+                }
+            }
+        }
+        self.pair_ptr = count;
     }
 
     /// Moves the vertices of `positions` that are inside a collider (as it is at time `t`) or
@@ -338,7 +362,7 @@ impl ContactModel {
     /// touches (see the [module docs](self)). `inverse_mass` weighs how a self contact's
     /// correction is shared (per vertex, 0 for a vertex that must not move).
     pub fn finish_step(&mut self, q: &mut [DVec3], inverse_mass: &[f64]) {
-        let has_self = self.self_from < self.contacts.len();
+        let has_self = !self.pairs.is_empty();
         if has_self {
             self.separate_self_contacts(q, inverse_mass);
         }
@@ -349,17 +373,18 @@ impl ContactModel {
         // What touches at the end: a force on, or within the thickness (plus round-off).
         self.touching.fill(false);
         let tolerance = 1e-3 * self.params.thickness.max(1e-9);
-        self.touching_count = 0;
-        self.self_count = 0;
+        let touching_pairs: Vec<&Pair> = self.pairs.par_iter().filter(|c| c.gap(q) <= tolerance).collect();
+        for c in &touching_pairs {
+            for &v in &c.vertices {
+                self.touching[v as usize] = true;
+            }
+        }
+        self.self_count = touching_pairs.len();
+        self.touching_count = self.self_count;
         for c in &self.contacts {
             if c.gap(q) <= tolerance {
                 self.touching_count += 1;
-                if c.collider == u32::MAX {
-                    self.self_count += 1;
-                }
-                for (v, _) in c.terms() {
-                    self.touching[v] = true;
-                }
+                self.touching[c.vertices[0] as usize] = true;
             }
         }
         self.forces.fill(DVec3::ZERO);
@@ -371,7 +396,7 @@ impl ContactModel {
         let thickness = self.params.thickness;
         for _ in 0..4 {
             let mut worst = 0.0f64;
-            for c in self.contacts.iter().filter(|c| c.collider == u32::MAX) {
+            for c in &self.pairs {
                 let gap = c.gap(q);
                 if gap >= 0.0 {
                     continue;
@@ -450,6 +475,12 @@ impl ContactModel {
             .count()
     }
 }
+
+/// Self contacts per parallel task in the per-iteration passes.
+const PAIRS_PER_TASK: usize = 4096;
+
+/// Vertices per parallel task in the per-iteration pass.
+const VERTICES_PER_TASK: usize = 1024;
 
 /// How many times a vertex's inertia (dynamic mode) or diagonal entry (static mode) its
 /// contact weight W_v is: heavy enough that the shape comes to rest against what it touches

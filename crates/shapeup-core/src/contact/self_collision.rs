@@ -11,10 +11,10 @@
 //! relative predicted motion is a contact, with the normal from the second closest point to
 //! the first (the side it started on).
 
-use super::gap::Contact;
+use super::gap::Pair;
 use glam::DVec3;
 use parry3d_f64::bounding_volume::Aabb;
-use parry3d_f64::partitioning::{Bvh, BvhBuildStrategy, BvhWorkspace};
+use parry3d_f64::partitioning::{Bvh, BvhBuildStrategy};
 use rayon::prelude::*;
 
 /// The surface that collides with itself: its triangles, their edges and their vertices, and
@@ -102,11 +102,12 @@ fn relative_motion(first: &[u32], others: &[u32], start: &[DVec3], predicted: &[
     let motion = |v: u32| predicted[v as usize] - start[v as usize];
     let mut most = 0.0f64;
     for &a in first {
+        let m = motion(a);
         for &b in others {
-            most = most.max((motion(a) - motion(b)).length());
+            most = most.max((m - motion(b)).length_squared());
         }
     }
-    most
+    most.sqrt()
 }
 
 /// Every vertex–triangle and edge–edge contact of the step (see the [module docs](self)).
@@ -115,8 +116,7 @@ pub(crate) fn detect_self_contacts(
     start: &[DVec3],
     predicted: &[DVec3],
     thickness: f64,
-    friction: f64,
-) -> Vec<Contact> {
+) -> Vec<Pair> {
     if surface.triangles.is_empty() {
         return Vec::new();
     }
@@ -148,25 +148,29 @@ pub(crate) fn detect_self_contacts(
                 .collect()
         },
         || {
-            let mut pairs: Vec<(u32, u32)> = Vec::new();
-            edge_bvh.traverse_bvtt_single_tree::<false>(&mut BvhWorkspace::default(), &mut |i, j| {
+            let mut pairs = edge_bvh.traverse_bvtt_single_tree_parallel::<false>();
+            pairs.retain(|&(i, j)| {
                 let (e, f) = (edges[i as usize], edges[j as usize]);
-                if !(f.contains(&e[0]) || f.contains(&e[1])) {
-                    pairs.push((i, j));
-                }
+                !(f.contains(&e[0]) || f.contains(&e[1]))
             });
             pairs
         },
     );
     // Narrow phase at x_n.
-    let mut contacts: Vec<Contact> = vertex_triangle
+    let mut contacts: Vec<Pair> = vertex_triangle
         .par_iter()
         .filter_map(|&(v, k)| {
             let t = triangles[k as usize];
             let x = start[v as usize];
             let (c, b) = closest_on_triangle(x, t.map(|i| start[i as usize]));
             let (normal, target) = separation(x - c, thickness, || relative_motion(&[v], &t, start, predicted))?;
-            Some(Contact::new(&[v, t[0], t[1], t[2]], &[1.0, -b[0], -b[1], -b[2]], normal, target, friction))
+            Some(Pair {
+                vertices: [v, t[0], t[1], t[2]],
+                alpha: [1.0, -b[0], -b[1], -b[2]],
+                normal,
+                distance: target,
+                copies: 1,
+            })
         })
         .collect();
     contacts.par_extend(edge_edge.par_iter().filter_map(|&(i, j)| {
@@ -174,9 +178,79 @@ pub(crate) fn detect_self_contacts(
         let (p, r) = (e.map(|v| start[v as usize]), f.map(|v| start[v as usize]));
         let (s, t, a, b) = closest_between_segments(p[0], p[1], r[0], r[1]);
         let (normal, target) = separation(a - b, thickness, || relative_motion(&e, &f, start, predicted))?;
-        Some(Contact::new(&[e[0], e[1], f[0], f[1]], &[1.0 - s, s, -(1.0 - t), -t], normal, target, friction))
+        Some(Pair {
+            vertices: [e[0], e[1], f[0], f[1]],
+            alpha: [1.0 - s, s, -(1.0 - t), -t],
+            normal,
+            distance: target,
+            copies: 1,
+        })
     }));
-    contacts
+    distinct_features(contacts)
+}
+
+/// The pairs whose closest features differ, in the order found, each with the
+/// number of element pairs that reached it. A vertex–triangle pair whose closest point is on an
+/// edge or a corner of the triangle, and an edge–edge pair whose closest point is at an edge's
+/// end, is the same constraint as the other pairs reaching those features (a vertex above a
+/// corner of a flat sheet meets all six triangles around it, and its edges meet that corner's
+/// edges): in a crumpled cloth half the pairs are such copies. One is kept and solved, weighted
+/// by its copies in the Jacobi mean of [`super::model`] as when each was solved (the weighting
+/// that holds the thickness: the copies weigh a vertex's and an edge's contacts against a
+/// face's). The features of a pair are its vertices with α ≠ 0 on each side (the clamped
+/// coordinates of the closest-point routines are exactly 0); of pairs with the same, the first
+/// found is kept.
+fn distinct_features(mut pairs: Vec<Pair>) -> Vec<Pair> {
+    let mut keys: Vec<(FeatureKey, u32)> =
+        pairs.par_iter().enumerate().map(|(i, c)| (feature_key(c), i as u32)).collect();
+    keys.par_sort_unstable();
+    // The first found of each feature pair keeps its place: the end-of-step Gauss–Seidel
+    // corrections visit pairs in this order, and the detection's order (vertex–triangle pairs,
+    // then edge–edge ones) holds a stack of cloths apart at the thickness where an order by
+    // vertex let it settle to a fifth of it.
+    let mut copies = vec![0u32; pairs.len()];
+    let mut group = 0;
+    for k in 1..=keys.len() {
+        if k == keys.len() || keys[k].0 != keys[group].0 {
+            copies[keys[group].1 as usize] = (k - group) as u32;
+            group = k;
+        }
+    }
+    let mut kept = 0;
+    for i in 0..pairs.len() {
+        if copies[i] > 0 {
+            pairs[kept] = pairs[i];
+            pairs[kept].copies = copies[i];
+            kept += 1;
+        }
+    }
+    pairs.truncate(kept);
+    pairs
+}
+
+/// Both sides' vertices with α ≠ 0, each side sorted, the smaller side first, and how many
+/// the first side has.
+type FeatureKey = ([u32; 4], u8);
+
+fn feature_key(c: &Pair) -> FeatureKey {
+    let side = |positive: bool| {
+        let mut out = [u32::MAX; 4];
+        let mut n = 0;
+        for (&v, &a) in c.vertices.iter().zip(&c.alpha) {
+            if a != 0.0 && (a > 0.0) == positive {
+                out[n] = v;
+                n += 1;
+            }
+        }
+        out[..n].sort_unstable();
+        (out, n)
+    };
+    let ((p, np), (m, nm)) = (side(true), side(false));
+    let ((first, n1), (second, n2)) = if (p, np) <= (m, nm) { ((p, np), (m, nm)) } else { ((m, nm), (p, np)) };
+    let mut key = [u32::MAX; 4];
+    key[..n1].copy_from_slice(&first[..n1]);
+    key[n1..n1 + n2].copy_from_slice(&second[..n2]);
+    (key, n1 as u8)
 }
 
 /// The unit normal of a pair whose closest points are `d` apart and the distance it must keep
@@ -358,23 +432,17 @@ mod tests {
         }
         let thickness = 0.05;
         let mut surface = Surface::new(&triangles, &vec![true; start.len()]);
-        let key = |c: &Contact| {
-            let mut k = c.vertices;
-            k[..c.len as usize].sort_unstable();
-            (c.len, k)
-        };
-        let mut found: Vec<_> =
-            detect_self_contacts(&mut surface, &start, &start, thickness, 0.0).iter().map(key).collect();
-        found.sort_unstable();
+        // Every pair within the thickness, by brute force, as the constraint it makes: its
+        // closest features.
         let mut brute = Vec::new();
+        let pair =
+            |vertices: [u32; 4], alpha: [f64; 4]| Pair { vertices, alpha, normal: DVec3::Y, distance: 0.0, copies: 1 };
         for (v, &x) in start.iter().enumerate() {
             for t in &triangles {
-                let (c, _) = closest_on_triangle(x, t.map(|i| start[i as usize]));
+                let (c, b) = closest_on_triangle(x, t.map(|i| start[i as usize]));
                 let d = (x - c).length();
                 if !t.contains(&(v as u32)) && d < thickness && d >= 1e-12 {
-                    let mut k = [v as u32, t[0], t[1], t[2]];
-                    k.sort_unstable();
-                    brute.push((4, k));
+                    brute.push(feature_key(&pair([v as u32, t[0], t[1], t[2]], [1.0, -b[0], -b[1], -b[2]])));
                 }
             }
         }
@@ -385,19 +453,49 @@ mod tests {
                     continue;
                 }
                 let p = |v: u32| start[v as usize];
-                let (_, _, a, b) = closest_between_segments(p(e[0]), p(e[1]), p(f[0]), p(f[1]));
+                let (s, t, a, b) = closest_between_segments(p(e[0]), p(e[1]), p(f[0]), p(f[1]));
                 let d = (a - b).length();
                 if d < thickness && d >= 1e-12 {
-                    let mut k = [e[0], e[1], f[0], f[1]];
-                    k.sort_unstable();
-                    brute.push((4, k));
+                    brute.push(feature_key(&pair([e[0], e[1], f[0], f[1]], [1.0 - s, s, -(1.0 - t), -t])));
                 }
             }
         }
+        let element_pairs = brute.len();
         brute.sort_unstable();
+        brute.dedup();
         assert!(brute.len() > 100, "the fold should bring the layers within the thickness: {}", brute.len());
+        assert!(brute.len() < element_pairs, "a fold has pairs reaching the same features");
+        // Found: each feature pair once, with as many copies as element pairs reached it.
+        let contacts = detect_self_contacts(&mut surface, &start, &start, thickness);
+        let copies: u32 = contacts.iter().map(|c| c.copies).sum();
+        let mut found: Vec<_> = contacts.iter().map(feature_key).collect();
+        found.sort_unstable();
         let missing: Vec<_> = brute.iter().filter(|k| found.binary_search(k).is_err()).take(4).collect();
         assert!(found == brute, "{} contacts, {} by brute force; missing e.g. {missing:?}", found.len(), brute.len());
+        assert_eq!(copies as usize, element_pairs);
+    }
+
+    #[test]
+    fn pairs_reaching_the_same_features_are_one_with_its_copies_in_the_order_found() {
+        // A vertex (9) above the middle vertex (4) of a 3 × 3 sheet meets its triangles at that
+        // corner: one vertex–vertex constraint. A vertex (10) above a triangle's inside: its own.
+        let corner = |t: [u32; 3], k: usize| {
+            let mut alpha = [1.0, 0.0, 0.0, 0.0];
+            alpha[1 + k] = -1.0;
+            Pair { vertices: [9, t[0], t[1], t[2]], alpha, normal: DVec3::Y, distance: 0.1, copies: 1 }
+        };
+        let inside = Pair {
+            vertices: [10, 0, 1, 3],
+            alpha: [1.0, -0.2, -0.3, -0.5],
+            normal: DVec3::Y,
+            distance: 0.1,
+            copies: 1,
+        };
+        let pairs = vec![inside, corner([4, 1, 3], 0), corner([1, 4, 2], 1), inside, corner([3, 7, 4], 2)];
+        let distinct = distinct_features(pairs);
+        assert_eq!(distinct.len(), 2);
+        assert_eq!((distinct[0].vertices[0], distinct[0].copies), (10, 2));
+        assert_eq!((distinct[1].vertices, distinct[1].copies), ([9, 4, 1, 3], 3));
     }
 
     #[test]
@@ -413,11 +511,11 @@ mod tests {
         }
         let triangles = [[0, 1, 2], [0, 2, 3], [4, 6, 5], [4, 7, 6]];
         let mut surface = Surface::new(&triangles, &[true; 8]);
-        let contacts = detect_self_contacts(&mut surface, &start, &start, 0.1, 0.0);
+        let contacts = detect_self_contacts(&mut surface, &start, &start, 0.1);
         assert!(!contacts.is_empty());
         for c in &contacts {
             let sheet = |v: u32| v / 4;
-            let vs = &c.vertices[..c.len as usize];
+            let vs = &c.vertices[..];
             assert!(vs.iter().any(|&v| sheet(v) == 0) && vs.iter().any(|&v| sheet(v) == 1), "{vs:?}");
             // 0.05 apart, too close by 0.05: asked for RECOVERY of that back this step.
             assert!((c.gap(&start) + RECOVERY * 0.05).abs() < 1e-12, "gap {}", c.gap(&start));
