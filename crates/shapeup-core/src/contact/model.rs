@@ -173,7 +173,7 @@ impl ContactModel {
                 let (x, s) = (start[v], predicted[v]);
                 let reach = 2.0 * (s - x);
                 let margin = thickness + reach.length();
-                colliders.iter().enumerate().filter_map(move |(k, c)| {
+                colliders.iter().filter_map(move |c| {
                     let near = c.closest_at(x, t1);
                     let (point, normal) = if near.distance < margin + c.displacement(x, t0, t1).length() {
                         (near.point, near.normal)
@@ -181,11 +181,9 @@ impl ContactModel {
                         let (t, normal) = c.segment_entry_at(x, x + reach, t1)?;
                         (x + t * reach, normal)
                     };
-                    let mut contact =
-                        Contact::new(&[v as u32], &[1.0], normal, normal.dot(point) + thickness, c.friction);
-                    contact.shift = c.displacement(point, t0, t1);
-                    contact.collider = k as u32;
-                    Some(contact)
+                    let offset = normal.dot(point) + thickness;
+                    let shift = c.displacement(point, t0, t1);
+                    Some(Contact { vertex: v as u32, normal, offset, friction: c.friction, shift })
                 })
             })
             .collect();
@@ -193,7 +191,7 @@ impl ContactModel {
             list.clear();
         }
         for (i, c) in contacts.iter().enumerate() {
-            self.by_vertex[c.vertices[0] as usize].push(i as u32);
+            self.by_vertex[c.vertex as usize].push(i as u32);
         }
         self.contacts = contacts;
         self.pair_ptr.clear();
@@ -258,7 +256,7 @@ impl ContactModel {
             let mut p = q[v];
             for &i in &by_vertex[v] {
                 let c = &contacts[i as usize];
-                let gap = c.normal.dot(p) - c.offset;
+                let gap = c.gap(p);
                 if gap >= 0.0 {
                     continue;
                 }
@@ -382,9 +380,9 @@ impl ContactModel {
         self.self_count = touching_pairs.len();
         self.touching_count = self.self_count;
         for c in &self.contacts {
-            if c.gap(q) <= tolerance {
+            if c.gap(q[c.vertex as usize]) <= tolerance {
                 self.touching_count += 1;
-                self.touching[c.vertices[0] as usize] = true;
+                self.touching[c.vertex as usize] = true;
             }
         }
         self.forces.fill(DVec3::ZERO);
@@ -440,7 +438,7 @@ impl ContactModel {
                     // The step's own contacts first: the side each started on.
                     for &i in &by_vertex[v] {
                         let c = &contacts[i as usize];
-                        let g = c.normal.dot(*p) - c.offset;
+                        let g = c.gap(*p);
                         if g < 0.0 {
                             *p -= g * c.normal;
                             // The push out is a normal impulse too: Coulomb friction with it.
