@@ -200,19 +200,30 @@ pub(crate) fn detect_self_contacts(
 /// face's). The features of a pair are its vertices with α ≠ 0 on each side (the clamped
 /// coordinates of the closest-point routines are exactly 0); of pairs with the same, the first
 /// found is kept.
+///
+/// Only pairs with fewer than four features can have copies: a vertex over a triangle's
+/// interior (1 + 3) is that one vertex–triangle pair, and two edges crossing in their interiors
+/// (2 + 2) that one edge–edge pair. So only the others are sorted by their features.
 fn distinct_features(mut pairs: Vec<Pair>) -> Vec<Pair> {
-    let mut keys: Vec<(FeatureKey, u32)> =
-        pairs.par_iter().enumerate().map(|(i, c)| (feature_key(c), i as u32)).collect();
+    let mut keys: Vec<(u128, u32)> =
+        pairs.par_iter().enumerate().filter_map(|(i, c)| Some((reduced_feature_key(c)?, i as u32))).collect();
+    if keys.is_empty() {
+        return pairs;
+    }
     keys.par_sort_unstable();
     // The first found of each feature pair keeps its place: the end-of-step Gauss–Seidel
     // corrections visit pairs in this order, and the detection's order (vertex–triangle pairs,
     // then edge–edge ones) holds a stack of cloths apart at the thickness where an order by
     // vertex let it settle to a fifth of it.
-    let mut copies = vec![0u32; pairs.len()];
+    let mut copies = vec![1u32; pairs.len()];
     let mut group = 0;
     for k in 1..=keys.len() {
         if k == keys.len() || keys[k].0 != keys[group].0 {
+            // Sorted by (key, index): the group's first is the first found.
             copies[keys[group].1 as usize] = (k - group) as u32;
+            for &(_, later) in &keys[group + 1..k] {
+                copies[later as usize] = 0;
+            }
             group = k;
         }
     }
@@ -228,29 +239,34 @@ fn distinct_features(mut pairs: Vec<Pair>) -> Vec<Pair> {
     pairs
 }
 
-/// Both sides' vertices with α ≠ 0, each side sorted, the smaller side first, and how many
-/// the first side has.
-type FeatureKey = ([u32; 4], u8);
-
-fn feature_key(c: &Pair) -> FeatureKey {
+/// The features of a pair with fewer than four (None for the others, which have no copies),
+/// packed: both sides' vertices with α ≠ 0, each side sorted, the smaller side first, in the
+/// low 96 bits (unused slots u32::MAX), and how many the first side has above them.
+fn reduced_feature_key(c: &Pair) -> Option<u128> {
     let side = |positive: bool| {
-        let mut out = [u32::MAX; 4];
+        let mut out = [u32::MAX; 3];
         let mut n = 0;
         for (&v, &a) in c.vertices.iter().zip(&c.alpha) {
             if a != 0.0 && (a > 0.0) == positive {
+                if n == 3 {
+                    return None;
+                }
                 out[n] = v;
                 n += 1;
             }
         }
         out[..n].sort_unstable();
-        (out, n)
+        Some((out, n))
     };
-    let ((p, np), (m, nm)) = (side(true), side(false));
+    let ((p, np), (m, nm)) = (side(true)?, side(false)?);
+    if np + nm > 3 {
+        return None;
+    }
     let ((first, n1), (second, n2)) = if (p, np) <= (m, nm) { ((p, np), (m, nm)) } else { ((m, nm), (p, np)) };
-    let mut key = [u32::MAX; 4];
-    key[..n1].copy_from_slice(&first[..n1]);
-    key[n1..n1 + n2].copy_from_slice(&second[..n2]);
-    (key, n1 as u8)
+    let mut slots = [u32::MAX; 3];
+    slots[..n1].copy_from_slice(&first[..n1]);
+    slots[n1..n1 + n2].copy_from_slice(&second[..n2]);
+    Some((n1 as u128) << 96 | u128::from(slots[0]) << 64 | u128::from(slots[1]) << 32 | u128::from(slots[2]))
 }
 
 /// The unit normal of a pair whose closest points are `d` apart and the distance it must keep
@@ -407,6 +423,29 @@ mod tests {
         }
     }
 
+    /// Both sides' vertices with α ≠ 0, each side sorted, the smaller side first, and how
+    /// many the first side has: the constraint a pair makes, whatever its number of features.
+    fn feature_key(c: &Pair) -> ([u32; 4], u8) {
+        let side = |positive: bool| {
+            let mut out = [u32::MAX; 4];
+            let mut n = 0;
+            for (&v, &a) in c.vertices.iter().zip(&c.alpha) {
+                if a != 0.0 && (a > 0.0) == positive {
+                    out[n] = v;
+                    n += 1;
+                }
+            }
+            out[..n].sort_unstable();
+            (out, n)
+        };
+        let ((p, np), (m, nm)) = (side(true), side(false));
+        let ((first, n1), (second, n2)) = if (p, np) <= (m, nm) { ((p, np), (m, nm)) } else { ((m, nm), (p, np)) };
+        let mut key = [u32::MAX; 4];
+        key[..n1].copy_from_slice(&first[..n1]);
+        key[n1..n1 + n2].copy_from_slice(&second[..n2]);
+        (key, n1 as u8)
+    }
+
     #[test]
     fn the_broad_phase_misses_no_pair_a_brute_force_search_finds() {
         // A 9 × 9 sheet folded over itself with noise (so the layers nearly touch), at rest
@@ -478,24 +517,36 @@ mod tests {
     #[test]
     fn pairs_reaching_the_same_features_are_one_with_its_copies_in_the_order_found() {
         // A vertex (9) above the middle vertex (4) of a 3 × 3 sheet meets its triangles at that
-        // corner: one vertex–vertex constraint. A vertex (10) above a triangle's inside: its own.
+        // corner: one vertex–vertex constraint. A vertex (11) above edge 1–4 meets both
+        // triangles on it: one vertex–edge constraint. A vertex (10) above a triangle's inside:
+        // its own.
+        let pair =
+            |vertices: [u32; 4], alpha: [f64; 4]| Pair { vertices, alpha, normal: DVec3::Y, distance: 0.1, copies: 1 };
         let corner = |t: [u32; 3], k: usize| {
             let mut alpha = [1.0, 0.0, 0.0, 0.0];
             alpha[1 + k] = -1.0;
-            Pair { vertices: [9, t[0], t[1], t[2]], alpha, normal: DVec3::Y, distance: 0.1, copies: 1 }
+            pair([9, t[0], t[1], t[2]], alpha)
         };
-        let inside = Pair {
-            vertices: [10, 0, 1, 3],
-            alpha: [1.0, -0.2, -0.3, -0.5],
-            normal: DVec3::Y,
-            distance: 0.1,
-            copies: 1,
+        let on_edge = |t: [u32; 3]| {
+            let alpha = t.map(|v| match v {
+                1 => -0.25,
+                4 => -0.75,
+                _ => 0.0,
+            });
+            pair([11, t[0], t[1], t[2]], [1.0, alpha[0], alpha[1], alpha[2]])
         };
-        let pairs = vec![inside, corner([4, 1, 3], 0), corner([1, 4, 2], 1), inside, corner([3, 7, 4], 2)];
+        let inside = pair([10, 0, 1, 3], [1.0, -0.2, -0.3, -0.5]);
+        let pairs = vec![
+            inside,
+            corner([4, 1, 3], 0),
+            on_edge([4, 1, 3]),
+            corner([1, 4, 2], 1),
+            on_edge([1, 4, 2]),
+            corner([3, 7, 4], 2),
+        ];
         let distinct = distinct_features(pairs);
-        assert_eq!(distinct.len(), 2);
-        assert_eq!((distinct[0].vertices[0], distinct[0].copies), (10, 2));
-        assert_eq!((distinct[1].vertices, distinct[1].copies), ([9, 4, 1, 3], 3));
+        let found: Vec<_> = distinct.iter().map(|c| (c.vertices, c.copies)).collect();
+        assert_eq!(found, [([10, 0, 1, 3], 1), ([9, 4, 1, 3], 3), ([11, 4, 1, 3], 2)]);
     }
 
     #[test]
