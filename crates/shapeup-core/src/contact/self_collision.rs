@@ -205,8 +205,13 @@ pub(crate) fn detect_self_contacts(
 /// interior (1 + 3) is that one vertex–triangle pair, and two edges crossing in their interiors
 /// (2 + 2) that one edge–edge pair. So only the others are sorted by their features.
 fn distinct_features(mut pairs: Vec<Pair>) -> Vec<Pair> {
-    let mut keys: Vec<(u128, u32)> =
-        pairs.par_iter().enumerate().filter_map(|(i, c)| Some((reduced_feature_key(c)?, i as u32))).collect();
+    // Fewer than four features: the last slot is unused.
+    let mut keys: Vec<(FeatureKey, u32)> = pairs
+        .par_iter()
+        .enumerate()
+        .map(|(i, c)| (feature_key(c), i as u32))
+        .filter(|((key, _), _)| key[3] == u32::MAX)
+        .collect();
     if keys.is_empty() {
         return pairs;
     }
@@ -239,34 +244,29 @@ fn distinct_features(mut pairs: Vec<Pair>) -> Vec<Pair> {
     pairs
 }
 
-/// The features of a pair with fewer than four (None for the others, which have no copies),
-/// packed: both sides' vertices with α ≠ 0, each side sorted, the smaller side first, in the
-/// low 96 bits (unused slots u32::MAX), and how many the first side has above them.
-fn reduced_feature_key(c: &Pair) -> Option<u128> {
+/// Both sides' vertices with α ≠ 0, each side sorted, the smaller side first (unused slots
+/// u32::MAX), and how many the first side has.
+type FeatureKey = ([u32; 4], u8);
+
+fn feature_key(c: &Pair) -> FeatureKey {
     let side = |positive: bool| {
-        let mut out = [u32::MAX; 3];
+        let mut out = [u32::MAX; 4];
         let mut n = 0;
         for (&v, &a) in c.vertices.iter().zip(&c.alpha) {
             if a != 0.0 && (a > 0.0) == positive {
-                if n == 3 {
-                    return None;
-                }
                 out[n] = v;
                 n += 1;
             }
         }
         out[..n].sort_unstable();
-        Some((out, n))
+        (out, n)
     };
-    let ((p, np), (m, nm)) = (side(true)?, side(false)?);
-    if np + nm > 3 {
-        return None;
-    }
+    let ((p, np), (m, nm)) = (side(true), side(false));
     let ((first, n1), (second, n2)) = if (p, np) <= (m, nm) { ((p, np), (m, nm)) } else { ((m, nm), (p, np)) };
-    let mut slots = [u32::MAX; 3];
-    slots[..n1].copy_from_slice(&first[..n1]);
-    slots[n1..n1 + n2].copy_from_slice(&second[..n2]);
-    Some((n1 as u128) << 96 | u128::from(slots[0]) << 64 | u128::from(slots[1]) << 32 | u128::from(slots[2]))
+    let mut key = [u32::MAX; 4];
+    key[..n1].copy_from_slice(&first[..n1]);
+    key[n1..n1 + n2].copy_from_slice(&second[..n2]);
+    (key, n1 as u8)
 }
 
 /// The unit normal of a pair whose closest points are `d` apart and the distance it must keep
@@ -421,29 +421,6 @@ mod tests {
                 }
             }
         }
-    }
-
-    /// Both sides' vertices with α ≠ 0, each side sorted, the smaller side first, and how
-    /// many the first side has: the constraint a pair makes, whatever its number of features.
-    fn feature_key(c: &Pair) -> ([u32; 4], u8) {
-        let side = |positive: bool| {
-            let mut out = [u32::MAX; 4];
-            let mut n = 0;
-            for (&v, &a) in c.vertices.iter().zip(&c.alpha) {
-                if a != 0.0 && (a > 0.0) == positive {
-                    out[n] = v;
-                    n += 1;
-                }
-            }
-            out[..n].sort_unstable();
-            (out, n)
-        };
-        let ((p, np), (m, nm)) = (side(true), side(false));
-        let ((first, n1), (second, n2)) = if (p, np) <= (m, nm) { ((p, np), (m, nm)) } else { ((m, nm), (p, np)) };
-        let mut key = [u32::MAX; 4];
-        key[..n1].copy_from_slice(&first[..n1]);
-        key[n1..n1 + n2].copy_from_slice(&second[..n2]);
-        (key, n1 as u8)
     }
 
     #[test]
