@@ -165,6 +165,9 @@ def test_bad_contact_settings_raise():
         sim.set_contact(self_collision="yes")  # type: ignore[arg-type]
     with pytest.raises(TypeError, match="thickness must be a number"):
         sim.set_contact(thickness="thick")  # type: ignore[arg-type]
+    # Self-collision refuses a thickness over the mean edge length (colliders alone take it).
+    with pytest.raises(ValueError, match=r"contact\]: thickness 1e1 is over the mean edge length"):
+        sim.set_contact(self_collision=True, thickness=10.0)
     assert sim.contact == {"self_collision": False, "thickness": None, "friction": 0.0}
     sim.set_contact(self_collision=True, thickness=0.01)
     assert sim.contact == {"self_collision": True, "thickness": 0.01, "friction": 0.0}

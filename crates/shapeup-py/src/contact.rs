@@ -9,9 +9,7 @@ use crate::errors::value_error;
 use numpy::PyArray1;
 use pyo3::prelude::*;
 use serde_json::{Map, Value};
-use shapeup_core::contact::{
-    ColliderSpec, ContactModel, ContactParams, ContactSettings, DEFAULT_THICKNESS_FRACTION, ShapeSpec,
-};
+use shapeup_core::contact::{ColliderSpec, ContactModel, ContactParams, ContactSettings, ShapeSpec};
 use shapeup_core::geometry::{RestGeometry, WorkingFrame, mean_edge_length};
 use shapeup_core::mesh::Mesh as CoreMesh;
 use std::path::Path;
@@ -23,10 +21,13 @@ pub(crate) struct ContactSetup {
     settings: ContactSettings,
 }
 
-/// The contact thickness: the settings' or [`DEFAULT_THICKNESS_FRACTION`] × the rest shape's
-/// mean edge length (as a scene with `normalize = false`).
-fn thickness(settings: &ContactSettings, rest: &RestGeometry) -> f64 {
-    settings.thickness.unwrap_or_else(|| DEFAULT_THICKNESS_FRACTION * mean_edge_length(rest))
+/// The contact thickness: the settings' or the default fraction of the rest shape's mean edge
+/// length (as a scene with `normalize = false`).
+///
+/// # Errors
+/// `ValueError` "[contact]: …": a self-collision thickness over the mean edge length.
+fn thickness(settings: &ContactSettings, rest: &RestGeometry) -> PyResult<f64> {
+    settings.resolve_thickness(1.0, mean_edge_length(rest)).map_err(|e| value_error(format!("[contact]: {e}")))
 }
 
 impl ContactSetup {
@@ -42,7 +43,7 @@ impl ContactSetup {
         if colliders.is_empty() && !settings.self_collision {
             return Ok(None);
         }
-        let thickness = thickness(settings, rest);
+        let thickness = thickness(settings, rest)?;
         let built = colliders
             .iter()
             .enumerate()

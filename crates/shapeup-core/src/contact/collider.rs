@@ -69,13 +69,19 @@ impl Collider {
         Proximity { point: self.motion.apply(p.point, t), normal: self.motion.turn(p.normal, t), distance: p.distance }
     }
 
-    /// [`Shape::segment_entry`] against the collider as it is at time t.
-    pub fn segment_entry_at(&self, x0: DVec3, x1: DVec3, t: f64) -> Option<(f64, DVec3)> {
+    /// [`Shape::segment_entry`] of a point moving from x0 at time t0 to x1 at t1, seen from the
+    /// collider: the path x0 → x1 in the collider's own frame (x0 taken back by its pose at t0,
+    /// x1 by its pose at t1), so that a collider which sweeps over a point within the step is
+    /// caught as a point that crosses a still one is. The entry point and the outward normal
+    /// there, where the collider is at t1.
+    pub fn segment_entry_at(&self, x0: DVec3, t0: f64, x1: DVec3, t1: f64) -> Option<(DVec3, DVec3)> {
         if self.motion.is_static() {
-            return self.shape.segment_entry(x0, x1);
+            let (s, n) = self.shape.segment_entry(x0, x1)?;
+            return Some((x0 + s * (x1 - x0), n));
         }
-        let (s, n) = self.shape.segment_entry(self.motion.invert(x0, t), self.motion.invert(x1, t))?;
-        Some((s, self.motion.turn(n, t)))
+        let (y0, y1) = (self.motion.invert(x0, t0), self.motion.invert(x1, t1));
+        let (s, n) = self.shape.segment_entry(y0, y1)?;
+        Some((self.motion.apply(y0 + s * (y1 - y0), t1), self.motion.turn(n, t1)))
     }
 
     /// How far the collider's material point that is at `y` at time `t1` moved since `t0`.

@@ -20,7 +20,8 @@ pub use collider::{Collider, Motion};
 pub use model::{ContactModel, ContactParams, ContactStats};
 pub use shape::{MeshShape, Proximity, Shape};
 pub use spec::{
-    COLLIDER_TYPES, ColliderError, ColliderSpec, ContactSettings, DEFAULT_THICKNESS_FRACTION, ShapeSpec, mesh_placement,
+    COLLIDER_TYPES, ColliderError, ColliderSpec, ContactSettings, DEFAULT_THICKNESS_FRACTION,
+    MAX_SELF_THICKNESS_FRACTION, ShapeSpec, mesh_placement,
 };
 
 use crate::solver::{SolveError, SolveReport, System};

@@ -178,8 +178,8 @@ impl ContactModel {
                     let (point, normal) = if near.distance < margin + c.displacement(x, t0, t1).length() {
                         (near.point, near.normal)
                     } else {
-                        let (t, normal) = c.segment_entry_at(x, x + reach, t1)?;
-                        (x + t * reach, normal)
+                        let (entry, normal) = c.segment_entry_at(x, t0, x + reach, t1)?;
+                        (entry, normal)
                     };
                     let offset = normal.dot(point) + thickness;
                     let shift = c.displacement(point, t0, t1);
@@ -449,8 +449,7 @@ impl ContactModel {
                         }
                     }
                     for c in colliders {
-                        if let Some((t, normal)) = c.segment_entry_at(start[v], *p, t1) {
-                            let entry = start[v] + t * (*p - start[v]);
+                        if let Some((entry, normal)) = c.segment_entry_at(start[v], t0, *p, t1) {
                             *p = entry + thickness * normal;
                         }
                         let near = c.closest_at(*p, t1);

@@ -16,6 +16,11 @@ use std::path::PathBuf;
 /// kept with a few iterations per step.
 pub const DEFAULT_THICKNESS_FRACTION: f64 = 0.25;
 
+/// Mean edge length × this is the largest self-collision thickness. Beyond it every vertex
+/// starts within the thickness of the triangles two rings away: the rest shape is all contact
+/// (millions of pairs on a 61×61 cloth at 6 edge lengths) and pushes itself apart.
+pub const MAX_SELF_THICKNESS_FRACTION: f64 = 1.0;
+
 /// The `[contact]` table.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -44,15 +49,42 @@ impl ContactSettings {
         if let Some(t) = self.thickness
             && !(t.is_finite() && (0.0..=MAX_MAGNITUDE).contains(&t))
         {
-            return Err(ColliderError::Invalid(format!("thickness must be a finite number in [0, 1e12], found {t}")));
+            return Err(ColliderError::Invalid(format!(
+                "thickness must be a finite number in [0, 1e12], found {}",
+                shown(t)
+            )));
         }
         if !(self.friction.is_finite() && (0.0..=MAX_MAGNITUDE).contains(&self.friction)) {
             return Err(ColliderError::Invalid(format!(
                 "friction must be a finite number in [0, 1e12], found {}",
-                self.friction
+                shown(self.friction)
             )));
         }
         Ok(())
+    }
+
+    /// The thickness in working units: `thickness` (input units) × `scale`, else
+    /// [`DEFAULT_THICKNESS_FRACTION`] × `mean_edge_length` (working units).
+    ///
+    /// # Errors
+    /// With `self_collision`, a thickness over [`MAX_SELF_THICKNESS_FRACTION`] × the mean edge
+    /// length, named with both in input units.
+    pub fn resolve_thickness(&self, scale: f64, mean_edge_length: f64) -> Result<f64, ColliderError> {
+        let thickness = match self.thickness {
+            Some(t) => t * scale,
+            None => DEFAULT_THICKNESS_FRACTION * mean_edge_length,
+        };
+        let limit = MAX_SELF_THICKNESS_FRACTION * mean_edge_length;
+        if self.self_collision && thickness > limit {
+            return Err(ColliderError::Invalid(format!(
+                "thickness {:e} is over the mean edge length {:e} (input units): with self_collision every vertex \
+                 would start in contact with its neighbours' triangles; give at most the mean edge length (default \
+                 {DEFAULT_THICKNESS_FRACTION} of it), or refine the mesh",
+                thickness / scale,
+                limit / scale
+            )));
+        }
+        Ok(thickness)
     }
 }
 
@@ -187,6 +219,12 @@ fn check_rotate(r: &Rotate) -> Result<(), ColliderError> {
     check_turn("rotate", r.axis, "angle_deg", r.angle_deg, r.center)
 }
 
+/// A value as a message shows it: plainly at ordinary magnitudes, in exponent form beyond
+/// (1e300 would print as 301 digits).
+fn shown(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() || (1e-4..1e7).contains(&v.abs()) { format!("{v}") } else { format!("{v:e}") }
+}
+
 fn invalid(message: impl Into<String>) -> ColliderError {
     ColliderError::Invalid(message.into())
 }
@@ -195,7 +233,7 @@ fn take<T: serde::de::DeserializeOwned>(entry: &mut Map<String, Value>, key: &st
     match entry.remove(key) {
         None => Ok(None),
         // A scene's nan or inf arrives as null (JSON has no such numbers).
-        Some(v) if contains_null(&v) => Err(invalid(format!("`{key}` must be finite numbers (not nan or inf)"))),
+        Some(v) if contains_null(&v) => Err(invalid(format!("`{key}` must hold finite numbers only (not nan or inf)"))),
         Some(v) => serde_json::from_value(v).map(Some).map_err(|e| invalid(format!("`{key}`: {e}"))),
     }
 }
@@ -243,10 +281,10 @@ fn finite3(key: &str, v: [f64; 3]) -> Result<DVec3, ColliderError> {
 
 fn positive(key: &str, v: f64) -> Result<f64, ColliderError> {
     if !(v.is_finite() && v > 0.0) {
-        return Err(invalid(format!("`{key}` must be a finite number > 0, found {v}")));
+        return Err(invalid(format!("`{key}` must be a finite number > 0, found {}", shown(v))));
     }
     if v > MAX_MAGNITUDE {
-        return Err(invalid(format!("`{key}` is too large: at most {MAX_MAGNITUDE:e}, found {v}")));
+        return Err(invalid(format!("`{key}` is too large: at most {MAX_MAGNITUDE:e}, found {}", shown(v))));
     }
     Ok(v)
 }
@@ -426,12 +464,18 @@ impl ColliderSpec {
                 if let Some(t) = thickness
                     && !(t.is_finite() && (0.0..=MAX_MAGNITUDE).contains(t))
                 {
-                    return Err(invalid(format!("`thickness` must be a finite number in [0, 1e12], found {t}")));
+                    return Err(invalid(format!(
+                        "`thickness` must be a finite number in [0, 1e12], found {}",
+                        shown(*t)
+                    )));
                 }
             }
         }
         if !(self.friction.is_finite() && (0.0..=MAX_MAGNITUDE).contains(&self.friction)) {
-            return Err(invalid(format!("`friction` must be a finite number in [0, 1e12], found {}", self.friction)));
+            return Err(invalid(format!(
+                "`friction` must be a finite number in [0, 1e12], found {}",
+                shown(self.friction)
+            )));
         }
         finite3("velocity", self.velocity)?;
         if let Some(s) = &self.spin {
@@ -488,6 +532,18 @@ impl ColliderSpec {
                 if mesh.triangles.is_empty() {
                     return Err(fail(format!("has no faces{}", mesh.why_no_triangles())));
                 }
+                // As every scene number: beyond ±1e12 the distance queries lose all precision.
+                if let Some((v, p)) = mesh
+                    .positions
+                    .iter()
+                    .enumerate()
+                    .find(|(_, p)| !(p.is_finite() && p.abs().max_element() <= MAX_MAGNITUDE))
+                {
+                    return Err(fail(format!(
+                        "vertex {v} (from 0) is at ({:e}, {:e}, {:e}): coordinates must be finite numbers within ±1e12",
+                        p.x, p.y, p.z
+                    )));
+                }
                 let is_closed = every_edge_twice(&mesh.triangles);
                 if *closed == Some(true) && !is_closed {
                     return Err(fail(
@@ -535,6 +591,20 @@ mod tests {
     }
 
     #[test]
+    fn the_thickness_resolves_to_the_default_fraction_and_self_collision_caps_it() {
+        let (scale, edge) = (2.0, 0.1);
+        let settings = |self_collision, thickness| ContactSettings { self_collision, thickness, friction: 0.0 };
+        let resolved = |s: ContactSettings| s.resolve_thickness(scale, edge);
+        assert_eq!(resolved(settings(true, None)).ok(), Some(DEFAULT_THICKNESS_FRACTION * edge));
+        // Input units × scale; at most the mean edge length with self-collision.
+        assert_eq!(resolved(settings(true, Some(0.05))).ok(), Some(0.1));
+        let err = resolved(settings(true, Some(0.051))).map(|_| ()).unwrap_err().to_string();
+        assert!(err.contains("thickness 5.1e-2 is over the mean edge length 5e-2"), "{err}");
+        // Colliders alone take any thickness.
+        assert_eq!(resolved(settings(false, Some(10.0))).ok(), Some(20.0));
+    }
+
+    #[test]
     fn every_type_reads_and_writes_back() {
         for text in [
             r#"{"type": "plane", "point": [0, 0, 0], "normal": [0, 1, 0], "friction": 0.3}"#,
@@ -567,7 +637,7 @@ mod tests {
             (r#"{"radius": 1}"#, "missing `type`"),
             (r#"{"type": "sphere", "center": [0, 0, 0], "radius": 1e300}"#, "`radius` is too large"),
             (r#"{"type": "box", "min": [-1e300, -1, -1], "max": [1, 1, 1]}"#, "`min` is too large"),
-            (r#"{"type": "sphere", "center": [0, null, 0], "radius": 1}"#, "`center` must be finite numbers"),
+            (r#"{"type": "sphere", "center": [0, null, 0], "radius": 1}"#, "`center` must hold finite numbers only"),
         ] {
             let message = ColliderSpec::from_entry(entry(text)).expect_err(text).to_string();
             assert!(message.contains(words), "{text}: {message}");

@@ -3,7 +3,7 @@
 
 use super::{Scene, SceneError, SolverSettings};
 use crate::constraints::{attach_degenerate_vertices, held_vertices};
-use crate::contact::{ContactModel, ContactParams, DEFAULT_THICKNESS_FRACTION};
+use crate::contact::{ContactModel, ContactParams};
 use crate::dynamics::{DynamicsParams, ParamError, Simulation};
 use crate::geometry::{RestGeometry, WorkingFrame, lumped_masses_surface, lumped_masses_volume};
 use crate::io::{Attributes, read_mesh};
@@ -153,22 +153,14 @@ impl Scene {
         })
     }
 
-    /// The contact thickness in working units: `[contact] thickness` (input units) or
-    /// [`DEFAULT_THICKNESS_FRACTION`] × the rest shape's mean edge length.
-    pub fn contact_thickness(&self, rest: &RestGeometry, frame: &WorkingFrame) -> f64 {
-        match self.contact.thickness {
-            Some(t) => t * frame.scale,
-            None => DEFAULT_THICKNESS_FRACTION * crate::geometry::mean_edge_length(rest),
-        }
-    }
-
     /// The scene's colliders and `[contact]` settings as a [`ContactModel`] (`None` when there
     /// are no colliders and no self-collision). Counts, as one warning, the rest shape's
     /// vertices that start inside a collider or within the thickness of it.
     ///
     /// # Errors
     /// [`SceneError::Invalid`] naming `colliders[i]`: a mesh that cannot be read, has no faces
-    /// or is said to be closed while open.
+    /// or is said to be closed while open; naming `[contact]`: a self-collision thickness over
+    /// the mean edge length ([`crate::contact::ContactSettings::resolve_thickness`]).
     pub fn build_contact(
         &self,
         mesh: &Mesh,
@@ -179,7 +171,10 @@ impl Scene {
         if self.colliders.is_empty() && !self.contact.self_collision {
             return Ok(None);
         }
-        let thickness = self.contact_thickness(rest, frame);
+        let thickness =
+            self.contact.resolve_thickness(frame.scale, crate::geometry::mean_edge_length(rest)).map_err(|e| {
+                SceneError::Invalid { path: self.file.clone(), entry: "[contact]".into(), message: e.to_string() }
+            })?;
         let colliders = self
             .colliders
             .iter()

@@ -17,10 +17,26 @@ struct RawScene {
     constraints: Vec<Entry>,
     #[serde(default)]
     colliders: Vec<Entry>,
-    #[serde(default)]
+    #[serde(default, deserialize_with = "one_table")]
     contact: crate::contact::ContactSettings,
     #[serde(default)]
     output: OutputSettings,
+}
+
+/// `[contact]` as one table. A derived struct also reads a list positionally, so `[[contact]]`
+/// would be refused as "expected a boolean" (its first field) instead of by what is wrong.
+fn one_table<'de, D: serde::Deserializer<'de>>(deserializer: D) -> Result<crate::contact::ContactSettings, D::Error> {
+    struct OneTable;
+    impl<'de> serde::de::Visitor<'de> for OneTable {
+        type Value = crate::contact::ContactSettings;
+        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+            f.write_str("one [contact] table (not a list: [[contact]])")
+        }
+        fn visit_map<A: serde::de::MapAccess<'de>>(self, map: A) -> Result<Self::Value, A::Error> {
+            crate::contact::ContactSettings::deserialize(serde::de::value::MapAccessDeserializer::new(map))
+        }
+    }
+    deserializer.deserialize_map(OneTable)
 }
 
 /// Scene file syntax.
@@ -122,7 +138,12 @@ impl Scene {
             message: e.0,
         })?;
         let mut groups: Vec<GroupSpec> = Vec::with_capacity(raw.constraints.len());
-        for (i, Entry(entry)) in raw.constraints.into_iter().enumerate() {
+        for (i, entry) in raw.constraints.into_iter().enumerate() {
+            let entry = entry.table().map_err(|message| SceneError::Invalid {
+                path: path.into(),
+                entry: format!("constraints[{i}]"),
+                message,
+            })?;
             let name = entry.get("name").and_then(Value::as_str).map(|n| format!(" (\"{n}\")")).unwrap_or_default();
             let existing: Vec<&str> = groups.iter().map(|g| g.name.as_str()).collect();
             let group = GroupSpec::from_entry_among(entry, &existing).map_err(|e| SceneError::Invalid {
@@ -141,12 +162,11 @@ impl Scene {
             .colliders
             .into_iter()
             .enumerate()
-            .map(|(i, Entry(entry))| {
-                crate::contact::ColliderSpec::from_entry(entry).map_err(|e| SceneError::Invalid {
-                    path: path.into(),
-                    entry: format!("colliders[{i}]"),
-                    message: e.to_string(),
-                })
+            .map(|(i, entry)| {
+                let invalid =
+                    |message| SceneError::Invalid { path: path.into(), entry: format!("colliders[{i}]"), message };
+                crate::contact::ColliderSpec::from_entry(entry.table().map_err(invalid)?)
+                    .map_err(|e| invalid(e.to_string()))
             })
             .collect::<Result<Vec<_>, _>>()?;
         Ok(Scene {

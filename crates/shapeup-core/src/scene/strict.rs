@@ -7,18 +7,33 @@ use serde_json::{Map, Value};
 /// How deep a constraint entry may nest (`box = { min = [..] }` is 3 levels).
 const MAX_ENTRY_DEPTH: usize = 32;
 
-/// A `[[constraints]]` entry as JSON values, read strictly: a key given twice is refused
-/// (serde_json's own map keeps the last one silently) and so is nesting deeper than
-/// [`MAX_ENTRY_DEPTH`] (building `serde_json::Value` recurses once per level, and TOML's dotted
-/// keys nest without its parser's limit).
-pub(super) struct Entry(pub(super) Map<String, Value>);
+/// A `[[constraints]]` or `[[colliders]]` entry as JSON values, read strictly: a key given
+/// twice is refused (serde_json's own map keeps the last one silently) and so is nesting deeper
+/// than [`MAX_ENTRY_DEPTH`] (building `serde_json::Value` recurses once per level, and TOML's
+/// dotted keys nest without its parser's limit). Any value is read, so that one which is not a
+/// table is refused by [`Entry::table`] with its list and index (a JSON `null` in the list).
+pub(super) struct Entry(Value);
+
+impl Entry {
+    /// The entry's keys.
+    ///
+    /// # Errors
+    /// A message for an entry that is not a table, naming what it is.
+    pub(super) fn table(self) -> Result<Map<String, Value>, String> {
+        match self.0 {
+            Value::Object(map) => Ok(map),
+            Value::Null => Err("must be a table, found null".into()),
+            Value::Bool(_) => Err("must be a table, found a boolean".into()),
+            Value::Number(_) => Err("must be a table, found a number".into()),
+            Value::String(_) => Err("must be a table, found a string".into()),
+            Value::Array(_) => Err("must be a table, found a list".into()),
+        }
+    }
+}
 
 impl<'de> Deserialize<'de> for Entry {
     fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
-        match deserializer.deserialize_map(StrictValue { depth: 0 })? {
-            Value::Object(map) => Ok(Entry(map)),
-            _ => Err(serde::de::Error::custom("a constraint entry must be a table")),
-        }
+        deserializer.deserialize_any(StrictValue { depth: 0 }).map(Entry)
     }
 }
 

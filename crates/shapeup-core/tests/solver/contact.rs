@@ -252,8 +252,8 @@ normal = [0.0, 1.0, 0.0]
 
 #[test]
 fn a_self_collision_thickness_near_the_edge_length_is_warned_about_once() {
-    // An 11 × 11 sheet has edges of 0.1: a thickness of 0.5 puts non-neighbouring pairs within
-    // it at rest, 0.01 none.
+    // An 11 × 11 sheet has edges of 0.1 (and diagonals of 0.14): a thickness of 0.11 puts
+    // non-neighbouring pairs within it at rest, 0.01 none.
     let text = |t: f64| {
         format!(
             "[mesh]\ngenerate = {{ kind = \"cloth\", vertices = [11, 11], size = [1.0, 1.0] }}\nnormalize = false\n\
@@ -261,8 +261,12 @@ fn a_self_collision_thickness_near_the_edge_length_is_warned_about_once() {
              [contact]\nself_collision = true\nthickness = {t}\n"
         )
     };
-    let thick = scene(&text(0.5)).load().unwrap();
+    // 0.11: each vertex is 0.1 from the triangles two rings away. Over the mean edge length
+    // (about 0.114) the scene is refused, naming [contact].
+    let thick = scene(&text(0.11)).load().unwrap();
     assert!(thick.warnings.count("self_contact_at_rest") > 100, "{:?}", thick.warnings.to_json());
+    let refused = scene(&text(0.5)).load().map(|_| ()).unwrap_err().to_string();
+    assert!(refused.contains("[contact]: thickness 5e-1 is over the mean edge length"), "{refused}");
     assert_eq!(thick.warnings.iter().filter(|w| w.kind == "self_contact_at_rest").count(), 1, "one warning");
     let thin = scene(&text(0.01)).load().unwrap();
     assert_eq!(thin.warnings.count("self_contact_at_rest"), 0, "{:?}", thin.warnings.to_json());
@@ -371,6 +375,41 @@ fn a_rising_sphere_lifts_the_cloth_and_never_enters_it() {
     let highest = sim.simulation.positions().iter().map(|p| p.y).fold(f64::NEG_INFINITY, f64::max);
     // After 2 s the sphere's top is at 0.8: the cloth rides on it.
     assert!(highest > 0.75, "the cloth was not lifted: highest y {highest}");
+}
+
+#[test]
+fn a_thin_fast_plate_carries_the_cloth_instead_of_passing_through_it() {
+    // A 2 cm plate rising at 3 m/s moves 5 cm per step, 2.5 of its thicknesses: checked only
+    // where it is at each step's end, it would pass by every vertex of the cloth above it. The
+    // path test in the plate's own frame sees it sweep over them. The cloth (0.4 m, no gravity)
+    // lies within the plate's 0.6 m: all of it is carried.
+    let cloth = CLOTH
+        .replace("vertices = [31, 31], size = [1.0, 1.0]", "vertices = [21, 21], size = [0.4, 0.4]")
+        .replace("iterations = 10\n", "iterations = 10\ngravity = [0.0, 0.0, 0.0]\n");
+    let text = format!(
+        "{cloth}\n[[colliders]]\ntype = \"box\"\nmin = [-0.3, -0.32, -0.3]\nmax = [0.3, -0.3, 0.3]\nvelocity = [0.0, 3.0, 0.0]\n"
+    );
+    let (_, mut sim) = start(&text);
+    let h = sim.simulation.params().time_step;
+    assert!(3.0 * h > 2.0 * 0.02, "the plate must move more than its thickness per step (h = {h})");
+    let mut carried = 0;
+    for k in 1..=40 {
+        sim.step().unwrap();
+        let top = -0.3 + 3.0 * k as f64 * h;
+        if top <= 0.0 {
+            continue;
+        }
+        let (v, lowest) = sim
+            .simulation
+            .positions()
+            .iter()
+            .map(|p| p.y)
+            .enumerate()
+            .fold((0, f64::INFINITY), |a, (v, y)| if y < a.1 { (v, y) } else { a });
+        assert!(lowest > top, "step {k}: vertex {v} at y {lowest} is behind the plate's top {top}");
+        carried += 1;
+    }
+    assert!(carried > 10, "the plate never passed the cloth's plane");
 }
 
 #[test]

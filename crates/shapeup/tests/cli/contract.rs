@@ -1334,6 +1334,13 @@ fn bad_colliders_name_the_entry_and_write_nothing() {
         ("[[colliders]]\ntype = \"mesh\"\npath = \"missing.obj\"\n", "missing.obj"),
         ("[contact]\nthickness = -0.1\n", "[contact]: thickness"),
         ("[contact]\nfriction = -0.1\n", "[contact]: friction"),
+        // Edges of 1/3 and 0.47: at 0.5 every vertex would touch its neighbours' triangles.
+        (
+            "[contact]\nself_collision = true\nthickness = 0.5\n",
+            "[contact]: thickness 5e-1 is over the mean edge length",
+        ),
+        ("[[contact]]\nthickness = 0.1\n", "one [contact] table (not a list: [[contact]])"),
+        ("[[colliders]]\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1e300\n", "found 1e300"),
     ] {
         let scene = ws.scene("bad.toml", &format!("{good}{bad}"));
         let out = simulate_in(None, &scene, &dir, &["--frames", "3"]);
@@ -1344,7 +1351,9 @@ fn bad_colliders_name_the_entry_and_write_nothing() {
     // A mesh with no faces, and an open mesh used as closed.
     write(&ws.path("points.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\n");
     write(&ws.path("open.obj"), "v 0 0 0\nv 1 0 0\nv 0 0 1\nf 1 3 2\n");
+    write(&ws.path("huge.obj"), "v 0 0 0\nv 1e100 0 0\nv 0 0 1\nf 1 3 2\n");
     for (bad, needle) in [
+        ("[[colliders]]\ntype = \"mesh\"\npath = \"huge.obj\"\n", "vertex 1 (from 0) is at (1e100, 0e0, 0e0)"),
         ("[[colliders]]\ntype = \"mesh\"\npath = \"points.obj\"\n", "no faces"),
         ("[[colliders]]\ntype = \"mesh\"\npath = \"open.obj\"\nclosed = true\n", "is open"),
     ] {
@@ -1352,6 +1361,20 @@ fn bad_colliders_name_the_entry_and_write_nothing() {
         let out = simulate_in(None, &scene, &dir, &["--frames", "3"]);
         assert_eq!(out.code, Some(1), "{bad}: {}", out.describe());
         assert!(out.stderr.contains(needle) && out.stderr.contains("colliders[0]"), "{bad}: {}", out.stderr);
+    }
+    // JSON lists with something other than a table in them: named by list and index.
+    for (list, needle) in [
+        ("colliders", "colliders[0]: must be a table, found null"),
+        ("constraints", "constraints[1]: must be a table, found a number"),
+    ] {
+        let entries = if list == "colliders" { r#"[null]"# } else { r#"[{"type": "edge_spring"}, 3]"# };
+        let text = format!(
+            r#"{{"mesh": {{"generate": {{"kind": "cloth", "vertices": [4, 4], "size": [1.0, 1.0]}}}}, "solver": {{"mode": "dynamic"}}, "{list}": {entries}}}"#
+        );
+        let scene = ws.scene("bad.json", &text);
+        let out = simulate_in(None, &scene, &dir, &["--frames", "3"]);
+        assert_eq!(out.code, Some(1), "{list}: {}", out.describe());
+        assert!(out.stderr.contains(needle) && out.stderr.contains("bad.json"), "{list}: {}", out.stderr);
     }
     assert!(!dir.exists(), "no output directory after errors");
 }
