@@ -19,6 +19,12 @@ pub(crate) fn shown(text: &str) -> std::borrow::Cow<'_, str> {
     std::borrow::Cow::Owned(out)
 }
 
+/// A number as a message shows it: plainly at ordinary magnitudes, in exponent form beyond
+/// (1e300 would print as 301 digits).
+pub(crate) fn number(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() || (1e-4..1e7).contains(&v.abs()) { format!("{v}") } else { format!("{v:e}") }
+}
+
 /// Characters of a file's text that [`shown`] quotes.
 const SHOWN_CHARS: usize = 40;
 

@@ -6,6 +6,7 @@ use super::collider::{Collider, Motion};
 use super::shape::{MeshShape, Shape, rotation};
 use crate::geometry::WorkingFrame;
 use crate::motion::{Rotate, Spin};
+use crate::text::number;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 use serde_json::{Map, Value};
@@ -51,13 +52,13 @@ impl ContactSettings {
         {
             return Err(ColliderError::Invalid(format!(
                 "thickness must be a finite number in [0, 1e12], found {}",
-                shown(t)
+                number(t)
             )));
         }
         if !(self.friction.is_finite() && (0.0..=MAX_MAGNITUDE).contains(&self.friction)) {
             return Err(ColliderError::Invalid(format!(
                 "friction must be a finite number in [0, 1e12], found {}",
-                shown(self.friction)
+                number(self.friction)
             )));
         }
         Ok(())
@@ -219,12 +220,6 @@ fn check_rotate(r: &Rotate) -> Result<(), ColliderError> {
     check_turn("rotate", r.axis, "angle_deg", r.angle_deg, r.center)
 }
 
-/// A value as a message shows it: plainly at ordinary magnitudes, in exponent form beyond
-/// (1e300 would print as 301 digits).
-fn shown(v: f64) -> String {
-    if v == 0.0 || !v.is_finite() || (1e-4..1e7).contains(&v.abs()) { format!("{v}") } else { format!("{v:e}") }
-}
-
 fn invalid(message: impl Into<String>) -> ColliderError {
     ColliderError::Invalid(message.into())
 }
@@ -281,10 +276,10 @@ fn finite3(key: &str, v: [f64; 3]) -> Result<DVec3, ColliderError> {
 
 fn positive(key: &str, v: f64) -> Result<f64, ColliderError> {
     if !(v.is_finite() && v > 0.0) {
-        return Err(invalid(format!("`{key}` must be a finite number > 0, found {}", shown(v))));
+        return Err(invalid(format!("`{key}` must be a finite number > 0, found {}", number(v))));
     }
     if v > MAX_MAGNITUDE {
-        return Err(invalid(format!("`{key}` is too large: at most {MAX_MAGNITUDE:e}, found {}", shown(v))));
+        return Err(invalid(format!("`{key}` is too large: at most {MAX_MAGNITUDE:e}, found {}", number(v))));
     }
     Ok(v)
 }
@@ -466,7 +461,7 @@ impl ColliderSpec {
                 {
                     return Err(invalid(format!(
                         "`thickness` must be a finite number in [0, 1e12], found {}",
-                        shown(*t)
+                        number(*t)
                     )));
                 }
             }
@@ -474,7 +469,7 @@ impl ColliderSpec {
         if !(self.friction.is_finite() && (0.0..=MAX_MAGNITUDE).contains(&self.friction)) {
             return Err(invalid(format!(
                 "`friction` must be a finite number in [0, 1e12], found {}",
-                shown(self.friction)
+                number(self.friction)
             )));
         }
         finite3("velocity", self.velocity)?;
