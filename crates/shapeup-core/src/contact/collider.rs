@@ -69,6 +69,23 @@ impl Collider {
         Proximity { point: self.motion.apply(p.point, t), normal: self.motion.turn(p.normal, t), distance: p.distance }
     }
 
+    /// The feature of the collider closest to `x` as the collider is at time t0, carried by
+    /// its motion to where it is at t1 (point and outward normal there); the distance is the
+    /// one at t0. A vertex keeps the side of the collider it started the step on: a thin plate
+    /// that sweeps past it within the step pushes it from its front face, where the closest
+    /// feature at t1 would be the back face.
+    pub fn closest_from(&self, x: DVec3, t0: f64, t1: f64) -> Proximity {
+        if self.motion.is_static() {
+            return self.shape.closest(x);
+        }
+        let p = self.shape.closest(self.motion.invert(x, t0));
+        Proximity {
+            point: self.motion.apply(p.point, t1),
+            normal: self.motion.turn(p.normal, t1),
+            distance: p.distance,
+        }
+    }
+
     /// [`Shape::segment_entry`] of a point moving from x0 at time t0 to x1 at t1, seen from the
     /// collider: the path x0 → x1 in the collider's own frame (x0 taken back by its pose at t0,
     /// x1 by its pose at t1), so that a collider which sweeps over a point within the step is

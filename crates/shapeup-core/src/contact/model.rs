@@ -174,7 +174,7 @@ impl ContactModel {
                 let reach = 2.0 * (s - x);
                 let margin = thickness + reach.length();
                 colliders.iter().filter_map(move |c| {
-                    let near = c.closest_at(x, t1);
+                    let near = c.closest_from(x, t0, t1);
                     let (point, normal) = if near.distance < margin + c.displacement(x, t0, t1).length() {
                         (near.point, near.normal)
                     } else {
