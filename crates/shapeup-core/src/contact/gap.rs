@@ -56,13 +56,6 @@ impl Pair {
         self.normal.dot(self.combine(q)) - self.distance
     }
 
-    /// Tangential relative slip since the step's start.
-    #[inline]
-    pub(crate) fn slip(&self, q: &[DVec3], start: &[DVec3]) -> DVec3 {
-        let u = self.combine(q) - self.combine(start);
-        u - self.normal.dot(u) * self.normal
-    }
-
     pub(crate) fn terms(&self) -> impl Iterator<Item = (usize, f64)> + '_ {
         self.vertices.iter().zip(&self.alpha).map(|(&v, &a)| (v as usize, a))
     }

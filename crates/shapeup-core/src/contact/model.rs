@@ -78,6 +78,8 @@ pub struct ContactModel {
     /// iteration gathers per vertex, in parallel, instead of scattering per pair.
     pair_ptr: Vec<u32>,
     pair_shares: Vec<(u32, u32, f64)>,
+    /// Per self contact, Σ_j α_j x_j at the step's start (built with `pair_ptr`).
+    pair_start: Vec<DVec3>,
     /// Per self contact, its correction at the current iterate, zero when it does not push
     /// (scratch).
     pair_push: Vec<DVec3>,
@@ -118,6 +120,7 @@ impl ContactModel {
             by_vertex: vec![Vec::new(); n],
             pair_ptr: Vec::new(),
             pair_shares: Vec::new(),
+            pair_start: Vec::new(),
             pair_push: Vec::new(),
         }
     }
@@ -232,17 +235,26 @@ impl ContactModel {
             if self.pair_ptr.is_empty() {
                 self.share_pairs(weights);
             }
-            let (start, friction) = (&self.start, self.params.friction);
+            let friction = self.params.friction;
+            // Σ α_j q_j once per pair: its gap and, when it pushes, its slip since the step's
+            // start (Σ α_j x_j, kept per pair for the step) both come from it.
             self.pairs
                 .par_iter()
+                .zip(&self.pair_start)
                 .with_min_len(PAIRS_PER_TASK)
-                .map(|c| {
-                    let gap = c.gap(q);
+                .map(|(c, &at_start)| {
+                    let u = c.combine(q);
+                    let gap = c.normal.dot(u) - c.distance;
                     if gap >= 0.0 {
                         return DVec3::ZERO;
                     }
                     let push = -gap * c.normal;
-                    if friction > 0.0 { push - coulomb(c.slip(q, start), friction * -gap) } else { push }
+                    if friction > 0.0 {
+                        let slip = u - at_start;
+                        push - coulomb(slip - c.normal.dot(slip) * c.normal, friction * -gap)
+                    } else {
+                        push
+                    }
                 })
                 .collect_into_vec(&mut self.pair_push);
         }
@@ -325,6 +337,8 @@ impl ContactModel {
             }
         }
         self.pair_ptr = count;
+        let start = &self.start;
+        self.pairs.par_iter().map(|c| c.combine(start)).collect_into_vec(&mut self.pair_start);
     }
 
     /// Moves the vertices of `positions` that are inside a collider (as it is at time `t`) or

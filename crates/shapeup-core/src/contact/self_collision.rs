@@ -2,10 +2,11 @@
 //! within the thickness during a step.
 //!
 //! Broad phase: parry3d's BVHs over the boxes of each vertex, edge and triangle swept from the
-//! step's start x_n to its prediction s and grown by half the thickness (two boxes meet when
-//! their gap is under the thickness), refitted each step. One simultaneous traversal of the
-//! vertex tree and the triangle tree gives the vertex–triangle candidates, one of the edge tree
-//! against itself the edge–edge ones: each pair once, without a query per element. Narrow
+//! step's start x_n to its prediction s (less the surface's mean motion) and grown by half the
+//! thickness (two boxes meet when their gap is under the thickness), refitted each step. One
+//! simultaneous traversal of the vertex tree and the triangle tree gives the vertex–triangle
+//! candidates, one of the edge tree against itself the edge–edge ones: each pair once, without
+//! a query per element, each handed to the narrow phase as it is met. Narrow
 //! phase at x_n: the closest points (Ericson, "Real-Time Collision Detection", 2005, §5.1.5
 //! point–triangle and §5.1.9 segment–segment); a pair closer than the thickness plus twice its
 //! relative predicted motion is a contact, with the normal from the second closest point to
@@ -14,7 +15,7 @@
 use super::gap::Pair;
 use glam::DVec3;
 use parry3d_f64::bounding_volume::Aabb;
-use parry3d_f64::partitioning::{Bvh, BvhBuildStrategy};
+use parry3d_f64::partitioning::{Bvh, BvhBuildStrategy, BvhWorkspace};
 use rayon::prelude::*;
 
 /// The surface that collides with itself: its triangles, their edges and their vertices, and
@@ -84,12 +85,26 @@ fn to_parry(p: DVec3) -> parry3d_f64::math::Vector {
     parry3d_f64::math::Vector::new(p.x, p.y, p.z)
 }
 
-/// The box around the points at `start` and `predicted` of `vertices`, grown by `grow`.
-fn swept_box(vertices: &[u32], start: &[DVec3], predicted: &[DVec3], grow: f64) -> Aabb {
+/// The mean predicted motion of `vertices`: the translation they share (gravity's h² g in a
+/// falling or resting cloth), taken out of every swept box.
+fn common_motion(vertices: &[u32], start: &[DVec3], predicted: &[DVec3]) -> DVec3 {
+    if vertices.is_empty() {
+        return DVec3::ZERO;
+    }
+    let sum: DVec3 = vertices.par_iter().map(|&v| predicted[v as usize] - start[v as usize]).sum();
+    sum / vertices.len() as f64
+}
+
+/// The box around the points of `vertices` at `start` and at `predicted` less `drift`, grown
+/// by `grow`: the element's sweep in a frame that moves by `drift` over the step. Distances
+/// at each instant are the same in any frame that translates, so two elements that come
+/// within the thickness during the step still have meeting boxes; taking out the motion the
+/// surface shares keeps the boxes small.
+fn swept_box(vertices: &[u32], start: &[DVec3], predicted: &[DVec3], drift: DVec3, grow: f64) -> Aabb {
     let mut lo = DVec3::splat(f64::INFINITY);
     let mut hi = DVec3::splat(f64::NEG_INFINITY);
     for &v in vertices {
-        for p in [start[v as usize], predicted[v as usize]] {
+        for p in [start[v as usize], predicted[v as usize] - drift] {
             lo = lo.min(p);
             hi = hi.max(p);
         }
@@ -122,11 +137,12 @@ pub(crate) fn detect_self_contacts(
     }
     // Boxes grown by half the thickness each: two meet when their gap is under the thickness.
     let grow = 0.5 * thickness;
-    let boxes = |items: &[u32], size: usize| -> Vec<Aabb> {
-        items.par_chunks(size).map(|item| swept_box(item, start, predicted, grow)).collect()
-    };
     let Surface { triangles, edges, vertices, triangle_tree, edge_tree, vertex_tree } = surface;
     let (triangles, edges, vertices) = (&*triangles, &*edges, &*vertices);
+    let drift = common_motion(vertices, start, predicted);
+    let boxes = |items: &[u32], size: usize| -> Vec<Aabb> {
+        items.par_chunks(size).map(|item| swept_box(item, start, predicted, drift, grow)).collect()
+    };
     let ((triangle_bvh, edge_bvh), vertex_bvh) = rayon::join(
         || {
             rayon::join(
@@ -136,57 +152,73 @@ pub(crate) fn detect_self_contacts(
         },
         || vertex_tree.update(&boxes(vertices, 1)),
     );
-    // Candidates: vertex–triangle pairs from one traversal of the vertex tree against the
-    // triangle tree, edge–edge pairs from one of the edge tree against itself, less those that
-    // share a vertex.
-    let (vertex_triangle, edge_edge) = rayon::join(
-        || -> Vec<(u32, u32)> {
+    // Candidates, each passed to the narrow phase as it is met (no list of candidates):
+    // vertex–triangle pairs from one traversal of the vertex tree against the triangle tree,
+    // edge–edge pairs from one of the edge tree against itself, less those that share a
+    // vertex. The two traversals run side by side.
+    let (mut contacts, edge_edge) = rayon::join(
+        || -> Vec<Pair> {
             vertex_bvh
                 .leaf_pairs(triangle_bvh, |a, b| a.intersects(b))
-                .map(|(i, k)| (vertices[i as usize], k))
-                .filter(|&(v, k)| !triangles[k as usize].contains(&v))
+                .filter_map(|(i, k)| {
+                    vertex_triangle_contact(vertices[i as usize], triangles[k as usize], start, predicted, thickness)
+                })
                 .collect()
         },
-        || {
-            let mut pairs = edge_bvh.traverse_bvtt_single_tree_parallel::<false>();
-            pairs.retain(|&(i, j)| {
-                let (e, f) = (edges[i as usize], edges[j as usize]);
-                !(f.contains(&e[0]) || f.contains(&e[1]))
-            });
-            pairs
+        || -> Vec<Pair> {
+            let contact =
+                |i: u32, j: u32| edge_edge_contact(edges[i as usize], edges[j as usize], start, predicted, thickness);
+            if rayon::current_num_threads() > 1 {
+                // parry's parallel traversal lists the pairs (in the sequential one's order).
+                let pairs = edge_bvh.traverse_bvtt_single_tree_parallel::<false>();
+                pairs.par_iter().filter_map(|&(i, j)| contact(i, j)).collect()
+            } else {
+                let mut out = Vec::new();
+                edge_bvh.traverse_bvtt_single_tree::<false>(&mut BvhWorkspace::default(), &mut |i, j| {
+                    out.extend(contact(i, j));
+                });
+                out
+            }
         },
     );
-    // Narrow phase at x_n.
-    let mut contacts: Vec<Pair> = vertex_triangle
-        .par_iter()
-        .filter_map(|&(v, k)| {
-            let t = triangles[k as usize];
-            let x = start[v as usize];
-            let (c, b) = closest_on_triangle(x, t.map(|i| start[i as usize]));
-            let (normal, target) = separation(x - c, thickness, || relative_motion(&[v], &t, start, predicted))?;
-            Some(Pair {
-                vertices: [v, t[0], t[1], t[2]],
-                alpha: [1.0, -b[0], -b[1], -b[2]],
-                normal,
-                distance: target,
-                copies: 1,
-            })
-        })
-        .collect();
-    contacts.par_extend(edge_edge.par_iter().filter_map(|&(i, j)| {
-        let (e, f) = (edges[i as usize], edges[j as usize]);
-        let (p, r) = (e.map(|v| start[v as usize]), f.map(|v| start[v as usize]));
-        let (s, t, a, b) = closest_between_segments(p[0], p[1], r[0], r[1]);
-        let (normal, target) = separation(a - b, thickness, || relative_motion(&e, &f, start, predicted))?;
-        Some(Pair {
-            vertices: [e[0], e[1], f[0], f[1]],
-            alpha: [1.0 - s, s, -(1.0 - t), -t],
-            normal,
-            distance: target,
-            copies: 1,
-        })
-    }));
+    contacts.extend(edge_edge);
     distinct_features(contacts)
+}
+
+/// The contact of vertex `v` with triangle `t` (narrow phase at x_n), when they are not
+/// neighbours and are close enough (see [`separation`]).
+fn vertex_triangle_contact(v: u32, t: [u32; 3], start: &[DVec3], predicted: &[DVec3], thickness: f64) -> Option<Pair> {
+    if t.contains(&v) {
+        return None;
+    }
+    let x = start[v as usize];
+    let (c, b) = closest_on_triangle(x, t.map(|i| start[i as usize]));
+    let (normal, target) = separation(x - c, thickness, || relative_motion(&[v], &t, start, predicted))?;
+    Some(Pair {
+        vertices: [v, t[0], t[1], t[2]],
+        alpha: [1.0, -b[0], -b[1], -b[2]],
+        normal,
+        distance: target,
+        copies: 1,
+    })
+}
+
+/// The contact of edges `e` and `f` (narrow phase at x_n), when they share no vertex and are
+/// close enough (see [`separation`]).
+fn edge_edge_contact(e: [u32; 2], f: [u32; 2], start: &[DVec3], predicted: &[DVec3], thickness: f64) -> Option<Pair> {
+    if f.contains(&e[0]) || f.contains(&e[1]) {
+        return None;
+    }
+    let (p, r) = (e.map(|v| start[v as usize]), f.map(|v| start[v as usize]));
+    let (s, t, a, b) = closest_between_segments(p[0], p[1], r[0], r[1]);
+    let (normal, target) = separation(a - b, thickness, || relative_motion(&e, &f, start, predicted))?;
+    Some(Pair {
+        vertices: [e[0], e[1], f[0], f[1]],
+        alpha: [1.0 - s, s, -(1.0 - t), -t],
+        normal,
+        distance: target,
+        copies: 1,
+    })
 }
 
 /// The pairs whose closest features differ, in the order found, each with the

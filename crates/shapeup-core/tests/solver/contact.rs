@@ -266,7 +266,7 @@ fn a_self_collision_thickness_near_the_edge_length_is_warned_about_once() {
     let thick = scene(&text(0.11)).load().unwrap();
     assert!(thick.warnings.count("self_contact_at_rest") > 100, "{:?}", thick.warnings.to_json());
     let refused = scene(&text(0.5)).load().map(|_| ()).unwrap_err().to_string();
-    assert!(refused.contains("[contact]: thickness 5e-1 is over the mean edge length"), "{refused}");
+    assert!(refused.contains("[contact]: thickness 0.5 is over the mean edge length"), "{refused}");
     assert_eq!(thick.warnings.iter().filter(|w| w.kind == "self_contact_at_rest").count(), 1, "one warning");
     let thin = scene(&text(0.01)).load().unwrap();
     assert_eq!(thin.warnings.count("self_contact_at_rest"), 0, "{:?}", thin.warnings.to_json());
