@@ -166,7 +166,7 @@ def test_bad_contact_settings_raise():
     with pytest.raises(TypeError, match="thickness must be a number"):
         sim.set_contact(thickness="thick")  # type: ignore[arg-type]
     # Self-collision refuses a thickness over the mean edge length (colliders alone take it).
-    with pytest.raises(ValueError, match=r"contact\]: thickness 1e1 is over the mean edge length"):
+    with pytest.raises(ValueError, match=r"contact\]: thickness 10 is over the mean edge length"):
         sim.set_contact(self_collision=True, thickness=10.0)
     assert sim.contact == {"self_collision": False, "thickness": None, "friction": 0.0}
     sim.set_contact(self_collision=True, thickness=0.01)

@@ -57,8 +57,14 @@ pub fn run(args: &SimulateArgs<'_>) -> Result<()> {
     let mut loaded = scene.load()?;
     let mut run = loaded.start_scene_simulation()?;
     drop(spinner);
-    std::fs::create_dir_all(output.as_path())
-        .map_err(|e| anyhow::anyhow!("cannot create the output directory {}: {e}", output.as_path().display()))?;
+    std::fs::create_dir_all(output.as_path()).map_err(|e| {
+        let problem = match shapeup_core::io::file_in_the_way(&output) {
+            // `-o` naming a file (or a folder under one): say so, not "File exists".
+            Some(file) => format!("{} is a file, not a folder", file.display()),
+            None => e.to_string(),
+        };
+        anyhow::anyhow!("cannot create the output directory {}: {problem}", output.as_path().display())
+    })?;
     // Frames go in one by one: make sure the folder takes files before the first step.
     crate::check_parent_dir(&output.join("frame"))?;
 

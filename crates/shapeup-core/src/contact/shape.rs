@@ -72,6 +72,8 @@ pub struct MeshShape {
     pub closed: bool,
     /// Open meshes: how deep behind the front a point still counts as inside (working units).
     pub thickness: f64,
+    /// The triangles of zero area ([`MeshShape::degenerate_triangles`]).
+    degenerate: Vec<usize>,
 }
 
 /// Why a mesh cannot be a collider.
@@ -99,7 +101,29 @@ impl MeshShape {
         let vertices = positions.iter().map(|p| to_parry(*p)).collect();
         let mesh = TriMesh::with_flags(vertices, triangles.to_vec(), TriMeshFlags::ORIENTED)
             .map_err(|e| MeshShapeError::Build(e.to_string()))?;
-        Ok(MeshShape { mesh, closed, thickness })
+        // Relative to the triangle's own size only: a collider is not in the working frame's
+        // unit size, so an absolute area bound would count small ordinary triangles.
+        let corner = |v: u32| positions.get(v as usize).copied().unwrap_or(DVec3::NAN);
+        let degenerate = triangles
+            .iter()
+            .enumerate()
+            .filter(|(_, t)| {
+                let (a, b, c) = (corner(t[0]), corner(t[1]), corner(t[2]));
+                let longest2 = (b - a).length_squared().max((c - b).length_squared()).max((a - c).length_squared());
+                let (area, bound) =
+                    (0.5 * (b - a).cross(c - a).length(), crate::geometry::MIN_RELATIVE_AREA * longest2);
+                // A NaN corner counts as degenerate.
+                area.is_nan() || bound.is_nan() || area <= bound
+            })
+            .map(|(i, _)| i)
+            .collect();
+        Ok(MeshShape { mesh, closed, thickness, degenerate })
+    }
+
+    /// The indices of the triangles of zero area (to round-off: A ≤ 1e-12 ℓ², ℓ the longest
+    /// edge; a point or a segment): they have no normal of their own, which a scene warns of.
+    pub fn degenerate_triangles(&self) -> &[usize] {
+        &self.degenerate
     }
 
     fn closest(&self, x: DVec3) -> Proximity {
@@ -160,7 +184,10 @@ impl Shape {
             Shape::Sphere { center, radius } => round(*center, x, *radius),
             Shape::Capsule { a, b, radius } => {
                 let ab = *b - *a;
-                let t = ((x - *a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0);
+                // An axis whose length squared underflows (scenes refuse one under 1e-150, but
+                // the working frame scales it) is a sphere at `a`, not 0/0.
+                let length2 = ab.length_squared();
+                let t = if length2 > 0.0 { ((x - *a).dot(ab) / length2).clamp(0.0, 1.0) } else { 0.0 };
                 round(*a + t * ab, x, *radius)
             }
             Shape::Box { center, half, rotation } => {

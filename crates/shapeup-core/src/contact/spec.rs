@@ -78,11 +78,11 @@ impl ContactSettings {
         let limit = MAX_SELF_THICKNESS_FRACTION * mean_edge_length;
         if self.self_collision && thickness > limit {
             return Err(ColliderError::Invalid(format!(
-                "thickness {:e} is over the mean edge length {:e} (input units): with self_collision every vertex \
+                "thickness {} is over the mean edge length {} (input units): with self_collision every vertex \
                  would start in contact with its neighbours' triangles; give at most the mean edge length (default \
                  {DEFAULT_THICKNESS_FRACTION} of it), or refine the mesh",
-                thickness / scale,
-                limit / scale
+                number(thickness / scale),
+                number(limit / scale)
             )));
         }
         Ok(thickness)
@@ -203,9 +203,7 @@ fn check_turn(
     amount: f64,
     center: Option<[f64; 3]>,
 ) -> Result<(), ColliderError> {
-    if finite3(&format!("{table}.axis"), axis)?.length() == 0.0 {
-        return Err(invalid(format!("`{table}.axis` must be non-zero")));
-    }
+    check_direction(&format!("{table}.axis"), finite3(&format!("{table}.axis"), axis)?)?;
     if !(amount.is_finite() && amount.abs() <= MAX_MAGNITUDE) {
         return Err(invalid(format!("`{table}.{amount_key}` must be a finite number within ±1e12")));
     }
@@ -284,6 +282,33 @@ fn positive(key: &str, v: f64) -> Result<f64, ColliderError> {
     Ok(v)
 }
 
+/// The shortest vector [`check_direction`] takes as a direction: its length squared is still a
+/// normal number (1e-300 squared is 0).
+const MIN_DIRECTION_LENGTH: f64 = 1e-150;
+
+/// The length of `d` without underflow or overflow (its largest component first).
+fn scaled_length(d: DVec3) -> f64 {
+    let m = d.abs().max_element();
+    if m == 0.0 { 0.0 } else { m * (d / m).length() }
+}
+
+/// Checks a plane's normal or a turn's axis: zero is refused as zero; a length under
+/// [`MIN_DIRECTION_LENGTH`] as too small to give a direction (its length squared underflows).
+fn check_direction(key: &str, d: DVec3) -> Result<(), ColliderError> {
+    let length = scaled_length(d);
+    if length == 0.0 {
+        return Err(invalid(format!("`{key}` must be non-zero")));
+    }
+    if length < MIN_DIRECTION_LENGTH {
+        return Err(invalid(format!(
+            "`{key}` is too small to give a direction: its length is {}, under {}",
+            number(length),
+            number(MIN_DIRECTION_LENGTH)
+        )));
+    }
+    Ok(())
+}
+
 /// A direction scaled to unit length without overflowing (its largest component first).
 fn direction(v: [f64; 3]) -> DVec3 {
     let d = DVec3::from(v);
@@ -296,7 +321,8 @@ impl ColliderSpec {
     ///
     /// # Errors
     /// [`ColliderError::Invalid`] naming the key: an unknown type or key, a missing key, a
-    /// negative radius or μ, a zero normal or capsule axis, a box with min > max.
+    /// negative radius or μ, a normal or capsule axis that is zero or too short to give a
+    /// direction, a box with min > max.
     pub fn from_entry(mut entry: Map<String, Value>) -> Result<ColliderSpec, ColliderError> {
         let kind: String =
             take(&mut entry, "type")?.ok_or_else(|| invalid("missing `type` (plane, sphere, capsule, box or mesh)"))?;
@@ -425,17 +451,25 @@ impl ColliderSpec {
         match &self.shape {
             ShapeSpec::Plane { point, normal } => {
                 finite3("point", *point)?;
-                if finite3("normal", *normal)?.length() == 0.0 {
-                    return Err(invalid("`normal` must be non-zero"));
-                }
+                check_direction("normal", finite3("normal", *normal)?)?;
             }
             ShapeSpec::Sphere { center, radius } => {
                 finite3("center", *center)?;
                 positive("radius", *radius)?;
             }
             ShapeSpec::Capsule { a, b, radius } => {
-                if finite3("a", *a)? == finite3("b", *b)? {
+                let (a, b) = (finite3("a", *a)?, finite3("b", *b)?);
+                let axis = b - a;
+                if axis == DVec3::ZERO {
                     return Err(invalid("the capsule's axis is zero: `a` and `b` must differ"));
+                }
+                // Closest points divide by the axis's length squared, which underflows.
+                if scaled_length(axis) < MIN_DIRECTION_LENGTH {
+                    return Err(invalid(format!(
+                        "the capsule's axis is too short to give a direction: `a` and `b` are {} apart, under {}",
+                        number(scaled_length(axis)),
+                        number(MIN_DIRECTION_LENGTH)
+                    )));
                 }
                 positive("radius", *radius)?;
             }
@@ -535,8 +569,10 @@ impl ColliderSpec {
                     .find(|(_, p)| !(p.is_finite() && p.abs().max_element() <= MAX_MAGNITUDE))
                 {
                     return Err(fail(format!(
-                        "vertex {v} (from 0) is at ({:e}, {:e}, {:e}): coordinates must be finite numbers within ±1e12",
-                        p.x, p.y, p.z
+                        "vertex {v} (from 0) is at ({}, {}, {}): coordinates must be finite numbers within ±1e12",
+                        number(p.x),
+                        number(p.y),
+                        number(p.z)
                     )));
                 }
                 let is_closed = every_edge_twice(&mesh.triangles);
@@ -594,7 +630,7 @@ mod tests {
         // Input units × scale; at most the mean edge length with self-collision.
         assert_eq!(resolved(settings(true, Some(0.05))).ok(), Some(0.1));
         let err = resolved(settings(true, Some(0.051))).map(|_| ()).unwrap_err().to_string();
-        assert!(err.contains("thickness 5.1e-2 is over the mean edge length 5e-2"), "{err}");
+        assert!(err.contains("thickness 0.051 is over the mean edge length 0.05"), "{err}");
         // Colliders alone take any thickness.
         assert_eq!(resolved(settings(false, Some(10.0))).ok(), Some(20.0));
     }
@@ -623,6 +659,19 @@ mod tests {
             (r#"{"type": "sphere", "center": [0, 0, 0], "radius": 1, "radus": 2}"#, "unknown key `radus`"),
             (r#"{"type": "plane", "point": [0, 0, 0], "normal": [0, 0, 0]}"#, "`normal` must be non-zero"),
             (r#"{"type": "capsule", "a": [1, 0, 0], "b": [1, 0, 0], "radius": 1}"#, "axis is zero"),
+            // Non-zero, but too short for its length squared to be a number other than 0.
+            (
+                r#"{"type": "plane", "point": [0, 0, 0], "normal": [1e-300, 0, 0]}"#,
+                "`normal` is too small to give a direction: its length is 1e-300, under 1e-150",
+            ),
+            (
+                r#"{"type": "capsule", "a": [0, 0, 0], "b": [0, 1e-300, 0], "radius": 1}"#,
+                "the capsule's axis is too short to give a direction: `a` and `b` are 1e-300 apart",
+            ),
+            (
+                r#"{"type": "box", "min": [0, 0, 0], "max": [1, 1, 1], "rotate": {"axis": [0, 0, 1e-200], "angle_deg": 9}}"#,
+                "`rotate.axis` is too small to give a direction",
+            ),
             (r#"{"type": "box", "min": [0, 2, 0], "max": [1, 1, 1]}"#, "`min` > `max` along y"),
             (r#"{"type": "sphere", "center": [0, 0, 0], "radius": 1, "friction": -0.1}"#, "`friction`"),
             (r#"{"type": "mesh", "path": "a.obj", "thickness": -1}"#, "`thickness`"),

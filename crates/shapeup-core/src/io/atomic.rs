@@ -107,6 +107,14 @@ pub enum OutputError {
         /// Its folder.
         dir: PathBuf,
     },
+    /// What should be its folder (or one above it) is a file.
+    #[error("{}: {} is a file, not a folder", one_line(path.display()), one_line(file.display()))]
+    NotAFolder {
+        /// The output.
+        path: PathBuf,
+        /// The file in the way.
+        file: PathBuf,
+    },
     /// The folder cannot take a new file (read-only, no permission, not a file system).
     #[error("{}: cannot write in {}: {source}", one_line(path.display()), one_line(dir.display()))]
     Unwritable {
@@ -132,15 +140,28 @@ pub fn check_output_extension(path: &Path, allowed: &'static [&'static str]) -> 
     }
 }
 
+/// The first of `dir` and the folders above it that exists as something other than a folder
+/// (`afile/r.json`, `afile/sub/r.json`: `afile`): a missing folder that cannot be created.
+pub fn file_in_the_way(dir: &Path) -> Option<PathBuf> {
+    dir.ancestors()
+        .filter(|d| !d.as_os_str().is_empty())
+        .find(|d| fs::metadata(d).is_ok())
+        .filter(|d| !d.is_dir())
+        .map(Path::to_path_buf)
+}
+
 /// Fails unless the folder `path` goes in exists and takes a new file: it creates (and
 /// removes) the kind of temporary file [`write_atomic`] writes through.
 ///
 /// # Errors
-/// [`OutputError::MissingFolder`] or [`OutputError::Unwritable`].
+/// [`OutputError::MissingFolder`], [`OutputError::NotAFolder`] or [`OutputError::Unwritable`].
 pub fn check_output_folder(path: &Path) -> Result<(), OutputError> {
     let unwritable = |dir: &Path, source| OutputError::Unwritable { path: path.to_path_buf(), dir: dir.into(), source };
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty() && !d.is_dir()) {
-        return Err(OutputError::MissingFolder { path: path.to_path_buf(), dir: dir.into() });
+        return Err(match file_in_the_way(dir) {
+            Some(file) => OutputError::NotAFolder { path: path.to_path_buf(), file },
+            None => OutputError::MissingFolder { path: path.to_path_buf(), dir: dir.into() },
+        });
     }
     let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
     let (_, temp) = create_temp(path).map_err(|e| unwritable(dir, e))?;

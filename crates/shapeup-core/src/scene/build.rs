@@ -3,7 +3,7 @@
 
 use super::{Scene, SceneError, SolverSettings};
 use crate::constraints::{attach_degenerate_vertices, held_vertices};
-use crate::contact::{ContactModel, ContactParams};
+use crate::contact::{ContactModel, ContactParams, Shape, ShapeSpec};
 use crate::dynamics::{DynamicsParams, ParamError, Simulation};
 use crate::geometry::{RestGeometry, WorkingFrame, lumped_masses_surface, lumped_masses_volume};
 use crate::io::{Attributes, read_mesh};
@@ -26,7 +26,8 @@ pub struct LoadedScene {
     pub attributes: Attributes,
     /// Vertices of the input mesh (before tetrahedralization added points): what outputs write.
     pub input_vertices: usize,
-    /// What loading changed (polygons triangulated, faces left out…), each naming the file.
+    /// What loading changed (polygons triangulated, faces left out…), each naming the file;
+    /// a static solve adds the collider motion it ignores.
     pub warnings: Warnings,
     /// Input ↔ working frame.
     pub frame: WorkingFrame,
@@ -187,6 +188,20 @@ impl Scene {
                 })
             })
             .collect::<Result<Vec<_>, _>>()?;
+        // Named by the collider's own file: the warnings without one name the scene's mesh.
+        for (i, (spec, collider)) in self.colliders.iter().zip(&colliders).enumerate() {
+            if let (ShapeSpec::Mesh { path, .. }, Shape::Mesh(shape)) = (&spec.shape, &collider.shape) {
+                let degenerate = shape.degenerate_triangles();
+                let mut found = Warnings::new();
+                found.add_many(
+                    "degenerate_collider_triangles",
+                    "zero-area (degenerate) triangles in a mesh collider: they have no normal of their own",
+                    degenerate.len(),
+                    || degenerate.first().map(|t| format!("colliders[{i}], triangle {t} (from 0)")).unwrap_or_default(),
+                );
+                warnings.extend(found.for_file(&self.base_dir.join(path)));
+            }
+        }
         // Vertices in an element take part; the others keep their positions.
         let mut active = vec![false; mesh.num_vertices()];
         for v in mesh.triangles.iter().flatten().chain(mesh.tetrahedra.iter().flatten()) {
@@ -406,6 +421,7 @@ impl LoadedScene {
         after_iteration: impl FnMut(usize, f64) -> std::ops::ControlFlow<()>,
     ) -> Result<(Vec<DVec3>, SolveReport), SceneError> {
         let iterations = self.static_iterations(iterations);
+        self.warn_of_collider_motion();
         let mut q = self.rest.positions.clone();
         if let Some(contact) = self.contact.as_mut().filter(|c| c.is_active()) {
             let report = solve_static_with_contact(&mut self.system, contact, &mut q, iterations, after_iteration)
@@ -417,6 +433,32 @@ impl LoadedScene {
             .solve_with(&mut q, iterations, self.scene.solver.tolerance, after_iteration)
             .map_err(|source| SceneError::Solve { path: self.scene.file.clone(), source })?;
         Ok((q, report))
+    }
+
+    /// Warns, once, of the colliders whose `velocity` or `spin` a static solve ignores (it
+    /// detects contact with the colliders where they are at time 0): a scene that sets them
+    /// must not look as if they had moved.
+    fn warn_of_collider_motion(&mut self) {
+        const KIND: &str = "collider_motion_ignored";
+        let moving: Vec<usize> = self
+            .scene
+            .colliders
+            .iter()
+            .enumerate()
+            .filter(|(_, c)| c.velocity != [0.0; 3] || c.spin.is_some_and(|s| s.deg_per_s != 0.0))
+            .map(|(i, _)| i)
+            .collect();
+        if moving.is_empty() || self.warnings.count(KIND) > 0 {
+            return;
+        }
+        let mut found = Warnings::new();
+        found.add_many(
+            KIND,
+            "colliders' motion (velocity, spin) ignored in static mode: a static solve keeps each collider where it is at time 0 (`shapeup simulate` moves them)",
+            moving.len(),
+            || moving.first().map(|i| format!("colliders[{i}]")).unwrap_or_default(),
+        );
+        self.warnings.extend(found.for_file(&self.scene.file));
     }
 
     /// The iterations of a static solve: `iterations`, or the scene's steps × iterations.

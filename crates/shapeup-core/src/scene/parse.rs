@@ -1,6 +1,6 @@
 //! From scene text (TOML or JSON) to a validated [`Scene`].
 
-use super::strict::{Entry, StrictValue};
+use super::strict::{Entry, EntryList, OneTable, StrictValue};
 use super::{GroupSpec, MeshSettings, OutputSettings, Scene, SceneError, SolverSettings};
 use crate::solver::{MAX_ANDERSON_WINDOW, MAX_LBFGS_MEMORY};
 use serde::Deserialize;
@@ -13,9 +13,9 @@ struct RawScene {
     mesh: MeshSettings,
     #[serde(default)]
     solver: SolverSettings,
-    #[serde(default)]
+    #[serde(default, deserialize_with = "constraint_list")]
     constraints: Vec<Entry>,
-    #[serde(default)]
+    #[serde(default, deserialize_with = "collider_list")]
     colliders: Vec<Entry>,
     #[serde(default, deserialize_with = "one_table")]
     contact: crate::contact::ContactSettings,
@@ -23,20 +23,17 @@ struct RawScene {
     output: OutputSettings,
 }
 
-/// `[contact]` as one table. A derived struct also reads a list positionally, so `[[contact]]`
-/// would be refused as "expected a boolean" (its first field) instead of by what is wrong.
+fn constraint_list<'de, D: serde::Deserializer<'de>>(deserializer: D) -> Result<Vec<Entry>, D::Error> {
+    deserializer.deserialize_any(EntryList("constraints"))
+}
+
+fn collider_list<'de, D: serde::Deserializer<'de>>(deserializer: D) -> Result<Vec<Entry>, D::Error> {
+    deserializer.deserialize_any(EntryList("colliders"))
+}
+
+/// `[contact]` as one table ([`OneTable`]).
 fn one_table<'de, D: serde::Deserializer<'de>>(deserializer: D) -> Result<crate::contact::ContactSettings, D::Error> {
-    struct OneTable;
-    impl<'de> serde::de::Visitor<'de> for OneTable {
-        type Value = crate::contact::ContactSettings;
-        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-            f.write_str("one [contact] table (not a list: [[contact]])")
-        }
-        fn visit_map<A: serde::de::MapAccess<'de>>(self, map: A) -> Result<Self::Value, A::Error> {
-            crate::contact::ContactSettings::deserialize(serde::de::value::MapAccessDeserializer::new(map))
-        }
-    }
-    deserializer.deserialize_map(OneTable)
+    deserializer.deserialize_any(OneTable)
 }
 
 /// Scene file syntax.
@@ -101,7 +98,7 @@ impl Scene {
         let parse_error = |message: String| SceneError::Parse { path: path.into(), message };
         let mut tree: Value = match format {
             SceneFormat::Toml => toml::from_str(text).map_err(|e| parse_error(toml_message(text, &e)))?,
-            SceneFormat::Json => StrictValue::read_json(text).map_err(|e| parse_error(e.to_string()))?,
+            SceneFormat::Json => StrictValue::read_json(text).map_err(|e| parse_error(json_message(text, &e)))?,
         };
         for (key, value) in overrides {
             apply_override(&mut tree, key, value.clone())?;
@@ -118,7 +115,7 @@ impl Scene {
         let parse_error = |message: String| SceneError::Parse { path: path.into(), message };
         let raw: RawScene = match format {
             SceneFormat::Toml => toml::from_str(text).map_err(|e| parse_error(toml_message(text, &e)))?,
-            SceneFormat::Json => serde_json::from_str(text).map_err(|e| parse_error(e.to_string()))?,
+            SceneFormat::Json => serde_json::from_str(text).map_err(|e| parse_error(json_message(text, &e)))?,
         };
         Scene::from_raw(raw, path, base_dir)
     }
@@ -275,6 +272,96 @@ fn toml_message(text: &str, e: &toml::de::Error) -> String {
     }
 }
 
+/// One line from a JSON error: its message with its line and column, and the key of the value
+/// it stopped in (serde_json names no key: `"thickness": 1e400` is "number out of range").
+fn json_message(text: &str, e: &serde_json::Error) -> String {
+    let full = e.to_string();
+    if e.line() == 0 {
+        return full;
+    }
+    let (line, column) = (e.line(), e.column());
+    let message = full.strip_suffix(&format!(" at line {line} column {column}")).unwrap_or(&full);
+    // serde_json's column counts the bytes of its line before the error.
+    let start: usize = text.split_inclusive('\n').take(line - 1).map(str::len).sum();
+    // A message that names the key or the entry it is in already (`colliders` must be a
+    // list…) needs no more.
+    let named = |key: &str| {
+        key.match_indices(['.', '['])
+            .map(|(at, _)| &key[..at])
+            .chain([key])
+            .any(|part| message.contains(&format!("`{part}`")))
+    };
+    match json_key_at(text, start + column) {
+        Some(key) if !named(&key) => format!("line {line}, column {column}: {message} (in `{key}`)"),
+        _ => format!("line {line}, column {column}: {message}"),
+    }
+}
+
+/// The key (`contact.thickness`, `colliders[0].center`) of the value that JSON `text`'s first
+/// `end` bytes stop in; `None` at the top level. The text before a serde_json error is
+/// well-formed so far: strings, brackets, colons and commas are all it takes.
+fn json_key_at(text: &str, end: usize) -> Option<String> {
+    enum Level {
+        Table { key: Option<String>, at_value: bool },
+        List(usize),
+    }
+    let mut end = end.min(text.len());
+    while !text.is_char_boundary(end) {
+        end -= 1;
+    }
+    let bytes = &text.as_bytes()[..end];
+    let mut levels: Vec<Level> = Vec::new();
+    let mut i = 0;
+    while i < bytes.len() {
+        match bytes[i] {
+            b'"' => {
+                let start = i;
+                i += 1;
+                while i < bytes.len() && bytes[i] != b'"' {
+                    i += if bytes[i] == b'\\' { 2 } else { 1 };
+                }
+                // A string before its table's colon is a key.
+                if let Some(Level::Table { key, at_value: false }) = levels.last_mut()
+                    && i < bytes.len()
+                {
+                    *key = serde_json::from_str::<String>(&text[start..=i]).ok();
+                }
+            }
+            b'{' => levels.push(Level::Table { key: None, at_value: false }),
+            b'[' => levels.push(Level::List(0)),
+            b'}' | b']' => {
+                levels.pop();
+            }
+            b':' => {
+                if let Some(Level::Table { at_value, .. }) = levels.last_mut() {
+                    *at_value = true;
+                }
+            }
+            b',' => match levels.last_mut() {
+                Some(Level::Table { key, at_value }) => (*key, *at_value) = (None, false),
+                Some(Level::List(n)) => *n += 1,
+                None => {}
+            },
+            _ => {}
+        }
+        i += 1;
+    }
+    let mut path = String::new();
+    for level in &levels {
+        match level {
+            Level::Table { key: Some(key), .. } => {
+                if !path.is_empty() {
+                    path.push('.');
+                }
+                path.push_str(&crate::text::shown(key));
+            }
+            Level::Table { key: None, .. } => break,
+            Level::List(n) => path.push_str(&format!("[{n}]")),
+        }
+    }
+    (!path.is_empty()).then_some(path)
+}
+
 /// A `[solver]` value out of range, described.
 struct BadSetting(String);
 
@@ -415,6 +502,49 @@ mod tests {
             let e = parse(&format!("[mesh]\npath = \"m.obj\"\n{body}")).unwrap_err().to_string();
             assert!(e.contains(needle), "{needle}: {e}");
         }
+    }
+
+    #[test]
+    fn json_errors_name_the_key() {
+        let json = |text: &str| {
+            Scene::parse(text, SceneFormat::Json, Path::new("s.json"), PathBuf::new())
+                .map(|_| ())
+                .unwrap_err()
+                .to_string()
+        };
+        for (text, words) in [
+            (
+                r#"{"mesh": {"path": "m.obj"}, "colliders": null}"#,
+                "`colliders` must be a list of [[colliders]] tables, found null",
+            ),
+            (
+                r#"{"mesh": {"path": "m.obj"}, "constraints": "x"}"#,
+                "`constraints` must be a list of [[constraints]] tables, found a string",
+            ),
+            (r#"{"mesh": {"path": "m.obj"}, "contact": null}"#, "`contact` must be one [contact] table, found null"),
+            (
+                r#"{"mesh": {"path": "m.obj"}, "contact": [{}]}"#,
+                "`contact` must be one [contact] table (not a list: [[contact]])",
+            ),
+            (
+                r#"{"mesh": {"path": "m.obj"},
+                 "contact": {"thickness": 1e400}}"#,
+                "s.json: line 2, column 47: number out of range (in `contact.thickness`)",
+            ),
+            (r#"{"mesh": {"path": "m.obj"}, "solver": {"tolerance": "x"}}"#, "(in `solver.tolerance`)"),
+            (
+                r#"{"mesh": {"path": "m.o\"bj"}, "constraints": [{}, {"weight": 1e999}]}"#,
+                "(in `constraints[1].weight`)",
+            ),
+        ] {
+            let e = json(text);
+            assert!(e.contains(words), "{text}: {e}");
+            // Named once: no key after a message that names it (or its entry).
+            assert!(!(e.contains("`contact` must") && e.contains("(in `")), "{text}: {e}");
+        }
+        let text = r#"{"a": [1, {"b\u0022": [0, 1e999"#;
+        assert_eq!(json_key_at(text, text.len()), Some("a[1].b\"[1]".into()));
+        assert_eq!(json_key_at(r#"{"a": 1}"#, 8), None);
     }
 
     #[test]

@@ -31,6 +31,90 @@ impl Entry {
     }
 }
 
+/// The visitor methods of every value that is not a list or a table, each refused by the
+/// visitor's own `refuse(found)` (which names the key: serde's "invalid type: null, expected a
+/// sequence" names none).
+macro_rules! refuse_plain_values {
+    () => {
+        fn visit_bool<E: serde::de::Error>(self, _: bool) -> Result<Self::Value, E> {
+            Err(self.refuse("a boolean"))
+        }
+        fn visit_i64<E: serde::de::Error>(self, _: i64) -> Result<Self::Value, E> {
+            Err(self.refuse("a number"))
+        }
+        fn visit_u64<E: serde::de::Error>(self, _: u64) -> Result<Self::Value, E> {
+            Err(self.refuse("a number"))
+        }
+        fn visit_f64<E: serde::de::Error>(self, _: f64) -> Result<Self::Value, E> {
+            Err(self.refuse("a number"))
+        }
+        fn visit_str<E: serde::de::Error>(self, _: &str) -> Result<Self::Value, E> {
+            Err(self.refuse("a string"))
+        }
+        fn visit_unit<E: serde::de::Error>(self) -> Result<Self::Value, E> {
+            Err(self.refuse("null"))
+        }
+        fn visit_none<E: serde::de::Error>(self) -> Result<Self::Value, E> {
+            Err(self.refuse("null"))
+        }
+    };
+}
+
+/// A top-level list of entries (`constraints`, `colliders`), each read as an [`Entry`]; any
+/// other value is refused naming the key and what it is (a JSON `"colliders": null`).
+pub(super) struct EntryList(pub(super) &'static str);
+
+impl EntryList {
+    fn refuse<E: serde::de::Error>(&self, found: &str) -> E {
+        let key = self.0;
+        E::custom(format!("`{key}` must be a list of [[{key}]] tables, found {found}"))
+    }
+}
+
+impl<'de> serde::de::Visitor<'de> for EntryList {
+    type Value = Vec<Entry>;
+    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        write!(f, "a list of [[{}]] tables", self.0)
+    }
+    fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut seq: A) -> Result<Vec<Entry>, A::Error> {
+        // Not sized by the hint: it may claim more than the input holds.
+        let mut list = Vec::new();
+        while let Some(entry) = seq.next_element()? {
+            list.push(entry);
+        }
+        Ok(list)
+    }
+    fn visit_map<A: serde::de::MapAccess<'de>>(self, _: A) -> Result<Vec<Entry>, A::Error> {
+        Err(self.refuse("a table"))
+    }
+    refuse_plain_values!();
+}
+
+/// `[contact]` as one table. A derived struct also reads a list positionally, so `[[contact]]`
+/// would be refused as "expected a boolean" (its first field) instead of by what is wrong; a
+/// JSON `"contact": null` is refused naming the key.
+pub(super) struct OneTable;
+
+impl OneTable {
+    fn refuse<E: serde::de::Error>(&self, found: &str) -> E {
+        E::custom(format!("`contact` must be one [contact] table, found {found}"))
+    }
+}
+
+impl<'de> serde::de::Visitor<'de> for OneTable {
+    type Value = crate::contact::ContactSettings;
+    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        f.write_str("one [contact] table")
+    }
+    fn visit_map<A: serde::de::MapAccess<'de>>(self, map: A) -> Result<Self::Value, A::Error> {
+        crate::contact::ContactSettings::deserialize(serde::de::value::MapAccessDeserializer::new(map))
+    }
+    fn visit_seq<A: serde::de::SeqAccess<'de>>(self, _: A) -> Result<Self::Value, A::Error> {
+        Err(serde::de::Error::custom("`contact` must be one [contact] table (not a list: [[contact]])"))
+    }
+    refuse_plain_values!();
+}
+
 impl<'de> Deserialize<'de> for Entry {
     fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
         deserializer.deserialize_any(StrictValue { depth: 0 }).map(Entry)

@@ -61,6 +61,11 @@ fn the_folder_check_leaves_nothing_visible() {
     let missing = dir.path().join("missing").join("x.obj");
     let err = check_output_folder(&missing).unwrap_err().to_string();
     assert!(err.contains("does not exist"), "{err}");
+    // A file where the folder (or one above it) should be is named as such.
+    for under in [dir.path().join("keep.obj").join("x.obj"), dir.path().join("keep.obj").join("sub").join("x.obj")] {
+        let err = check_output_folder(&under).unwrap_err().to_string();
+        assert!(err.ends_with("keep.obj is a file, not a folder"), "{err}");
+    }
 }
 
 #[test]

@@ -1310,11 +1310,18 @@ fn simulate_rejects_bad_requests_and_writes_nothing() {
         assert!(out.stderr.contains(needle), "{mesh}: {}", out.stderr);
     }
     assert!(!dir.exists(), "no output directory after errors");
-    // An output "directory" that is a file.
+    // An output "directory" that is a file, or under one.
     let file = write(&ws.path("taken"), "x");
     let out = simulate_in(None, &scene, &file, &["--frames", "3"]);
     assert_eq!(out.code, Some(1), "{}", out.describe());
-    assert!(out.stderr.contains("taken"), "{}", out.stderr);
+    assert!(
+        out.stderr.contains("taken is a file, not a folder") && !out.stderr.contains("File exists"),
+        "{}",
+        out.stderr
+    );
+    let out = simulate_in(None, &scene, &file.join("sub"), &["--frames", "3"]);
+    assert_eq!(out.code, Some(1), "{}", out.describe());
+    assert!(out.stderr.contains("taken is a file, not a folder"), "{}", out.stderr);
 }
 
 #[test]
@@ -1328,6 +1335,15 @@ fn bad_colliders_name_the_entry_and_write_nothing() {
         ("[[colliders]]\ntype = \"cone\"\n", "colliders[0]: unknown collider type"),
         ("[[colliders]]\ntype = \"plane\"\npoint = [0, 0, 0]\nnormal = [0, 0, 0]\n", "`normal` must be non-zero"),
         ("[[colliders]]\ntype = \"capsule\"\na = [0, 0, 0]\nb = [0, 0, 0]\nradius = 1.0\n", "axis is zero"),
+        // Not zero, but too short for a direction.
+        (
+            "[[colliders]]\ntype = \"plane\"\npoint = [0, 0, 0]\nnormal = [1e-300, 0, 0]\n",
+            "`normal` is too small to give a direction: its length is 1e-300, under 1e-150",
+        ),
+        (
+            "[[colliders]]\ntype = \"capsule\"\na = [0, 0, 0]\nb = [1e-300, 0, 0]\nradius = 1.0\n",
+            "the capsule's axis is too short to give a direction: `a` and `b` are 1e-300 apart, under 1e-150",
+        ),
         ("[[colliders]]\ntype = \"box\"\nmin = [0, 1, 0]\nmax = [1, 0, 1]\n", "`min` > `max`"),
         ("[[colliders]]\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1.0\nfriction = -1.0\n", "`friction`"),
         ("[[colliders]]\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1.0\nradus = 2\n", "unknown key `radus`"),
@@ -1337,7 +1353,7 @@ fn bad_colliders_name_the_entry_and_write_nothing() {
         // Edges of 1/3 and 0.47: at 0.5 every vertex would touch its neighbours' triangles.
         (
             "[contact]\nself_collision = true\nthickness = 0.5\n",
-            "[contact]: thickness 5e-1 is over the mean edge length",
+            "[contact]: thickness 0.5 is over the mean edge length",
         ),
         ("[[contact]]\nthickness = 0.1\n", "one [contact] table (not a list: [[contact]])"),
         ("[[colliders]]\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1e300\n", "found 1e300"),
@@ -1353,7 +1369,7 @@ fn bad_colliders_name_the_entry_and_write_nothing() {
     write(&ws.path("open.obj"), "v 0 0 0\nv 1 0 0\nv 0 0 1\nf 1 3 2\n");
     write(&ws.path("huge.obj"), "v 0 0 0\nv 1e100 0 0\nv 0 0 1\nf 1 3 2\n");
     for (bad, needle) in [
-        ("[[colliders]]\ntype = \"mesh\"\npath = \"huge.obj\"\n", "vertex 1 (from 0) is at (1e100, 0e0, 0e0)"),
+        ("[[colliders]]\ntype = \"mesh\"\npath = \"huge.obj\"\n", "vertex 1 (from 0) is at (1e100, 0, 0)"),
         ("[[colliders]]\ntype = \"mesh\"\npath = \"points.obj\"\n", "no faces"),
         ("[[colliders]]\ntype = \"mesh\"\npath = \"open.obj\"\nclosed = true\n", "is open"),
     ] {
@@ -1376,7 +1392,75 @@ fn bad_colliders_name_the_entry_and_write_nothing() {
         assert_eq!(out.code, Some(1), "{list}: {}", out.describe());
         assert!(out.stderr.contains(needle) && out.stderr.contains("bad.json"), "{list}: {}", out.stderr);
     }
+    // A whole key of the wrong type, or a number out of range, named by its key.
+    for (entry, needle) in [
+        (r#""colliders": null"#, "line 1, column 99: `colliders` must be a list of [[colliders]] tables, found null"),
+        (r#""constraints": 5"#, "`constraints` must be a list of [[constraints]] tables, found a number"),
+        (r#""contact": null"#, "`contact` must be one [contact] table, found null"),
+        (r#""contact": {"thickness": 1e400}"#, "number out of range (in `contact.thickness`)"),
+        (r#""colliders": [{"type": "sphere", "center": [0, 0, 1e400]}]"#, "(in `colliders[0].center[2]`)"),
+    ] {
+        let text = format!(
+            r#"{{"mesh": {{"generate": {{"kind": "cloth", "vertices": [4, 4], "size": [1.0, 1.0]}}}}, {entry}}}"#
+        );
+        let scene = ws.scene("bad.json", &text);
+        let out = simulate_in(None, &scene, &dir, &["--frames", "3"]);
+        assert_eq!(out.code, Some(1), "{entry}: {}", out.describe());
+        assert!(out.stderr.contains(needle) && out.stderr.contains("bad.json"), "{entry}: {}", out.stderr);
+        assert_eq!(out.stderr.lines().count(), 1, "{entry}: {}", out.stderr);
+    }
+    // The same in TOML: the key's line is quoted.
+    let out = simulate_in(None, &ws.scene("bad.toml", &format!("colliders = 5\n{good}")), &dir, &["--frames", "3"]);
+    assert!(
+        out.code == Some(1)
+            && out.stderr.contains("`colliders` must be a list of [[colliders]] tables, found a number"),
+        "{}",
+        out.describe()
+    );
     assert!(!dir.exists(), "no output directory after errors");
+}
+
+/// What a collider scene gives that is used other than as written is warned of, once: the
+/// motion a static solve ignores, and a mesh collider's zero-area triangles.
+#[test]
+fn a_static_solve_warns_of_collider_motion_and_zero_area_collider_triangles() {
+    let ws = Workspace::new();
+    // The second triangle's corners are on one line.
+    write(&ws.path("flat.obj"), "v 0 0 0\nv 1 0 0\nv 0 0 1\nv 2 0 0\nf 1 3 2\nf 1 2 4\n");
+    let sphere = "[[colliders]]\ntype = \"sphere\"\ncenter = [0.0, -3.0, 0.0]\nradius = 0.1\n";
+    let scene = ws.scene(
+        "moving.toml",
+        &format!(
+            "[mesh]\ngenerate = {{ kind = \"cloth\", vertices = [4, 4], size = [1.0, 1.0] }}\n\
+             [[constraints]]\ntype = \"edge_spring\"\n[[constraints]]\ntype = \"position\"\nvertices = [0]\n\
+             [[colliders]]\ntype = \"mesh\"\npath = \"flat.obj\"\ntranslate = [0.0, -2.0, 0.0]\n\
+             {sphere}velocity = [0.0, 1.0, 0.0]\n{sphere}spin = {{ axis = [0.0, 1.0, 0.0], deg_per_s = 5.0 }}\n\
+             {sphere}spin = {{ axis = [0.0, 1.0, 0.0], deg_per_s = 0.0 }}\n"
+        ),
+    );
+    let (o, r) = (ws.out("result.obj"), ws.out("report.json"));
+    let out = shapeup([
+        OsStr::new("deform"),
+        scene.as_os_str(),
+        "-o".as_ref(),
+        o.as_os_str(),
+        "--report".as_ref(),
+        r.as_os_str(),
+    ]);
+    assert_eq!(out.code, Some(0), "{}", out.describe());
+    let motion = "moving.toml: 2 colliders' motion (velocity, spin) ignored in static mode";
+    let flat = "flat.obj: 1 zero-area (degenerate) triangles in a mesh collider";
+    assert_eq!(out.stderr.matches(motion).count(), 1, "{}", out.describe());
+    assert_eq!(out.stderr.matches(flat).count(), 1, "{}", out.describe());
+    assert!(out.stderr.contains("(first: colliders[0], triangle 1 (from 0))"), "{}", out.describe());
+    let kinds: Vec<String> =
+        report(&r)["warnings"].as_array().unwrap().iter().map(|w| w["kind"].as_str().unwrap().to_owned()).collect();
+    assert!(kinds.contains(&"collider_motion_ignored".into()), "{kinds:?}");
+    assert!(kinds.contains(&"degenerate_collider_triangles".into()), "{kinds:?}");
+    // Time steps move the colliders: no motion warning there.
+    let out = simulate_in(None, &scene, &ws.out("frames"), &["--frames", "2"]);
+    assert_eq!(out.code, Some(0), "{}", out.describe());
+    assert!(!out.stderr.contains("ignored in static mode") && out.stderr.contains(flat), "{}", out.describe());
 }
 
 #[test]
@@ -1678,6 +1762,13 @@ fn a_report_in_a_missing_folder_fails_before_anything_is_written() {
             r.as_os_str(),
         ],
         &["missing", "does not exist"],
+    );
+    // A report under a file: the file is named as what is in the way.
+    write(&ws.path("afile"), "x");
+    let r = ws.path("afile").join("report.json");
+    ws.expect_failure(
+        &[OsStr::new("deform"), scene.as_os_str(), "-o".as_ref(), o.as_os_str(), "--report".as_ref(), r.as_os_str()],
+        &["afile is a file, not a folder"],
     );
 }
 
