@@ -233,9 +233,9 @@ impl Scene {
             close,
             || {
                 format!(
-                    "thickness {:.4e}, mean edge length {:.4e} (input units)",
-                    thickness / frame.scale,
-                    crate::geometry::mean_edge_length(rest) / frame.scale
+                    "thickness {}, mean edge length {} (input units)",
+                    crate::text::number(thickness / frame.scale),
+                    crate::text::number(crate::geometry::mean_edge_length(rest) / frame.scale)
                 )
             },
         );
