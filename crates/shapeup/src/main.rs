@@ -353,6 +353,34 @@ pub(crate) fn check_parent_dir(path: &Path) -> Result<()> {
     Ok(check_output_folder(path)?)
 }
 
+/// Refuses, before any work, an output that is one of the run's inputs (the scene file, its
+/// mesh, a mesh collider's file, however it is named: a link, `./`, `..`): a result or a
+/// report written there would replace what the run was read from.
+pub(crate) fn refuse_inputs_as_outputs(scene_path: &Path, scene: &Scene, outputs: &[&Path]) -> Result<()> {
+    let mut inputs: Vec<(PathBuf, String)> = vec![(scene_path.to_path_buf(), "the scene file".into())];
+    if scene.mesh.generate.is_none() {
+        inputs.push((scene.mesh_path(), "the scene's mesh".into()));
+    }
+    for (i, c) in scene.colliders.iter().enumerate() {
+        if let shapeup_core::contact::ShapeSpec::Mesh { path, .. } = &c.shape {
+            inputs.push((scene.base_dir.join(path), format!("the mesh of colliders[{i}]")));
+        }
+    }
+    for output in outputs {
+        // An output that does not exist yet is no input.
+        if let Some((input, what)) =
+            inputs.iter().find(|(input, _)| same_file::is_same_file(output, input).unwrap_or(false))
+        {
+            bail!(
+                "{}: is {what} ({}); shapeup never replaces its inputs, write the result elsewhere",
+                shapeup_core::io::one_line(output.display()),
+                shapeup_core::io::one_line(input.display())
+            );
+        }
+    }
+    Ok(())
+}
+
 fn deform(
     scene_path: &Path,
     output: Option<&Path>,
@@ -374,6 +402,11 @@ fn deform(
     let report_path = report_path.as_deref();
     check_output_extension(output, MESH_OUTPUT_EXTENSIONS)?;
     check_parent_dir(output)?;
+    refuse_inputs_as_outputs(
+        scene_path,
+        &scene,
+        &[Some(output), report_path].into_iter().flatten().collect::<Vec<_>>(),
+    )?;
     if let Some(r) = report_path {
         check_output_extension(r, &["json"])?;
         check_parent_dir(r)?;

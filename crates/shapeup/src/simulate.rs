@@ -52,6 +52,7 @@ pub fn run(args: &SimulateArgs<'_>) -> Result<()> {
     }
     if let Some(r) = report.as_deref() {
         crate::check_parent_dir(r)?;
+        crate::refuse_inputs_as_outputs(args.scene, &scene, &[r])?;
     }
     let spinner = crate::logging::spinner(format!("loading {}", args.scene.display()));
     let mut loaded = scene.load()?;

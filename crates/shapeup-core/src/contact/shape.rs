@@ -116,7 +116,14 @@ impl MeshShape {
                 area.is_nan() || bound.is_nan() || area <= bound
             })
             .map(|(i, _)| i)
-            .collect();
+            .collect::<Vec<_>>();
+        // Only zero-area triangles: no face has a normal, there is nothing to be outside of.
+        if degenerate.len() == triangles.len() {
+            return Err(MeshShapeError::Build(format!(
+                "all {} of its triangles have zero area (points or segments): no face to collide with",
+                triangles.len()
+            )));
+        }
         Ok(MeshShape { mesh, closed, thickness, degenerate })
     }
 

@@ -1368,8 +1368,10 @@ fn bad_colliders_name_the_entry_and_write_nothing() {
     write(&ws.path("points.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\n");
     write(&ws.path("open.obj"), "v 0 0 0\nv 1 0 0\nv 0 0 1\nf 1 3 2\n");
     write(&ws.path("huge.obj"), "v 0 0 0\nv 1e100 0 0\nv 0 0 1\nf 1 3 2\n");
+    write(&ws.path("segment.obj"), "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n");
     for (bad, needle) in [
         ("[[colliders]]\ntype = \"mesh\"\npath = \"huge.obj\"\n", "vertex 1 (from 0) is at (1e100, 0, 0)"),
+        ("[[colliders]]\ntype = \"mesh\"\npath = \"segment.obj\"\n", "all 1 of its triangles have zero area"),
         ("[[colliders]]\ntype = \"mesh\"\npath = \"points.obj\"\n", "no faces"),
         ("[[colliders]]\ntype = \"mesh\"\npath = \"open.obj\"\nclosed = true\n", "is open"),
     ] {
@@ -1738,6 +1740,54 @@ fn a_tetrahedralized_surface_comes_back_as_the_input_surface() {
     assert_eq!(obj.polygons, rest.polygons);
     let (msh, _, _) = deform_ok(&ws, &scene, "spot.msh", &[]);
     assert!(msh.num_tetrahedra() > 0 && msh.num_vertices() > rest.num_vertices(), "a volume output keeps them");
+}
+
+#[test]
+fn an_output_or_report_that_is_an_input_is_refused_and_the_input_kept() {
+    // The scene file, its mesh: however named (a `./` path, a link), a result or a report
+    // written there would replace what the run reads.
+    let ws = Workspace::new();
+    let mesh = ws.path("in.obj");
+    std::fs::copy(SPOT, &mesh).unwrap();
+    let json = ws.path("scene.json");
+    let text = r#"{"mesh": {"path": "in.obj"}, "constraints": [{"type": "edge_spring"}, {"type": "position", "vertices": [0]}]}"#;
+    write(&json, text);
+    let kept = std::fs::read(&mesh).unwrap();
+    let o = ws.out("result.obj");
+    ws.expect_failure(
+        &[OsStr::new("deform"), json.as_os_str(), "-o".as_ref(), o.as_os_str(), "--report".as_ref(), json.as_os_str()],
+        &["scene.json", "is the scene file", "never replaces its inputs"],
+    );
+    let relative = ws.path(".").join("in.obj");
+    ws.expect_failure(
+        &[OsStr::new("deform"), json.as_os_str(), "-o".as_ref(), relative.as_os_str()],
+        &["is the scene's mesh"],
+    );
+    #[cfg(unix)]
+    {
+        let link = ws.path("link.obj");
+        std::os::unix::fs::symlink(&mesh, &link).unwrap();
+        ws.expect_failure(
+            &[OsStr::new("deform"), json.as_os_str(), "-o".as_ref(), link.as_os_str()],
+            &["is the scene's mesh"],
+        );
+    }
+    let dir = ws.out("frames");
+    ws.expect_failure(
+        &[
+            OsStr::new("simulate"),
+            json.as_os_str(),
+            "--frames".as_ref(),
+            "1".as_ref(),
+            "-o".as_ref(),
+            dir.as_os_str(),
+            "--report".as_ref(),
+            json.as_os_str(),
+        ],
+        &["is the scene file"],
+    );
+    assert_eq!(std::fs::read_to_string(&json).unwrap(), text, "the scene was changed");
+    assert_eq!(std::fs::read(&mesh).unwrap(), kept, "the mesh was changed");
 }
 
 #[test]
