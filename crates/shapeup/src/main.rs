@@ -9,8 +9,9 @@
 //! - `shapeup samples` — the sample meshes built into the binary (`--write DIR` writes them).
 //! - `shapeup completions SHELL`, `shapeup man` — shell completions and manual pages.
 //!
-//! Every error is one line on stderr and a non-zero exit; nothing is written on failure. Log
-//! records and progress bars: [`logging`].
+//! Every error is one line on stderr and a non-zero exit; bad input writes nothing (a simulation
+//! failing part-way keeps its finished frames, see `simulate`). Log records and progress bars:
+//! [`logging`].
 
 use anyhow::{Context, Result, bail};
 use clap::{Args, Parser, Subcommand};
