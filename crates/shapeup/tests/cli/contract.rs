@@ -216,20 +216,15 @@ impl Workspace {
         lines[0].to_owned()
     }
 
+    /// The arguments `deform SCENE -o out/result.obj --report out/report.json`.
+    fn deform_args(&self, scene: &Path) -> Vec<std::ffi::OsString> {
+        let (o, r) = (self.out("result.obj"), self.out("report.json"));
+        vec!["deform".into(), scene.into(), "-o".into(), o.into(), "--report".into(), r.into()]
+    }
+
     /// `deform SCENE -o out/result.obj --report out/report.json`, expected to fail.
     fn deform_fails(&self, scene: &Path, needles: &[&str]) -> String {
-        let (o, r) = (self.out("result.obj"), self.out("report.json"));
-        self.expect_failure(
-            &[
-                OsStr::new("deform"),
-                scene.as_os_str(),
-                "-o".as_ref(),
-                o.as_os_str(),
-                "--report".as_ref(),
-                r.as_os_str(),
-            ],
-            needles,
-        )
+        self.expect_failure(&self.deform_args(scene), needles)
     }
 
     /// A scene on spot with `body`, expected to fail naming the scene file and `needles`.
@@ -882,14 +877,7 @@ fn failure_leaves_an_existing_output_untouched() {
     let (o, r) = (ws.out("result.obj"), ws.out("report.json"));
     write(&o, "old output\n");
     write(&r, "old report\n");
-    let out = shapeup([
-        OsStr::new("deform"),
-        scene.as_os_str(),
-        "-o".as_ref(),
-        o.as_os_str(),
-        "--report".as_ref(),
-        r.as_os_str(),
-    ]);
+    let out = shapeup(ws.deform_args(&scene));
     assert!(matches!(out.code, Some(c) if c != 0), "{}", out.describe());
     assert_eq!(std::fs::read_to_string(&o).unwrap(), "old output\n", "the output was overwritten by a failed run");
     assert_eq!(std::fs::read_to_string(&r).unwrap(), "old report\n", "the report was overwritten by a failed run");
@@ -1440,23 +1428,19 @@ fn a_static_solve_warns_of_collider_motion_and_zero_area_collider_triangles() {
              {sphere}spin = {{ axis = [0.0, 1.0, 0.0], deg_per_s = 0.0 }}\n"
         ),
     );
-    let (o, r) = (ws.out("result.obj"), ws.out("report.json"));
-    let out = shapeup([
-        OsStr::new("deform"),
-        scene.as_os_str(),
-        "-o".as_ref(),
-        o.as_os_str(),
-        "--report".as_ref(),
-        r.as_os_str(),
-    ]);
+    let out = shapeup(ws.deform_args(&scene));
     assert_eq!(out.code, Some(0), "{}", out.describe());
     let motion = "moving.toml: 2 colliders' motion (velocity, spin) ignored in static mode";
     let flat = "flat.obj: 1 zero-area (degenerate) triangles in a mesh collider";
     assert_eq!(out.stderr.matches(motion).count(), 1, "{}", out.describe());
     assert_eq!(out.stderr.matches(flat).count(), 1, "{}", out.describe());
     assert!(out.stderr.contains("(first: colliders[0], triangle 1 (from 0))"), "{}", out.describe());
-    let kinds: Vec<String> =
-        report(&r)["warnings"].as_array().unwrap().iter().map(|w| w["kind"].as_str().unwrap().to_owned()).collect();
+    let kinds: Vec<String> = report(&ws.out("report.json"))["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|w| w["kind"].as_str().unwrap().to_owned())
+        .collect();
     assert!(kinds.contains(&"collider_motion_ignored".into()), "{kinds:?}");
     assert!(kinds.contains(&"degenerate_collider_triangles".into()), "{kinds:?}");
     // Time steps move the colliders: no motion warning there.
