@@ -62,11 +62,7 @@ pub struct Collider {
 impl Collider {
     /// [`Shape::closest`] against the collider as it is at time t.
     pub fn closest_at(&self, x: DVec3, t: f64) -> Proximity {
-        if self.motion.is_static() {
-            return self.shape.closest(x);
-        }
-        let p = self.shape.closest(self.motion.invert(x, t));
-        Proximity { point: self.motion.apply(p.point, t), normal: self.motion.turn(p.normal, t), distance: p.distance }
+        self.closest_from(x, t, t)
     }
 
     /// The feature of the collider closest to `x` as the collider is at time t0, carried by
