@@ -46,6 +46,11 @@ impl Motion {
     pub fn turn(&self, d: DVec3, t: f64) -> DVec3 {
         self.pose(t).0 * d
     }
+
+    /// A direction at time t0 turned with the body to where it points at t1: R(t1) R(t0)⁻¹ d.
+    pub fn carry(&self, d: DVec3, t0: f64, t1: f64) -> DVec3 {
+        self.pose(t1).0 * (self.pose(t0).0.inverse() * d)
+    }
 }
 
 /// A collider (working frame): its shape at rest, μ and its motion.

@@ -3,13 +3,15 @@
 //!
 //! Layers: [`shape`] (closest point and signed distance of each collider shape), [`collider`]
 //! (a shape, its friction and rigid motion), a contact's linear gap (`gap`), the
-//! self-collision broad and narrow phase,
+//! self-collision broad and narrow phase, the contacts of colliders' corners, edges and
+//! ridges with the surface's triangles and edges (`features`),
 //! [`model`] (detection per step, contact targets per iteration, projection at the end), and
 //! [`spec`] (the one description of a collider and of `[contact]` that scenes, the command
 //! line, the editor and Python share). [`solve_with_contact`] is the iteration a time step
 //! or a static solve runs when something can touch.
 
 pub mod collider;
+mod features;
 mod gap;
 pub mod model;
 mod self_collision;

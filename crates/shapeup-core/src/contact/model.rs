@@ -32,8 +32,9 @@
 //!    come last, so their thickness holds.
 
 use super::collider::Collider;
+use super::features::{FeatureContact, Features, PREDICTION_SLACK, detect_feature_contacts, longest_edge};
 use super::gap::{Contact, Pair};
-use super::self_collision::{Surface, detect_self_contacts};
+use super::self_collision::{Surface, Trees, detect_self_contacts};
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -53,14 +54,31 @@ pub struct ContactParams {
 #[derive(Debug, Clone)]
 pub struct ContactModel {
     colliders: Vec<Collider>,
+    /// Per collider, its points and segments that can cut into the surface.
+    features: Vec<Features>,
     params: ContactParams,
+    /// The surface's triangles and edges with their BVHs: for self-collision, and for the
+    /// colliders' features.
     surface: Option<Surface>,
     /// Vertices that take part (simulated, with mass or in the system).
     active: Vec<bool>,
     /// Collider contacts of the current step (one vertex each).
     contacts: Vec<Contact>,
-    /// Self contacts of the current step.
+    /// Self contacts of the current step, then the contacts of the colliders' features with
+    /// triangles and edges (`super::features`), the same linear gaps on the surface's side.
     pairs: Vec<Pair>,
+    /// How many of `pairs` are self contacts.
+    self_pairs: usize,
+    /// The feature contacts (their gaps are `pairs[self_pairs..]`), with their collider's μ
+    /// and motion.
+    feature_contacts: Vec<FeatureContact>,
+    /// The feature contacts the end of the step projects.
+    end_features: Vec<FeatureContact>,
+    /// With features: the step's prediction, the surface's longest edge over it, and which
+    /// of the surface's trees the step's detection refitted.
+    predicted: Vec<DVec3>,
+    longest: f64,
+    refitted: Trees,
     forces: Vec<DVec3>,
     start: Vec<DVec3>,
     /// Step interval [t0, t1] the contacts were detected for.
@@ -103,14 +121,23 @@ impl ContactModel {
     /// over `triangles` when `params.self_collision`.
     pub fn new(colliders: Vec<Collider>, params: ContactParams, triangles: &[[u32; 3]], active: Vec<bool>) -> Self {
         let n = active.len();
-        let surface = params.self_collision.then(|| Surface::new(triangles, &active));
+        let features: Vec<Features> = colliders.iter().map(|c| Features::of(&c.shape)).collect();
+        let any_features = features.iter().any(|f| f.has_points() || f.has_segments());
+        let surface = (params.self_collision || any_features).then(|| Surface::new(triangles, &active));
         ContactModel {
             colliders,
+            features,
             params,
             surface,
             active,
             contacts: Vec::new(),
             pairs: Vec::new(),
+            self_pairs: 0,
+            feature_contacts: Vec::new(),
+            end_features: Vec::new(),
+            predicted: Vec::new(),
+            longest: 0.0,
+            refitted: Trees { triangles: false, edges: false, vertices: false },
             forces: vec![DVec3::ZERO; n],
             start: Vec::new(),
             times: (0.0, 0.0),
@@ -137,7 +164,7 @@ impl ContactModel {
 
     /// Whether anything can touch anything (a collider, or self-collision).
     pub fn is_active(&self) -> bool {
-        !self.colliders.is_empty() || self.surface.is_some()
+        !self.colliders.is_empty() || self.params.self_collision
     }
 
     /// Contacts detected for the current step.
@@ -199,8 +226,42 @@ impl ContactModel {
         self.contacts = contacts;
         self.pair_ptr.clear();
         self.pairs.clear();
+        self.feature_contacts.clear();
+        self.self_pairs = 0;
+        let has_features = self.has_features();
         if let Some(surface) = &mut self.surface {
-            self.pairs = detect_self_contacts(surface, start, predicted, thickness);
+            let self_collision = self.params.self_collision;
+            let mut trees = Trees { triangles: self_collision, edges: self_collision, vertices: self_collision };
+            if has_features {
+                self.predicted.clear();
+                self.predicted.extend_from_slice(predicted);
+                self.longest = longest_edge(surface, start).max(longest_edge(surface, predicted));
+                for f in &self.features {
+                    let (points, segments) = f.can_cut(self.longest, thickness);
+                    trees.triangles |= points;
+                    trees.edges |= segments;
+                }
+            }
+            surface.refit(start, predicted, thickness, trees);
+            self.refitted = trees;
+            if self_collision {
+                self.pairs = surface.self_contacts(start, predicted, thickness);
+                self.self_pairs = self.pairs.len();
+            }
+            if trees.triangles || trees.edges {
+                self.feature_contacts = detect_feature_contacts(
+                    surface,
+                    colliders,
+                    &self.features,
+                    start,
+                    predicted,
+                    thickness,
+                    self.longest,
+                    0.0,
+                    (t0, t1),
+                );
+                self.pairs.extend(self.feature_contacts.iter().map(|f| f.pair));
+            }
         }
     }
 
@@ -209,6 +270,9 @@ impl ContactModel {
     /// edge length or above makes such pairs of a flat sheet, which then push apart.
     pub fn self_pairs_at_rest(&mut self, positions: &[DVec3]) -> usize {
         let thickness = self.params.thickness;
+        if !self.params.self_collision {
+            return 0;
+        }
         self.surface.as_mut().map_or(0, |surface| {
             let mut fresh = surface.clone();
             detect_self_contacts(&mut fresh, positions, positions, thickness).len()
@@ -235,14 +299,17 @@ impl ContactModel {
             if self.pair_ptr.is_empty() {
                 self.share_pairs(weights);
             }
-            let friction = self.params.friction;
+            let (friction, self_pairs, features) = (self.params.friction, self.self_pairs, &self.feature_contacts);
             // Σ α_j q_j once per pair: its gap and, when it pushes, its slip since the step's
-            // start (Σ α_j x_j, kept per pair for the step) both come from it.
+            // start (Σ α_j x_j, kept per pair for the step, plus a collider's own motion at a
+            // feature contact) both come from it.
             self.pairs
                 .par_iter()
                 .zip(&self.pair_start)
+                .enumerate()
                 .with_min_len(PAIRS_PER_TASK)
-                .map(|(c, &at_start)| {
+                .map(|(i, (c, &at_start))| {
+                    let friction = if i < self_pairs { friction } else { features[i - self_pairs].friction };
                     let u = c.combine(q);
                     let gap = c.normal.dot(u) - c.distance;
                     if gap >= 0.0 {
@@ -262,10 +329,14 @@ impl ContactModel {
         let contacts = &self.contacts;
         let by_vertex = &self.by_vertex;
         let (ptr, shares, push) = (&self.pair_ptr, &self.pair_shares, &self.pair_push);
+        let self_pairs = self.self_pairs as u32;
         // Per vertex, in parallel: its collider contacts one after the other, then the mean of
-        // its self contacts' corrections; times W_v.
+        // its feature contacts' corrections less what the first already moved it along them
+        // (a vertex and a triangle or edge around it pressed into the same collider are one
+        // push, not two), then the mean of its self contacts' corrections; times W_v.
         self.forces.par_iter_mut().enumerate().with_min_len(VERTICES_PER_TASK).for_each(|(v, target)| {
             let mut p = q[v];
+            let first = p;
             for &i in &by_vertex[v] {
                 let c = &contacts[i as usize];
                 let gap = c.gap(p);
@@ -280,16 +351,28 @@ impl ContactModel {
                 }
             }
             if let (Some(&from), Some(&to)) = (ptr.get(v), ptr.get(v + 1)) {
-                let (mut sum, mut count) = (DVec3::ZERO, 0u32);
+                // (self, features)
+                let (mut sum, mut count) = ([DVec3::ZERO; 2], [0u32; 2]);
                 for &(pair, copies, share) in &shares[from as usize..to as usize] {
                     let x = push[pair as usize];
                     if x != DVec3::ZERO {
-                        sum += share * x;
-                        count += copies;
+                        let kind = usize::from(pair >= self_pairs);
+                        sum[kind] += share * x;
+                        count[kind] += copies;
                     }
                 }
-                if count > 0 {
-                    p += sum / f64::from(count);
+                if count[1] > 0 {
+                    let mut mean = sum[1] / f64::from(count[1]);
+                    let moved = p - first;
+                    let length = moved.length();
+                    if length > 0.0 {
+                        let along = moved / length;
+                        mean -= mean.dot(along).clamp(0.0, length) * along;
+                    }
+                    p += mean;
+                }
+                if count[0] > 0 {
+                    p += sum[0] / f64::from(count[0]);
                 }
             }
             *target = weights[v] * p;
@@ -339,6 +422,9 @@ impl ContactModel {
         self.pair_ptr = count;
         let start = &self.start;
         self.pairs.par_iter().map(|c| c.combine(start)).collect_into_vec(&mut self.pair_start);
+        for (at_start, f) in self.pair_start[self.self_pairs..].iter_mut().zip(&self.feature_contacts) {
+            *at_start += f.shift;
+        }
     }
 
     /// Moves the vertices of `positions` that are inside a collider (as it is at time `t`) or
@@ -374,25 +460,34 @@ impl ContactModel {
     /// touches (see the [module docs](self)). `inverse_mass` weighs how a self contact's
     /// correction is shared (per vertex, 0 for a vertex that must not move).
     pub fn finish_step(&mut self, q: &mut [DVec3], inverse_mass: &[f64]) {
-        let has_self = !self.pairs.is_empty();
-        if has_self {
+        if !self.pairs.is_empty() {
             self.separate_self_contacts(q, inverse_mass);
         }
-        if self.project_out_of_colliders(q) > 0 && has_self {
+        // The colliders' features against the surface as it ended up (found again over the
+        // path it took when it strayed from the prediction: a fold can roll over a box's edge
+        // within the step), then the vertices.
+        let mut pushed = false;
+        if self.has_features() {
+            self.find_end_feature_contacts(q);
+            pushed = self.project_features(q, inverse_mass);
+        }
+        pushed |= self.project_out_of_colliders(q) > 0;
+        if pushed && self.self_pairs > 0 {
             self.separate_self_contacts(q, inverse_mass);
             self.project_out_of_colliders(q);
         }
         // What touches at the end: a force on, or within the thickness (plus round-off).
         self.touching.fill(false);
         let tolerance = 1e-3 * self.params.thickness.max(1e-9);
-        let touching_pairs: Vec<&Pair> = self.pairs.par_iter().filter(|c| c.gap(q) <= tolerance).collect();
-        for c in &touching_pairs {
-            for &v in &c.vertices {
+        let touching_pairs: Vec<usize> =
+            self.pairs.par_iter().enumerate().filter(|(_, c)| c.gap(q) <= tolerance).map(|(i, _)| i).collect();
+        for &i in &touching_pairs {
+            for &v in &self.pairs[i].vertices {
                 self.touching[v as usize] = true;
             }
         }
-        self.self_count = touching_pairs.len();
-        self.touching_count = self.self_count;
+        self.self_count = touching_pairs.iter().filter(|&&i| i < self.self_pairs).count();
+        self.touching_count = touching_pairs.len();
         for c in &self.contacts {
             if c.gap(q[c.vertex as usize]) <= tolerance {
                 self.touching_count += 1;
@@ -400,6 +495,72 @@ impl ContactModel {
             }
         }
         self.forces.fill(DVec3::ZERO);
+    }
+
+    /// Whether a collider has features (points or segments) that can cut into the surface.
+    fn has_features(&self) -> bool {
+        self.features.iter().any(|f| f.has_points() || f.has_segments())
+    }
+
+    /// The feature contacts the end of the step projects ([`FeatureContact::project`]): the
+    /// step's own when every vertex ended within [`PREDICTION_SLACK`] of the thickness of its
+    /// prediction (a pair the detection left out then still keeps 1 − that of it), else those
+    /// found again over the path from the step's start to `q`: from the step's trees, the
+    /// features' boxes grown by the farthest a vertex ended from its prediction.
+    fn find_end_feature_contacts(&mut self, q: &[DVec3]) {
+        let Some(surface) = &mut self.surface else { return };
+        let thickness = self.params.thickness;
+        let predicted = &self.predicted;
+        let off = surface
+            .vertices()
+            .par_iter()
+            .map(|&v| (q[v as usize] - predicted[v as usize]).length())
+            .reduce(|| 0.0, f64::max);
+        if off <= PREDICTION_SLACK * thickness {
+            self.end_features.clone_from(&self.feature_contacts);
+            return;
+        }
+        let longest = self.longest.max(longest_edge(surface, q));
+        let (mut points, mut segments) = (false, false);
+        for f in &self.features {
+            let (p, s) = f.can_cut(longest, thickness);
+            points |= p;
+            segments |= s;
+        }
+        // A tree the step did not refit (the surface stretched past what its features need).
+        let stale = Trees {
+            triangles: points && !self.refitted.triangles,
+            edges: segments && !self.refitted.edges,
+            vertices: false,
+        };
+        if stale.triangles || stale.edges {
+            surface.refit(&self.start, predicted, thickness, stale);
+        }
+        self.end_features = detect_feature_contacts(
+            surface,
+            &self.colliders,
+            &self.features,
+            &self.start,
+            q,
+            thickness,
+            longest,
+            off,
+            self.times,
+        );
+    }
+
+    /// Projects the end-of-step feature contacts. Whether anything moved. In a time step a
+    /// sphere's or a capsule's are left to the iterations: their linear gap drifts from the
+    /// round surface only as far as the surface slides around it, and projecting that back
+    /// every step turns into velocity that keeps a cloth lying on a bar from settling. A static
+    /// solve (t0 = t1) projects them too: its positions are the answer, not a velocity.
+    fn project_features(&self, q: &mut [DVec3], inverse_mass: &[f64]) -> bool {
+        let dynamic = self.times.1 > self.times.0;
+        let mut moved = false;
+        for f in self.end_features.iter().filter(|f| !(dynamic && f.round)) {
+            moved |= f.project(q, inverse_mass);
+        }
+        moved
     }
 
     /// Up to 4 Gauss–Seidel passes of position corrections over the self contacts still too

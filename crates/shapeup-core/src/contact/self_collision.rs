@@ -28,6 +28,8 @@ pub(crate) struct Surface {
     triangle_tree: Tree,
     edge_tree: Tree,
     vertex_tree: Tree,
+    /// The mean motion of the last refit.
+    drift: DVec3,
 }
 
 /// A BVH over boxes that move a little each step: refitted, and rebuilt every
@@ -77,6 +79,7 @@ impl Surface {
             triangle_tree: Tree::default(),
             edge_tree: Tree::default(),
             vertex_tree: Tree::default(),
+            drift: DVec3::ZERO,
         }
     }
 }
@@ -113,7 +116,7 @@ fn swept_box(vertices: &[u32], start: &[DVec3], predicted: &[DVec3], drift: DVec
 }
 
 /// The largest predicted motion of any of `others` relative to `first`'s vertices.
-fn relative_motion(first: &[u32], others: &[u32], start: &[DVec3], predicted: &[DVec3]) -> f64 {
+pub(crate) fn relative_motion(first: &[u32], others: &[u32], start: &[DVec3], predicted: &[DVec3]) -> f64 {
     let motion = |v: u32| predicted[v as usize] - start[v as usize];
     let mut most = 0.0f64;
     for &a in first {
@@ -125,64 +128,132 @@ fn relative_motion(first: &[u32], others: &[u32], start: &[DVec3], predicted: &[
     most.sqrt()
 }
 
-/// Every vertex–triangle and edge–edge contact of the step (see the [module docs](self)).
+/// Every vertex–triangle and edge–edge contact of the step (see the [module docs](self)):
+/// [`Surface::refit`] of every tree, then [`Surface::self_contacts`].
 pub(crate) fn detect_self_contacts(
     surface: &mut Surface,
     start: &[DVec3],
     predicted: &[DVec3],
     thickness: f64,
 ) -> Vec<Pair> {
-    if surface.triangles.is_empty() {
-        return Vec::new();
+    surface.refit(start, predicted, thickness, Trees { triangles: true, edges: true, vertices: true });
+    surface.self_contacts(start, predicted, thickness)
+}
+
+/// Which of a surface's BVHs a step needs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Trees {
+    pub(crate) triangles: bool,
+    pub(crate) edges: bool,
+    pub(crate) vertices: bool,
+}
+
+impl Surface {
+    /// The triangles.
+    pub(crate) fn triangles(&self) -> &[[u32; 3]] {
+        &self.triangles
     }
-    // Boxes grown by half the thickness each: two meet when their gap is under the thickness.
-    let grow = 0.5 * thickness;
-    let Surface { triangles, edges, vertices, triangle_tree, edge_tree, vertex_tree } = surface;
-    let (triangles, edges, vertices) = (&*triangles, &*edges, &*vertices);
-    let drift = common_motion(vertices, start, predicted);
-    let boxes = |items: &[u32], size: usize| -> Vec<Aabb> {
-        items.par_chunks(size).map(|item| swept_box(item, start, predicted, drift, grow)).collect()
-    };
-    let ((triangle_bvh, edge_bvh), vertex_bvh) = rayon::join(
-        || {
-            rayon::join(
-                || triangle_tree.update(&boxes(triangles.as_flattened(), 3)),
-                || edge_tree.update(&boxes(edges.as_flattened(), 2)),
-            )
-        },
-        || vertex_tree.update(&boxes(vertices, 1)),
-    );
-    // Candidates, each passed to the narrow phase as it is met (no list of candidates):
-    // vertex–triangle pairs from one traversal of the vertex tree against the triangle tree,
-    // edge–edge pairs from one of the edge tree against itself, less those that share a
-    // vertex. The two traversals run side by side.
-    let (mut contacts, edge_edge) = rayon::join(
-        || -> Vec<Pair> {
-            vertex_bvh
-                .leaf_pairs(triangle_bvh, |a, b| a.intersects(b))
-                .filter_map(|(i, k)| {
-                    vertex_triangle_contact(vertices[i as usize], triangles[k as usize], start, predicted, thickness)
-                })
-                .collect()
-        },
-        || -> Vec<Pair> {
-            let contact =
-                |i: u32, j: u32| edge_edge_contact(edges[i as usize], edges[j as usize], start, predicted, thickness);
-            if rayon::current_num_threads() > 1 {
-                // parry's parallel traversal lists the pairs (in the sequential one's order).
-                let pairs = edge_bvh.traverse_bvtt_single_tree_parallel::<false>();
-                pairs.par_iter().filter_map(|&(i, j)| contact(i, j)).collect()
-            } else {
-                let mut out = Vec::new();
-                edge_bvh.traverse_bvtt_single_tree::<false>(&mut BvhWorkspace::default(), &mut |i, j| {
-                    out.extend(contact(i, j));
-                });
-                out
-            }
-        },
-    );
-    contacts.extend(edge_edge);
-    distinct_features(contacts)
+
+    /// The edges (each once).
+    pub(crate) fn edges(&self) -> &[[u32; 2]] {
+        &self.edges
+    }
+
+    /// The vertices (each once).
+    pub(crate) fn vertices(&self) -> &[u32] {
+        &self.vertices
+    }
+
+    /// The BVH of the triangles' swept boxes of the last [`Surface::refit`] that asked for it.
+    pub(crate) fn triangle_bvh(&self) -> Option<&Bvh> {
+        self.triangle_tree.bvh.as_ref()
+    }
+
+    /// The BVH of the edges' swept boxes of the last [`Surface::refit`] that asked for it.
+    pub(crate) fn edge_bvh(&self) -> Option<&Bvh> {
+        self.edge_tree.bvh.as_ref()
+    }
+
+    /// The mean motion taken out of the boxes of the last [`Surface::refit`] (see
+    /// [`common_motion`]).
+    pub(crate) fn drift(&self) -> DVec3 {
+        self.drift
+    }
+
+    /// Refits (or rebuilds) the BVHs in `which` over the boxes swept from `start` to
+    /// `predicted`, less the surface's mean motion, each grown by half the thickness: two
+    /// boxes meet when their elements come within the thickness of each other.
+    pub(crate) fn refit(&mut self, start: &[DVec3], predicted: &[DVec3], thickness: f64, which: Trees) {
+        if self.triangles.is_empty() {
+            return;
+        }
+        let grow = 0.5 * thickness;
+        let Surface { triangles, edges, vertices, triangle_tree, edge_tree, vertex_tree, drift } = self;
+        let (triangles, edges, vertices) = (&*triangles, &*edges, &*vertices);
+        *drift = common_motion(vertices, start, predicted);
+        let drift = *drift;
+        let boxes = |items: &[u32], size: usize| -> Vec<Aabb> {
+            items.par_chunks(size).map(|item| swept_box(item, start, predicted, drift, grow)).collect()
+        };
+        rayon::join(
+            || {
+                rayon::join(
+                    || which.triangles.then(|| triangle_tree.update(&boxes(triangles.as_flattened(), 3))),
+                    || which.edges.then(|| edge_tree.update(&boxes(edges.as_flattened(), 2))),
+                )
+            },
+            || which.vertices.then(|| vertex_tree.update(&boxes(vertices, 1))),
+        );
+    }
+
+    /// The self contacts of the step, from the trees of the last [`Surface::refit`] (which
+    /// must have refitted all three).
+    pub(crate) fn self_contacts(&self, start: &[DVec3], predicted: &[DVec3], thickness: f64) -> Vec<Pair> {
+        let (Some(triangle_bvh), Some(edge_bvh), Some(vertex_bvh)) =
+            (self.triangle_tree.bvh.as_ref(), self.edge_tree.bvh.as_ref(), self.vertex_tree.bvh.as_ref())
+        else {
+            return Vec::new();
+        };
+        let (triangles, edges, vertices) = (&self.triangles, &self.edges, &self.vertices);
+        // Candidates, each passed to the narrow phase as it is met (no list of candidates):
+        // vertex–triangle pairs from one traversal of the vertex tree against the triangle
+        // tree, edge–edge pairs from one of the edge tree against itself, less those that
+        // share a vertex. The two traversals run side by side.
+        let (mut contacts, edge_edge) = rayon::join(
+            || -> Vec<Pair> {
+                vertex_bvh
+                    .leaf_pairs(triangle_bvh, |a, b| a.intersects(b))
+                    .filter_map(|(i, k)| {
+                        vertex_triangle_contact(
+                            vertices[i as usize],
+                            triangles[k as usize],
+                            start,
+                            predicted,
+                            thickness,
+                        )
+                    })
+                    .collect()
+            },
+            || -> Vec<Pair> {
+                let contact = |i: u32, j: u32| {
+                    edge_edge_contact(edges[i as usize], edges[j as usize], start, predicted, thickness)
+                };
+                if rayon::current_num_threads() > 1 {
+                    // parry's parallel traversal lists the pairs (in the sequential one's order).
+                    let pairs = edge_bvh.traverse_bvtt_single_tree_parallel::<false>();
+                    pairs.par_iter().filter_map(|&(i, j)| contact(i, j)).collect()
+                } else {
+                    let mut out = Vec::new();
+                    edge_bvh.traverse_bvtt_single_tree::<false>(&mut BvhWorkspace::default(), &mut |i, j| {
+                        out.extend(contact(i, j));
+                    });
+                    out
+                }
+            },
+        );
+        contacts.extend(edge_edge);
+        distinct_features(contacts)
+    }
 }
 
 /// The contact of vertex `v` with triangle `t` (narrow phase at x_n), when they are not
@@ -308,7 +379,7 @@ fn feature_key(c: &Pair) -> FeatureKey {
 /// A pair that starts closer than the thickness is asked for only [`RECOVERY`] of the way
 /// back to it per step: pushing it all the way out in one step would become a velocity
 /// (depth / h) that throws the layers apart and feeds energy into a crumpled cloth.
-fn separation(d: DVec3, thickness: f64, relative_motion: impl FnOnce() -> f64) -> Option<(DVec3, f64)> {
+pub(crate) fn separation(d: DVec3, thickness: f64, relative_motion: impl FnOnce() -> f64) -> Option<(DVec3, f64)> {
     let distance = d.length();
     if distance < 1e-12 || (distance >= thickness && distance >= thickness + 2.0 * relative_motion()) {
         return None;
@@ -319,7 +390,7 @@ fn separation(d: DVec3, thickness: f64, relative_motion: impl FnOnce() -> f64) -
 
 /// The share of its missing distance to the thickness that a pair which starts too close is
 /// given back per step.
-const RECOVERY: f64 = 0.2;
+pub(crate) const RECOVERY: f64 = 0.2;
 
 /// The closest point of triangle `p` to `x` and its barycentric coordinates (Ericson §5.1.5).
 pub(crate) fn closest_on_triangle(x: DVec3, p: [DVec3; 3]) -> (DVec3, [f64; 3]) {

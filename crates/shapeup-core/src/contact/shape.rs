@@ -169,7 +169,58 @@ impl MeshShape {
     pub fn num_triangles(&self) -> usize {
         self.mesh.indices().len()
     }
+
+    /// The ridges of the mesh (rest pose): its edges on one face only (an open mesh's rim),
+    /// on more than two, or between two faces that meet at a convex dihedral angle over
+    /// [`RIDGE_ANGLE_DEG`]; and the vertices at their ends. Only these can cut into a surface
+    /// whose vertices are kept out of the mesh: a concave or flat edge lies behind its faces.
+    pub fn ridges(&self) -> (Vec<DVec3>, Vec<[DVec3; 2]>) {
+        let vertices: Vec<DVec3> = self.mesh.vertices().iter().map(|p| from_parry(*p)).collect();
+        let triangles = self.mesh.indices();
+        let normal = |t: &[u32; 3]| {
+            let [a, b, c] = t.map(|v| vertices[v as usize]);
+            (b - a).cross(c - a).try_normalize()
+        };
+        // Per edge (sorted ends): the faces on it, with the vertex opposite it in each.
+        let mut faces: std::collections::HashMap<(u32, u32), Vec<(usize, u32)>> = std::collections::HashMap::new();
+        for (f, t) in triangles.iter().enumerate() {
+            for k in 0..3 {
+                let (a, b, o) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
+                faces.entry((a.min(b), a.max(b))).or_default().push((f, o));
+            }
+        }
+        let cos_ridge = RIDGE_ANGLE_DEG.to_radians().cos();
+        let mut keep = vec![false; vertices.len()];
+        let mut segments = Vec::new();
+        let mut edges: Vec<_> = faces.into_iter().collect();
+        edges.sort_unstable_by_key(|(e, _)| *e);
+        for ((a, b), on) in edges {
+            let ridge = match on[..] {
+                [(f, _), (g, o)] => match (normal(&triangles[f]), normal(&triangles[g])) {
+                    // Convex: g's far vertex lies behind f's plane.
+                    (Some(nf), Some(ng)) => {
+                        nf.dot(ng) < cos_ridge && nf.dot(vertices[o as usize] - vertices[a as usize]) < 0.0
+                    }
+                    _ => false,
+                },
+                _ => true,
+            };
+            if ridge {
+                keep[a as usize] = true;
+                keep[b as usize] = true;
+                segments.push([vertices[a as usize], vertices[b as usize]]);
+            }
+        }
+        let points = vertices.iter().zip(&keep).filter(|(_, k)| **k).map(|(p, _)| *p).collect();
+        (points, segments)
+    }
 }
+
+/// The dihedral angle (between the faces' normals) over which a convex edge of a mesh
+/// collider is a ridge: a surface edge of length ℓ whose ends are kept at the thickness t from
+/// the faces of a flatter edge passes over it within about ℓ/2 · tan(5°) − t, which is below
+/// 0 for t ≥ 0.044 ℓ (the default thickness is 0.25 of the mean edge length).
+pub const RIDGE_ANGLE_DEG: f64 = 10.0;
 
 fn to_parry(p: DVec3) -> parry3d_f64::math::Vector {
     parry3d_f64::math::Vector::new(p.x, p.y, p.z)
@@ -409,6 +460,55 @@ mod tests {
             let l = rotation.inverse() * (x - center);
             l.abs().cmplt(half).all()
         });
+    }
+
+    #[test]
+    fn a_cube_has_12_ridges_a_flat_or_gently_bent_sheet_only_its_rim() {
+        let p: Vec<DVec3> =
+            (0..8).map(|i| DVec3::new((i & 1) as f64, ((i >> 1) & 1) as f64, ((i >> 2) & 1) as f64)).collect();
+        let cube = [
+            [0, 2, 1],
+            [1, 2, 3],
+            [4, 5, 6],
+            [5, 7, 6],
+            [0, 1, 4],
+            [1, 5, 4],
+            [2, 6, 3],
+            [3, 6, 7],
+            [0, 4, 2],
+            [2, 4, 6],
+            [1, 3, 5],
+            [3, 7, 5],
+        ];
+        let (points, segments) = MeshShape::new(&p, &cube, true, 0.0).unwrap().ridges();
+        // The 6 face diagonals are flat; the 12 cube edges are convex at 90°.
+        assert_eq!((points.len(), segments.len()), (8, 12));
+        assert!(segments.iter().all(|[a, b]| ((*a - *b).length() - 1.0).abs() < 1e-12));
+        // A 4 × 4 grid of squares bent along x = 2 by `angle` (y = 0 for x ≤ 2, rising after),
+        // faces up: below the ridge angle only its 16 rim edges are ridges; above it the fold
+        // line's 4 edges too, once convex (bent down), never when concave (bent up).
+        let sheet = |angle_deg: f64| {
+            let slope = angle_deg.to_radians().tan();
+            let p: Vec<DVec3> = (0..25)
+                .map(|k| {
+                    let (x, z) = ((k / 5) as f64, (k % 5) as f64);
+                    DVec3::new(x, slope * (x - 2.0).max(0.0), z)
+                })
+                .collect();
+            let mut t = Vec::new();
+            for i in 0..4u32 {
+                for j in 0..4u32 {
+                    let v = |a: u32, b: u32| a * 5 + b;
+                    t.push([v(i, j), v(i, j + 1), v(i + 1, j)]);
+                    t.push([v(i + 1, j), v(i, j + 1), v(i + 1, j + 1)]);
+                }
+            }
+            MeshShape::new(&p, &t, false, 0.1).unwrap().ridges().1.len()
+        };
+        assert_eq!(sheet(0.0), 16);
+        assert_eq!(sheet(5.0), 16);
+        assert_eq!(sheet(-20.0), 20, "bent down by 20°: a convex fold");
+        assert_eq!(sheet(20.0), 16, "bent up by 20°: a concave fold cannot cut anything");
     }
 
     #[test]
