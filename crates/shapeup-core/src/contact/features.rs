@@ -177,6 +177,11 @@ impl Features {
         !self.points.is_empty()
     }
 
+    /// Whether the collider is the points within ρ > 0 of its features (a sphere, a capsule).
+    pub(crate) fn is_round(&self) -> bool {
+        self.radius > 0.0
+    }
+
     /// Whether there are segment features.
     pub(crate) fn has_segments(&self) -> bool {
         !self.segments.is_empty()

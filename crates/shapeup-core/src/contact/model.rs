@@ -508,6 +508,12 @@ impl ContactModel {
     /// found again over the path from the step's start to `q`: from the step's trees, the
     /// features' boxes grown by the farthest a vertex ended from its prediction.
     fn find_end_feature_contacts(&mut self, q: &[DVec3]) {
+        self.end_features.clear();
+        // A time step projects no round collider's (see `project_features`).
+        let dynamic = self.times.1 > self.times.0;
+        if dynamic && self.features.iter().all(|f| f.is_round() || !(f.has_points() || f.has_segments())) {
+            return;
+        }
         let Some(surface) = &mut self.surface else { return };
         let thickness = self.params.thickness;
         let predicted = &self.predicted;
