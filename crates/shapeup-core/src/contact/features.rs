@@ -73,13 +73,12 @@ enum FeatureAt {
 }
 
 impl FeatureContact {
-    /// The end-of-step projection of the contact (after the vertices' own): its closest points
-    /// taken again at `q` (the surface may have slid along the feature during the step, which
-    /// moves them off the fixed α of the step's gap), and the surface's element moved out to
-    /// the reach along their direction (the step's normal when they are on the wrong side of
-    /// it), its vertices by α_j w_j / Σ α_k² w_k with w = `inverse_mass`. Whether it moved
-    /// anything.
-    pub(crate) fn project(&self, q: &mut [DVec3], inverse_mass: &[f64]) -> bool {
+    /// The closest points of the feature (where it is at the step's end) and the surface's
+    /// element at `q`: the element's coordinates α, the direction from the feature's point to
+    /// the element's (the step's normal when that is on the wrong side of it) and the distance
+    /// along it. `None` past an end of the element or of a segment feature (the vertices' and
+    /// the point features' own contacts).
+    fn closest_at(&self, q: &[DVec3]) -> Option<([f64; 4], DVec3, f64)> {
         let (alpha, offset) = match self.end {
             FeatureAt::Point(p) => {
                 let t = [self.pair.vertices[0], self.pair.vertices[1], self.pair.vertices[2]];
@@ -89,10 +88,8 @@ impl FeatureContact {
             FeatureAt::Segment(a, b) => {
                 let [e0, e1] = [self.pair.vertices[0], self.pair.vertices[1]];
                 let (s, u, on_edge, on_feature) = closest_between_segments(q[e0 as usize], q[e1 as usize], a, b);
-                // Past the feature's ends or at the edge's: the point features' and the
-                // vertices' own projections.
                 if s <= 0.0 || s >= 1.0 || u <= 0.0 || u >= 1.0 {
-                    return false;
+                    return None;
                 }
                 ([1.0 - s, s, 0.0, 0.0], on_edge - on_feature)
             }
@@ -100,7 +97,27 @@ impl FeatureContact {
         let length = offset.length();
         let normal = self.pair.normal;
         let direction = if length > 1e-12 && offset.dot(normal) > 0.0 { offset / length } else { normal };
-        let depth = self.reach - offset.dot(direction);
+        Some((alpha, direction, offset.dot(direction)))
+    }
+
+    /// The vertices of the surface's element with α ≠ 0 at `q` when it is within the reach
+    /// plus `tolerance` of the feature (it touches the collider).
+    pub(crate) fn touching(&self, q: &[DVec3], tolerance: f64) -> Option<impl Iterator<Item = u32> + '_> {
+        let (alpha, _, distance) = self.closest_at(q)?;
+        (distance <= self.reach + tolerance)
+            .then(move || self.pair.vertices.into_iter().zip(alpha).filter(|(_, a)| *a != 0.0).map(|(v, _)| v))
+    }
+
+    /// The end-of-step projection of the contact (after the vertices' own): its closest points
+    /// taken again at `q` (the surface may have slid along the feature during the step, which
+    /// moves them off the fixed α of the step's gap), and the surface's element moved out to
+    /// the reach along their direction (the step's normal when they are on the wrong side of
+    /// it), its vertices by α_j w_j / Σ α_k² w_k with w = `inverse_mass`; `give` of the reach
+    /// is left (the surface is moved out to the reach less it, when closer). Whether it moved
+    /// anything.
+    pub(crate) fn project(&self, q: &mut [DVec3], inverse_mass: &[f64], give: f64) -> bool {
+        let Some((alpha, direction, distance)) = self.closest_at(q) else { return false };
+        let depth = self.reach - give - distance;
         let terms = || self.pair.vertices.iter().zip(alpha).map(|(&v, a)| (v as usize, a));
         let w: f64 = terms().map(|(v, a)| a * a * inverse_mass[v]).sum();
         if depth <= 0.0 || w <= 0.0 {

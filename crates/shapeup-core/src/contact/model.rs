@@ -479,15 +479,28 @@ impl ContactModel {
         // What touches at the end: a force on, or within the thickness (plus round-off).
         self.touching.fill(false);
         let tolerance = 1e-3 * self.params.thickness.max(1e-9);
-        let touching_pairs: Vec<usize> =
-            self.pairs.par_iter().enumerate().filter(|(_, c)| c.gap(q) <= tolerance).map(|(i, _)| i).collect();
+        let touching_pairs: Vec<usize> = self.pairs[..self.self_pairs]
+            .par_iter()
+            .enumerate()
+            .filter(|(_, c)| c.gap(q) <= tolerance)
+            .map(|(i, _)| i)
+            .collect();
         for &i in &touching_pairs {
             for &v in &self.pairs[i].vertices {
                 self.touching[v as usize] = true;
             }
         }
-        self.self_count = touching_pairs.iter().filter(|&&i| i < self.self_pairs).count();
-        self.touching_count = touching_pairs.len();
+        self.self_count = touching_pairs.len();
+        self.touching_count = self.self_count;
+        // Feature contacts where the surface ended (the step's α may have slid off).
+        for f in &self.end_features {
+            if let Some(vertices) = f.touching(q, tolerance) {
+                self.touching_count += 1;
+                for v in vertices {
+                    self.touching[v as usize] = true;
+                }
+            }
+        }
         for c in &self.contacts {
             if c.gap(q[c.vertex as usize]) <= tolerance {
                 self.touching_count += 1;
@@ -508,10 +521,12 @@ impl ContactModel {
     /// found again over the path from the step's start to `q`: from the step's trees, the
     /// features' boxes grown by the farthest a vertex ended from its prediction.
     fn find_end_feature_contacts(&mut self, q: &[DVec3]) {
-        self.end_features.clear();
-        // A time step projects no round collider's (see `project_features`).
+        // Only round colliders in a time step: the step's own contacts (what they leave is
+        // held to half the thickness, see `project_features`; a search along the path cost
+        // cloth-folding a quarter of its step).
         let dynamic = self.times.1 > self.times.0;
         if dynamic && self.features.iter().all(|f| f.is_round() || !(f.has_points() || f.has_segments())) {
+            self.end_features.clone_from(&self.feature_contacts);
             return;
         }
         let Some(surface) = &mut self.surface else { return };
@@ -556,15 +571,19 @@ impl ContactModel {
     }
 
     /// Projects the end-of-step feature contacts. Whether anything moved. In a time step a
-    /// sphere's or a capsule's are left to the iterations: their linear gap drifts from the
-    /// round surface only as far as the surface slides around it, and projecting that back
-    /// every step turns into velocity that keeps a cloth lying on a bar from settling. A static
-    /// solve (t0 = t1) projects them too: its positions are the answer, not a velocity.
+    /// sphere's or a capsule's are projected only where the surface came within half the
+    /// thickness, and to there: their linear gap drifts from the round surface as far as the
+    /// surface slides around it, and projecting that back to the whole thickness every step
+    /// turned into velocity that kept a strain-only cloth on a bar from settling; without any
+    /// projection the penalty let a cloth hanging on a thin bar sink through it. A static
+    /// solve (t0 = t1) projects all of them to the whole thickness: its positions are the
+    /// answer, not a velocity.
     fn project_features(&self, q: &mut [DVec3], inverse_mass: &[f64]) -> bool {
         let dynamic = self.times.1 > self.times.0;
+        let give = if dynamic { 0.75 * self.params.thickness } else { 0.0 };
         let mut moved = false;
-        for f in self.end_features.iter().filter(|f| !(dynamic && f.round)) {
-            moved |= f.project(q, inverse_mass);
+        for f in &self.end_features {
+            moved |= f.project(q, inverse_mass, if f.round { give } else { 0.0 });
         }
         moved
     }
