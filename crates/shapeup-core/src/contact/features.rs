@@ -25,8 +25,11 @@
 //! point, seen along the feature, is √(a² + r²) from the feature when the point is at
 //! a = ρ + t, which is a + t/10 or more when r² ≥ t a/5 + t²/100 ([`needs_own_contact`]). So a
 //! large sphere under a fine cloth adds none (r² ≈ ℓ²/4 < t R/5), a box's edge under it does.
-//! A surface point that starts inside the collider makes none either (its vertices' contacts
-//! and the end-of-step projection take it out; the normal from P would point inward).
+//! A surface point that starts inside the collider (an edge pulled into a thin bar, a
+//! triangle over a box's corner that points up) takes its normal from the side its element's
+//! vertices are on, their outward normals weighted by α, where that points away from P; the
+//! offset from P could point inward ([`contact_normal`]). Where the vertices are inside too,
+//! their own contacts take them out first.
 
 use super::collider::Collider;
 use super::gap::Pair;
@@ -98,6 +101,17 @@ impl FeatureContact {
         let normal = self.pair.normal;
         let direction = if length > 1e-12 && offset.dot(normal) > 0.0 { offset / length } else { normal };
         Some((alpha, direction, offset.dot(direction)))
+    }
+
+    /// What makes two contacts the same one: the surface's element and the feature where it
+    /// ends the step.
+    pub(crate) fn key(&self) -> ([u32; 4], [u64; 6]) {
+        let bits = |p: DVec3| [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()];
+        let end = match self.end {
+            FeatureAt::Point(p) => [bits(p), [0; 3]],
+            FeatureAt::Segment(a, b) => [bits(a), bits(b)],
+        };
+        (self.pair.vertices, [end[0][0], end[0][1], end[0][2], end[1][0], end[1][1], end[1][2]])
     }
 
     /// The vertices of the surface's element with α ≠ 0 at `q` when it is within the reach
@@ -356,11 +370,10 @@ pub(crate) fn detect_feature_contacts(
                                 radius,
                                 [p0, p1],
                                 triangle,
-                                start,
-                                predicted,
+                                (start, predicted),
                                 thickness,
-                                t0,
-                                t1,
+                                (t0, t1),
+                                ClosestAt::Start,
                             )
                         })
                         .collect()
@@ -380,11 +393,10 @@ pub(crate) fn detect_feature_contacts(
                                 ends,
                                 (piece, pieces),
                                 edge,
-                                start,
-                                predicted,
+                                (start, predicted),
                                 thickness,
-                                t0,
-                                t1,
+                                (t0, t1),
+                                ClosestAt::Start,
                             )
                         })
                         .collect()
@@ -395,9 +407,69 @@ pub(crate) fn detect_feature_contacts(
         .collect()
 }
 
-/// Whether the surface point `x` (at t0) is inside the collider.
-fn starts_inside(collider: &Collider, radius: f64, distance: f64, x: DVec3, t0: f64) -> bool {
-    if radius > 0.0 { distance < radius } else { collider.closest_from(x, t0, t0).distance < 0.0 }
+/// The contacts of round colliders' features (sphere, capsule) with the elements of the
+/// surface that ended the step at `end` within reach of them, made from where the elements
+/// started (`start`, the side they came from): an edge pulled into a thin bar beyond its
+/// prediction, which the step's detection did not see coming. Every element is tested against
+/// the features' boxes at t1 (a handful of features; the surface's trees stay as the step
+/// left them, since the self contacts' order follows them).
+pub(crate) fn detect_round_contacts_at_end(
+    surface: &Surface,
+    colliders: &[Collider],
+    features: &[Features],
+    (start, end): (&[DVec3], &[DVec3]),
+    thickness: f64,
+    longest: f64,
+    (t0, t1): (f64, f64),
+) -> Vec<FeatureContact> {
+    let mut found = Vec::new();
+    for (collider, f) in colliders.iter().zip(features) {
+        let (points, segments) = f.can_cut(longest, thickness);
+        if !f.is_round() || !(points || segments) {
+            continue;
+        }
+        let reach = f.radius + thickness;
+        let at = |p: DVec3, t: f64| if collider.motion.is_static() { p } else { collider.motion.apply(p, t) };
+        let near = |b: &Aabb, element: &[u32]| {
+            let (lo, hi) = element
+                .iter()
+                .map(|&v| end[v as usize])
+                .fold((DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)), |(lo, hi), p| {
+                    (lo.min(p), hi.max(p))
+                });
+            lo.x <= b.maxs.x
+                && hi.x >= b.mins.x
+                && lo.y <= b.maxs.y
+                && hi.y >= b.mins.y
+                && lo.z <= b.maxs.z
+                && hi.z >= b.mins.z
+        };
+        for &p in f.points.iter().filter(|_| points) {
+            let ends = [at(p, t0), at(p, t1)];
+            let b = aabb([ends[1]], reach);
+            found.par_extend(surface.triangles().par_iter().filter(|t| near(&b, &t[..])).filter_map(|&t| {
+                point_triangle_contact(collider, f.radius, ends, t, (start, end), thickness, (t0, t1), ClosestAt::End)
+            }));
+        }
+        for &[a, b] in f.segments.iter().filter(|_| segments) {
+            let ends = [[at(a, t0), at(b, t0)], [at(a, t1), at(b, t1)]];
+            let bounds = aabb(ends[1], reach);
+            found.par_extend(surface.edges().par_iter().filter(|e| near(&bounds, &e[..])).filter_map(|&e| {
+                segment_edge_contact(
+                    collider,
+                    f.radius,
+                    ends,
+                    (0, 1),
+                    e,
+                    (start, end),
+                    thickness,
+                    (t0, t1),
+                    ClosestAt::End,
+                )
+            }));
+        }
+    }
+    found
 }
 
 /// The largest predicted motion of `vertices` relative to the feature's point, which moves
@@ -406,14 +478,126 @@ fn relative_motion(vertices: &[u32], shift: DVec3, start: &[DVec3], predicted: &
     vertices.iter().map(|&v| (predicted[v as usize] - start[v as usize] - shift).length()).fold(0.0, f64::max)
 }
 
-/// The distance a contact whose points are `distance` apart must keep this step, `reach` =
-/// ρ + t, when it is one: closer than the reach plus twice the relative motion (computed
-/// only when needed), not touching exactly. As a self contact's.
-fn target(distance: f64, reach: f64, motion: impl FnOnce() -> f64) -> Option<f64> {
-    if distance < 1e-12 || (distance >= reach && distance >= reach + 2.0 * motion()) {
+/// The distance a contact whose points are `gap` apart along its normal (negative: crossed)
+/// must keep this step, `reach` = ρ + t, when it is one: closer than the reach plus twice the
+/// relative motion (computed only when needed). As a self contact's.
+fn target(gap: f64, reach: f64, motion: impl FnOnce() -> f64) -> Option<f64> {
+    if gap >= reach && gap >= reach + 2.0 * motion() {
         return None;
     }
-    Some(if distance < reach { distance + RECOVERY * (reach - distance) } else { reach })
+    Some(if gap < reach { gap + RECOVERY * (reach - gap) } else { reach })
+}
+
+/// The normal of a contact at x_n whose surface point `on_surface` is `offset` from the
+/// feature's point, and the gap along it. Outside the collider, the direction of the offset.
+/// Inside it (the element cut in while its vertices stayed out, or the offset is too short
+/// to have a direction), the side the element's vertices are on: their outward normals
+/// weighted by α; the offset's direction still where it is on that side (an element dipping
+/// into a capsule above its axis). `None` where the vertices are inside too (their own
+/// contacts take them out first) or on no clear side (an edge across a thin bar).
+fn contact_normal(
+    collider: &Collider,
+    radius: f64,
+    element: (&[u32], &[f64]),
+    (on_surface, offset): (DVec3, DVec3),
+    start: &[DVec3],
+    t0: f64,
+) -> Option<(DVec3, f64)> {
+    let length = offset.length();
+    let inside = if radius > 0.0 { length < radius } else { collider.closest_from(on_surface, t0, t0).distance < 0.0 };
+    if !inside && length > 1e-12 {
+        return Some((offset / length, length));
+    }
+    let mut side = DVec3::ZERO;
+    for (&v, &a) in element.0.iter().zip(element.1) {
+        if a != 0.0 {
+            let p = collider.closest_from(start[v as usize], t0, t0);
+            if p.distance < 0.0 || p.distance.is_nan() {
+                return None;
+            }
+            // Farther behind an open mesh than its thickness: on its back, which faces away.
+            side += a * if p.distance.is_infinite() { -p.normal } else { p.normal };
+        }
+    }
+    // Half of α-weighted unit normals: the vertices agree to within about 120°.
+    if side.length() < 0.5 {
+        return None;
+    }
+    let side = side.normalize();
+    if length > 1e-12 && offset.dot(side) > 0.0 {
+        return Some((offset / length, length));
+    }
+    Some((side, offset.dot(side)))
+}
+
+/// A contact between the surface's element (`vertices` with coordinates `alpha`, at
+/// `on_surface` at x_n) and a feature whose point `on_feature` at t0 is at `later` at t1;
+/// `nearest` is r², the element's nearest vertex from its point seen along the feature.
+struct Candidate {
+    vertices: [u32; 4],
+    alpha: [f64; 4],
+    on_surface: DVec3,
+    on_feature: DVec3,
+    later: DVec3,
+    nearest: f64,
+    end: FeatureAt,
+    /// 3 for a triangle, 2 for an edge: the leading `vertices`.
+    size: usize,
+}
+
+impl Candidate {
+    /// The contact, where the vertices' own contacts do not hold it and the points are within
+    /// reach this step (see the [module docs](self)).
+    fn contact(
+        self,
+        collider: &Collider,
+        radius: f64,
+        (start, predicted): (&[DVec3], &[DVec3]),
+        thickness: f64,
+        (t0, t1): (f64, f64),
+    ) -> Option<FeatureContact> {
+        let element = &self.vertices[..self.size];
+        let reach = radius + thickness;
+        let shift = self.later - self.on_feature;
+        let motion = relative_motion(element, shift, start, predicted);
+        if !may_need_own_contact(self.nearest, motion, thickness, reach) {
+            return None;
+        }
+        let offset = self.on_surface - self.on_feature;
+        let (normal, gap) = contact_normal(
+            collider,
+            radius,
+            (element, &self.alpha[..element.len()]),
+            (self.on_surface, offset),
+            start,
+            t0,
+        )?;
+        let target = target(gap, reach, || motion)?;
+        let normal = collider.motion.carry(normal, t0, t1);
+        Some(FeatureContact {
+            pair: Pair {
+                vertices: self.vertices,
+                alpha: self.alpha,
+                normal,
+                distance: normal.dot(self.later) + target,
+                copies: 1,
+            },
+            friction: collider.friction,
+            shift,
+            end: self.end,
+            reach,
+            round: radius > 0.0,
+        })
+    }
+}
+
+/// Where a contact's closest points are taken: at the step's start (the detection), or at its
+/// end (elements that ended within reach, [`detect_round_contacts_at_end`]; the normal still
+/// from where they started).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum ClosestAt {
+    Start,
+    End,
 }
 
 /// The contact of a point feature at `p` = [P(t0), P(t1)] with `triangle`.
@@ -423,43 +607,28 @@ fn point_triangle_contact(
     radius: f64,
     [p0, p1]: [DVec3; 2],
     triangle: [u32; 3],
-    start: &[DVec3],
-    predicted: &[DVec3],
+    positions: (&[DVec3], &[DVec3]),
     thickness: f64,
-    t0: f64,
-    t1: f64,
+    times: (f64, f64),
+    at: ClosestAt,
 ) -> Option<FeatureContact> {
-    let x = triangle.map(|v| start[v as usize]);
-    let (c, alpha) = closest_on_triangle(p0, x);
+    let (shape, p) = if at == ClosestAt::Start { (positions.0, p0) } else { (positions.1, p1) };
+    let x = triangle.map(|v| shape[v as usize]);
+    let (c, alpha) = closest_on_triangle(p, x);
     let nearest =
         (0..3).filter(|&k| alpha[k] != 0.0).map(|k| (x[k] - c).length_squared()).fold(f64::INFINITY, f64::min);
-    let reach = radius + thickness;
-    let shift = p1 - p0;
-    let motion = relative_motion(&triangle, shift, start, predicted);
-    if !may_need_own_contact(nearest, motion, thickness, reach) {
-        return None;
-    }
-    let offset = c - p0;
-    let distance = offset.length();
-    let target = target(distance, reach, || motion)?;
-    if starts_inside(collider, radius, distance, c, t0) {
-        return None;
-    }
-    let normal = collider.motion.carry(offset / distance, t0, t1);
-    Some(FeatureContact {
-        pair: Pair {
-            vertices: [triangle[0], triangle[1], triangle[2], triangle[0]],
-            alpha: [alpha[0], alpha[1], alpha[2], 0.0],
-            normal,
-            distance: normal.dot(p1) + target,
-            copies: 1,
-        },
-        friction: collider.friction,
-        shift,
+    let on_surface = (0..3).map(|k| alpha[k] * positions.0[triangle[k] as usize]).sum();
+    Candidate {
+        vertices: [triangle[0], triangle[1], triangle[2], triangle[0]],
+        alpha: [alpha[0], alpha[1], alpha[2], 0.0],
+        on_surface: if at == ClosestAt::Start { c } else { on_surface },
+        on_feature: p0,
+        later: p1,
+        nearest,
         end: FeatureAt::Point(p1),
-        reach,
-        round: radius > 0.0,
-    })
+        size: 3,
+    }
+    .contact(collider, radius, positions, thickness, times)
 }
 
 /// The contact of piece `piece` of a segment feature (`ends` at t0 and at t1) with `edge`:
@@ -471,46 +640,30 @@ fn segment_edge_contact(
     [[a0, b0], [a1, b1]]: [[DVec3; 2]; 2],
     (piece, pieces): (usize, usize),
     edge: [u32; 2],
-    start: &[DVec3],
-    predicted: &[DVec3],
+    positions: (&[DVec3], &[DVec3]),
     thickness: f64,
-    t0: f64,
-    t1: f64,
+    times: (f64, f64),
+    at: ClosestAt,
 ) -> Option<FeatureContact> {
-    let x = edge.map(|v| start[v as usize]);
-    let (s, u, on_edge, on_feature) = closest_between_segments(x[0], x[1], a0, b0);
+    let (shape, [a, b]) = if at == ClosestAt::Start { (positions.0, [a0, b0]) } else { (positions.1, [a1, b1]) };
+    let x = edge.map(|v| shape[v as usize]);
+    let (s, u, on_edge, _) = closest_between_segments(x[0], x[1], a, b);
     // At an end of either: a vertex's or a point feature's contact.
     if s <= 0.0 || s >= 1.0 || u <= 0.0 || u >= 1.0 || ((u * pieces as f64) as usize).min(pieces - 1) != piece {
         return None;
     }
-    let axis = (b0 - a0).normalize_or_zero();
+    let axis = (b - a).normalize_or_zero();
     let across = |d: DVec3| (d - d.dot(axis) * axis).length_squared();
-    let reach = radius + thickness;
-    let later = a1 + u * (b1 - a1);
-    let shift = later - on_feature;
-    let motion = relative_motion(&edge, shift, start, predicted);
-    if !may_need_own_contact(across(x[0] - on_edge).min(across(x[1] - on_edge)), motion, thickness, reach) {
-        return None;
-    }
-    let offset = on_edge - on_feature;
-    let distance = offset.length();
-    let target = target(distance, reach, || motion)?;
-    if starts_inside(collider, radius, distance, on_edge, t0) {
-        return None;
-    }
-    let normal = collider.motion.carry(offset / distance, t0, t1);
-    Some(FeatureContact {
-        pair: Pair {
-            vertices: [edge[0], edge[1], edge[0], edge[1]],
-            alpha: [1.0 - s, s, 0.0, 0.0],
-            normal,
-            distance: normal.dot(later) + target,
-            copies: 1,
-        },
-        friction: collider.friction,
-        shift,
+    let start = edge.map(|v| positions.0[v as usize]);
+    Candidate {
+        vertices: [edge[0], edge[1], edge[0], edge[1]],
+        alpha: [1.0 - s, s, 0.0, 0.0],
+        on_surface: (1.0 - s) * start[0] + s * start[1],
+        on_feature: a0 + u * (b0 - a0),
+        later: a1 + u * (b1 - a1),
+        nearest: across(x[0] - on_edge).min(across(x[1] - on_edge)),
         end: FeatureAt::Segment(a1, b1),
-        reach,
-        round: radius > 0.0,
-    })
+        size: 2,
+    }
+    .contact(collider, radius, positions, thickness, times)
 }

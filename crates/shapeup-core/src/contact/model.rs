@@ -32,7 +32,9 @@
 //!    come last, so their thickness holds.
 
 use super::collider::Collider;
-use super::features::{FeatureContact, Features, PREDICTION_SLACK, detect_feature_contacts, longest_edge};
+use super::features::{
+    FeatureContact, Features, PREDICTION_SLACK, detect_feature_contacts, detect_round_contacts_at_end, longest_edge,
+};
 use super::gap::{Contact, Pair};
 use super::self_collision::{Surface, Trees, detect_self_contacts};
 use glam::DVec3;
@@ -115,6 +117,9 @@ pub struct ContactStats {
     /// Vertices in a touching contact.
     pub vertices: usize,
 }
+
+/// Most passes of the end-of-step projection of the feature contacts.
+const FEATURE_PASSES: usize = 4;
 
 impl ContactModel {
     /// Contact of `n` vertices (those with `active[v]`) with `colliders`, and with themselves
@@ -469,7 +474,14 @@ impl ContactModel {
         let mut pushed = false;
         if self.has_features() {
             self.find_end_feature_contacts(q);
-            pushed = self.project_features(q, inverse_mass);
+            // Gauss–Seidel passes: two edges on either side of a vertex over a thin bar each
+            // push it sideways, together up.
+            for _ in 0..FEATURE_PASSES {
+                if !self.project_features(q, inverse_mass) {
+                    break;
+                }
+                pushed = true;
+            }
         }
         pushed |= self.project_out_of_colliders(q) > 0;
         if pushed && self.self_pairs > 0 {
@@ -519,16 +531,10 @@ impl ContactModel {
     /// step's own when every vertex ended within [`PREDICTION_SLACK`] of the thickness of its
     /// prediction (a pair the detection left out then still keeps 1 − that of it), else those
     /// found again over the path from the step's start to `q`: from the step's trees, the
-    /// features' boxes grown by the farthest a vertex ended from its prediction.
+    /// features' boxes grown by the farthest a vertex ended from its prediction. With only
+    /// round colliders in a time step: the step's own and those of the elements that ended
+    /// within reach ([`detect_round_contacts_at_end`]).
     fn find_end_feature_contacts(&mut self, q: &[DVec3]) {
-        // Only round colliders in a time step: the step's own contacts (what they leave is
-        // held to half the thickness, see `project_features`; a search along the path cost
-        // cloth-folding a quarter of its step).
-        let dynamic = self.times.1 > self.times.0;
-        if dynamic && self.features.iter().all(|f| f.is_round() || !(f.has_points() || f.has_segments())) {
-            self.end_features.clone_from(&self.feature_contacts);
-            return;
-        }
         let Some(surface) = &mut self.surface else { return };
         let thickness = self.params.thickness;
         let predicted = &self.predicted;
@@ -547,6 +553,27 @@ impl ContactModel {
             let (p, s) = f.can_cut(longest, thickness);
             points |= p;
             segments |= s;
+        }
+        let dynamic = self.times.1 > self.times.0;
+        if dynamic && self.features.iter().all(|f| f.is_round() || !(f.has_points() || f.has_segments())) {
+            // Only round colliders in a time step: the step's own contacts, and those of the
+            // elements that ended within reach (an edge pulled into a thin bar beyond its
+            // prediction), made from where they started (the side they came from). A search
+            // along the whole path cost cloth-folding a quarter of its step; what passes a bar
+            // within one step the step's own contacts catch.
+            let found = detect_round_contacts_at_end(
+                surface,
+                &self.colliders,
+                &self.features,
+                (&self.start, q),
+                thickness,
+                longest,
+                self.times,
+            );
+            self.end_features.clone_from(&self.feature_contacts);
+            let known: std::collections::HashSet<_> = self.end_features.iter().map(FeatureContact::key).collect();
+            self.end_features.extend(found.into_iter().filter(|f| !known.contains(&f.key())));
+            return;
         }
         // A tree the step did not refit (the surface stretched past what its features need).
         let stale = Trees {
