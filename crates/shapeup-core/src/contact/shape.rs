@@ -6,11 +6,14 @@
 //! distance computation using the angle weighted pseudonormal", IEEE TVCG 2005): robust at
 //! edges and vertices of a closed, consistently oriented mesh. An open mesh is one-sided: its
 //! front is where the faces' normals point, and a point behind it counts as inside only
-//! within the mesh's `thickness` (deeper, it is free: it came from behind).
+//! within the mesh's `thickness` (deeper, it is free: it came from behind). Its rim (the
+//! edges on one face, and their vertices) is rounded: a point whose closest point is on the
+//! rim is outside, whichever side of the faces' planes it is on (a cloth hanging over the
+//! edge of a roof is beside the roof, not behind it).
 
 use glam::{DMat3, DQuat, DVec3};
 use parry3d_f64::query::{PointQueryWithLocation, Ray, RayCast};
-use parry3d_f64::shape::{TriMesh, TriMeshFlags};
+use parry3d_f64::shape::{TriMesh, TriMeshFlags, TrianglePointLocation};
 
 /// What a query finds: the closest point on the surface, the outward unit normal there and
 /// the signed distance of the query point (negative inside, +∞ when nothing answers).
@@ -74,6 +77,9 @@ pub struct MeshShape {
     pub thickness: f64,
     /// The triangles of zero area ([`MeshShape::degenerate_triangles`]).
     degenerate: Vec<usize>,
+    /// Open meshes: the edges on one face (sorted ends) and the vertices on them.
+    rim: std::collections::HashSet<(u32, u32)>,
+    rim_vertices: Vec<bool>,
 }
 
 /// Why a mesh cannot be a collider.
@@ -124,7 +130,22 @@ impl MeshShape {
                 triangles.len()
             )));
         }
-        Ok(MeshShape { mesh, closed, thickness, degenerate })
+        let (mut rim, mut rim_vertices) = (std::collections::HashSet::new(), vec![false; positions.len()]);
+        if !closed {
+            let mut faces: std::collections::HashMap<(u32, u32), usize> = std::collections::HashMap::new();
+            for t in triangles {
+                for k in 0..3 {
+                    let (a, b) = (t[k], t[(k + 1) % 3]);
+                    *faces.entry((a.min(b), a.max(b))).or_default() += 1;
+                }
+            }
+            for (&(a, b), _) in faces.iter().filter(|(_, n)| **n == 1) {
+                rim.insert((a, b));
+                rim_vertices[a as usize] = true;
+                rim_vertices[b as usize] = true;
+            }
+        }
+        Ok(MeshShape { mesh, closed, thickness, degenerate, rim, rim_vertices })
     }
 
     /// The indices of the triangles of zero area (to round-off: A ≤ 1e-12 ℓ², ℓ the longest
@@ -134,11 +155,11 @@ impl MeshShape {
     }
 
     fn closest(&self, x: DVec3) -> Proximity {
-        let (projection, _) = self.mesh.project_local_point_and_get_location(to_parry(x), false);
+        let (projection, (face, location)) = self.mesh.project_local_point_and_get_location(to_parry(x), false);
         let point = from_parry(projection.point);
         let offset = x - point;
         let length = offset.length();
-        let inside = projection.is_inside;
+        let inside = projection.is_inside && !self.on_rim(face, location);
         // The direction from the surface to the point, turned outward; on the surface, the
         // face's normal.
         let normal = if length > 1e-12 {
@@ -153,6 +174,27 @@ impl MeshShape {
             return Proximity { point, normal, distance: f64::INFINITY };
         }
         Proximity { point, normal, distance }
+    }
+
+    /// Whether a closest point on `face` at `location` lies on the rim of an open mesh.
+    fn on_rim(&self, face: u32, location: TrianglePointLocation) -> bool {
+        if self.rim.is_empty() {
+            return false;
+        }
+        let Some(t) = self.mesh.indices().get(face as usize) else { return false };
+        match location {
+            TrianglePointLocation::OnVertex(i) => t.get(i as usize).is_some_and(|&v| self.rim_vertices[v as usize]),
+            // parry's edges: 0 = AB, 1 = BC, 2 = AC.
+            TrianglePointLocation::OnEdge(i, _) => {
+                let (a, b) = match i {
+                    0 => (t[0], t[1]),
+                    1 => (t[1], t[2]),
+                    _ => (t[0], t[2]),
+                };
+                self.rim.contains(&(a.min(b), a.max(b)))
+            }
+            TrianglePointLocation::OnFace(..) | TrianglePointLocation::OnSolid => false,
+        }
     }
 
     /// The first time t ∈ [0, 1] at which x0 + t (x1 − x0) meets the surface, with the
@@ -564,6 +606,13 @@ mod tests {
         let shallow = shape.closest(DVec3::new(0.2, -0.05, 0.1));
         assert!((shallow.distance + 0.05).abs() < 1e-12, "within the thickness behind: inside");
         assert!(shape.closest(DVec3::new(0.2, -0.5, 0.1)).distance.is_infinite(), "deep behind: free");
+        // Beyond the rim, just below the plane: beside the square, outside, pointing away from
+        // its edge (x = 1) or its corner (1, 0, 1).
+        let beside = shape.closest(DVec3::new(1.03, -0.04, 0.1));
+        assert!((beside.distance - 0.05).abs() < 1e-12, "{beside:?}");
+        assert!((beside.normal - DVec3::new(0.6, -0.8, 0.0)).length() < 1e-12, "{beside:?}");
+        let corner = shape.closest(DVec3::new(1.02, -0.01, 1.02));
+        assert!((corner.distance - 0.03).abs() < 1e-12 && corner.normal.y < 0.0, "{corner:?}");
     }
 
     #[test]
