@@ -12,7 +12,10 @@
 //!    prediction s: a vertex near a collider (within the thickness plus twice its predicted
 //!    motion), or whose path x_n → x_n + 2(s − x_n) enters one (continuous check), gets a
 //!    contact; with self-collision, so do vertex–triangle and edge–edge pairs of the surface
-//!    whose swept boxes meet (a BVH over the triangles and one over the edges). A contact is
+//!    whose swept boxes meet (a BVH over the triangles and one over the edges); and so do the
+//!    triangles and edges of the surface near a collider's corners, edges, ridges or a
+//!    sphere's or capsule's core, which could cut between the vertices ([`super::features`]).
+//!    A contact is
 //!    a linear gap g(q) = n · Σ_j α_j q_j − c with its normal n, points and thickness fixed
 //!    over the step (the side each pair was on at x_n is kept: no pass-through between
 //!    detections).
@@ -29,7 +32,9 @@
 //!    out along the normal, which also removes the velocity into it, and a path that crossed a
 //!    collider is stopped where it entered. When a collider moved something and there are self
 //!    contacts, both once more: a collider's push can carry one layer into the next. Colliders
-//!    come last, so their thickness holds.
+//!    come last, so their thickness holds. The feature contacts are projected before the
+//!    vertices', taken again where the surface ended (and found again when it strayed from
+//!    its prediction).
 
 use super::collider::Collider;
 use super::features::{

@@ -504,25 +504,27 @@ mod tests {
         });
     }
 
+    /// A cube's 12 triangles, outward, over corners k = (x, y, z) bits (x the lowest).
+    const CUBE: [[u32; 3]; 12] = [
+        [0, 2, 1],
+        [1, 2, 3],
+        [4, 5, 6],
+        [5, 7, 6],
+        [0, 1, 4],
+        [1, 5, 4],
+        [2, 6, 3],
+        [3, 6, 7],
+        [0, 4, 2],
+        [2, 4, 6],
+        [1, 3, 5],
+        [3, 7, 5],
+    ];
+
     #[test]
     fn a_cube_has_12_ridges_a_flat_or_gently_bent_sheet_only_its_rim() {
         let p: Vec<DVec3> =
             (0..8).map(|i| DVec3::new((i & 1) as f64, ((i >> 1) & 1) as f64, ((i >> 2) & 1) as f64)).collect();
-        let cube = [
-            [0, 2, 1],
-            [1, 2, 3],
-            [4, 5, 6],
-            [5, 7, 6],
-            [0, 1, 4],
-            [1, 5, 4],
-            [2, 6, 3],
-            [3, 6, 7],
-            [0, 4, 2],
-            [2, 4, 6],
-            [1, 3, 5],
-            [3, 7, 5],
-        ];
-        let (points, segments) = MeshShape::new(&p, &cube, true, 0.0).unwrap().ridges();
+        let (points, segments) = MeshShape::new(&p, &CUBE, true, 0.0).unwrap().ridges();
         // The 6 face diagonals are flat; the 12 cube edges are convex at 90°.
         assert_eq!((points.len(), segments.len()), (8, 12));
         assert!(segments.iter().all(|[a, b]| ((*a - *b).length() - 1.0).abs() < 1e-12));
@@ -555,7 +557,7 @@ mod tests {
 
     #[test]
     fn closed_mesh_inside_outside_and_distance() {
-        // An icosphere-like closed mesh: a cube's 12 triangles, outward.
+        // A closed mesh: the cube's 12 triangles against the exact box.
         let p: Vec<DVec3> = (0..8)
             .map(|i| {
                 DVec3::new(
@@ -565,21 +567,7 @@ mod tests {
                 )
             })
             .collect();
-        let t = vec![
-            [0, 2, 1],
-            [1, 2, 3],
-            [4, 5, 6],
-            [5, 7, 6],
-            [0, 1, 4],
-            [1, 5, 4],
-            [2, 6, 3],
-            [3, 6, 7],
-            [0, 4, 2],
-            [2, 4, 6],
-            [1, 3, 5],
-            [3, 7, 5],
-        ];
-        let mesh = Shape::Mesh(Box::new(MeshShape::new(&p, &t, true, 0.0).expect("a cube")));
+        let mesh = Shape::Mesh(Box::new(MeshShape::new(&p, &CUBE, true, 0.0).expect("a cube")));
         let exact = Shape::Box { center: DVec3::ZERO, half: DVec3::splat(0.5), rotation: DQuat::IDENTITY };
         let mut seed = 3;
         for _ in 0..500 {
