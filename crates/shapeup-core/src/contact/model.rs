@@ -15,10 +15,9 @@
 //!    whose swept boxes meet (a BVH over the triangles and one over the edges); and so do the
 //!    triangles and edges of the surface near a collider's corners, edges, ridges or a
 //!    sphere's or capsule's core, which could cut between the vertices ([`super::features`]).
-//!    A contact is
-//!    a linear gap g(q) = n · Σ_j α_j q_j − c with its normal n, points and thickness fixed
-//!    over the step (the side each pair was on at x_n is kept: no pass-through between
-//!    detections).
+//!    A contact is a linear gap g(q) = n · Σ_j α_j q_j − c with its normal n, points and
+//!    thickness fixed over the step (the side each pair was on at x_n is kept: no
+//!    pass-through between detections).
 //! 2. **Local step** ([`ContactModel::targets`]): for a collider contact with g < 0, p_v is
 //!    q_v moved out by −g along n, then by Coulomb friction (Macklin, Müller, Chentanez and
 //!    Kim, "Unified Particle Physics for Real-Time Applications", SIGGRAPH 2014, §6.1): the
