@@ -172,6 +172,12 @@ def test_bad_contact_settings_raise():
     sim.set_contact(self_collision=True, thickness=0.01)
     assert sim.contact == {"self_collision": True, "thickness": 0.01, "friction": 0.0}
     assert sim.contact_thickness == 0.01
+    # With a collider, a thickness over a quarter of the mesh's size (its bounding-box
+    # diagonal, 1.41 here) is refused and the settings stay.
+    sim.add_collider("plane", point=[0, -1, 0], normal=[0, 1, 0])
+    with pytest.raises(ValueError, match=r"contact\]: thickness 5 is over 0.25 of the mesh's size"):
+        sim.set_contact(thickness=5.0)
+    assert sim.contact_thickness == 0.01
 
 
 def test_a_later_collider_keeps_the_earlier_ones_and_index(tmp_path):

@@ -169,6 +169,13 @@ pub fn mean_edge_length(rest: &RestGeometry) -> f64 {
     if edges.is_empty() { 0.0 } else { total / edges.len() as f64 }
 }
 
+/// The diagonal of the axis-aligned bounding box of the rest positions (0 for none).
+pub fn bounding_box_diagonal(rest: &RestGeometry) -> f64 {
+    let Some(&first) = rest.positions.first() else { return 0.0 };
+    let (lo, hi) = rest.positions.iter().fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+    (hi - lo).length()
+}
+
 /// Lumped masses of a surface: m_i = max(ρ Σ_{t ∋ i} A_t / 3, 1e-9).
 pub fn lumped_masses_surface(n: usize, triangles: &[[u32; 3]], triangle_areas: &[f64], density: f64) -> Vec<f64> {
     let mut m = vec![0.0; n];

@@ -10,7 +10,7 @@ use numpy::PyArray1;
 use pyo3::prelude::*;
 use serde_json::{Map, Value};
 use shapeup_core::contact::{ColliderSpec, ContactModel, ContactParams, ContactSettings, ShapeSpec};
-use shapeup_core::geometry::{RestGeometry, WorkingFrame, mean_edge_length};
+use shapeup_core::geometry::{RestGeometry, WorkingFrame, bounding_box_diagonal, mean_edge_length};
 use shapeup_core::mesh::Mesh as CoreMesh;
 use std::path::Path;
 
@@ -25,9 +25,12 @@ pub(crate) struct ContactSetup {
 /// length (as a scene with `normalize = false`).
 ///
 /// # Errors
-/// `ValueError` "[contact]: …": a self-collision thickness over the mean edge length.
+/// `ValueError` "[contact]: …": a thickness over a quarter of the rest shape's size, or a
+/// self-collision thickness over the mean edge length.
 fn thickness(settings: &ContactSettings, rest: &RestGeometry) -> PyResult<f64> {
-    settings.resolve_thickness(1.0, mean_edge_length(rest)).map_err(|e| value_error(format!("[contact]: {e}")))
+    settings
+        .resolve_thickness(1.0, mean_edge_length(rest), bounding_box_diagonal(rest))
+        .map_err(|e| value_error(format!("[contact]: {e}")))
 }
 
 impl ContactSetup {

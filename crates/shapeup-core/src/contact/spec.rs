@@ -22,6 +22,11 @@ pub const DEFAULT_THICKNESS_FRACTION: f64 = 0.25;
 /// (millions of pairs on a 61×61 cloth at 6 edge lengths) and pushes itself apart.
 pub const MAX_SELF_THICKNESS_FRACTION: f64 = 1.0;
 
+/// The rest shape's bounding-box diagonal × this is the largest contact thickness given. A
+/// 1 m cloth over a box with a thickness of 5 m was pushed 5 m out at once and thrown at
+/// 300 m/s.
+pub const MAX_THICKNESS_OF_SIZE: f64 = 0.25;
+
 /// The `[contact]` table.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -65,12 +70,15 @@ impl ContactSettings {
     }
 
     /// The thickness in working units: `thickness` (input units) × `scale`, else
-    /// [`DEFAULT_THICKNESS_FRACTION`] × `mean_edge_length` (working units).
+    /// [`DEFAULT_THICKNESS_FRACTION`] × `mean_edge_length` (working units); `size` is the rest
+    /// shape's bounding-box diagonal (working units).
     ///
     /// # Errors
-    /// With `self_collision`, a thickness over [`MAX_SELF_THICKNESS_FRACTION`] × the mean edge
-    /// length, named with both in input units.
-    pub fn resolve_thickness(&self, scale: f64, mean_edge_length: f64) -> Result<f64, ColliderError> {
+    /// A thickness over [`MAX_THICKNESS_OF_SIZE`] × `size` (a skin that wide would hold the
+    /// surface a large part of its own size from every collider, and turn the push out into
+    /// speed); with `self_collision`, one over [`MAX_SELF_THICKNESS_FRACTION`] × the mean edge
+    /// length. Each named with both numbers in input units.
+    pub fn resolve_thickness(&self, scale: f64, mean_edge_length: f64, size: f64) -> Result<f64, ColliderError> {
         let thickness = match self.thickness {
             Some(t) => t * scale,
             None => DEFAULT_THICKNESS_FRACTION * mean_edge_length,
@@ -83,6 +91,17 @@ impl ContactSettings {
                  {DEFAULT_THICKNESS_FRACTION} of it), or refine the mesh",
                 number(thickness / scale),
                 number(limit / scale)
+            )));
+        }
+        let most = MAX_THICKNESS_OF_SIZE * size;
+        if self.thickness.is_some() && thickness > most {
+            return Err(ColliderError::Invalid(format!(
+                "thickness {} is over {MAX_THICKNESS_OF_SIZE} of the mesh's size (its bounding-box diagonal {}, input \
+                 units): the thickness is a skin around the surface (default {DEFAULT_THICKNESS_FRACTION} of the mean \
+                 edge length, {})",
+                number(thickness / scale),
+                number(size / scale),
+                number(DEFAULT_THICKNESS_FRACTION * mean_edge_length / scale)
             )));
         }
         Ok(thickness)
@@ -625,14 +644,17 @@ mod tests {
     fn the_thickness_resolves_to_the_default_fraction_and_self_collision_caps_it() {
         let (scale, edge) = (2.0, 0.1);
         let settings = |self_collision, thickness| ContactSettings { self_collision, thickness, friction: 0.0 };
-        let resolved = |s: ContactSettings| s.resolve_thickness(scale, edge);
+        let resolved = |s: ContactSettings| s.resolve_thickness(scale, edge, 100.0);
         assert_eq!(resolved(settings(true, None)).ok(), Some(DEFAULT_THICKNESS_FRACTION * edge));
         // Input units × scale; at most the mean edge length with self-collision.
         assert_eq!(resolved(settings(true, Some(0.05))).ok(), Some(0.1));
         let err = resolved(settings(true, Some(0.051))).map(|_| ()).unwrap_err().to_string();
         assert!(err.contains("thickness 0.051 is over the mean edge length 0.05"), "{err}");
-        // Colliders alone take any thickness.
+        // Colliders alone take any thickness up to a quarter of the mesh's size.
         assert_eq!(resolved(settings(false, Some(10.0))).ok(), Some(20.0));
+        assert_eq!(resolved(settings(false, Some(12.5))).ok(), Some(25.0));
+        let err = resolved(settings(false, Some(12.6))).map(|_| ()).unwrap_err().to_string();
+        assert!(err.contains("thickness 12.6 is over 0.25 of the mesh's size (its bounding-box diagonal 50"), "{err}");
     }
 
     #[test]

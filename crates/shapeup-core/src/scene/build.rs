@@ -172,10 +172,12 @@ impl Scene {
         if self.colliders.is_empty() && !self.contact.self_collision {
             return Ok(None);
         }
-        let thickness =
-            self.contact.resolve_thickness(frame.scale, crate::geometry::mean_edge_length(rest)).map_err(|e| {
-                SceneError::Invalid { path: self.file.clone(), entry: "[contact]".into(), message: e.to_string() }
-            })?;
+        let (edge, size) = (crate::geometry::mean_edge_length(rest), crate::geometry::bounding_box_diagonal(rest));
+        let thickness = self.contact.resolve_thickness(frame.scale, edge, size).map_err(|e| SceneError::Invalid {
+            path: self.file.clone(),
+            entry: "[contact]".into(),
+            message: e.to_string(),
+        })?;
         let colliders = self
             .colliders
             .iter()

@@ -1343,6 +1343,11 @@ fn bad_colliders_name_the_entry_and_write_nothing() {
             "[contact]\nself_collision = true\nthickness = 0.5\n",
             "[contact]: thickness 0.5 is over the mean edge length",
         ),
+        // A 1 m cloth (diagonal 1.41): at most 0.35.
+        (
+            "[contact]\nthickness = 5.0\n[[colliders]]\ntype = \"plane\"\npoint = [0, -1, 0]\nnormal = [0, 1, 0]\n",
+            "[contact]: thickness 5 is over 0.25 of the mesh's size (its bounding-box diagonal 1.414",
+        ),
         ("[[contact]]\nthickness = 0.1\n", "one [contact] table (not a list: [[contact]])"),
         ("[[colliders]]\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1e300\n", "found 1e300"),
     ] {
