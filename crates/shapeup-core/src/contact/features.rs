@@ -36,7 +36,7 @@ use super::gap::Pair;
 use super::self_collision::{RECOVERY, Surface, closest_between_segments, closest_on_triangle};
 use super::shape::Shape;
 use glam::DVec3;
-use parry3d_f64::bounding_volume::Aabb;
+use parry3d_f64::bounding_volume::{Aabb, BoundingVolume};
 use parry3d_f64::partitioning::{Bvh, BvhBuildStrategy};
 use rayon::prelude::*;
 
@@ -430,20 +430,7 @@ pub(crate) fn detect_round_contacts_at_end(
         }
         let reach = f.radius + thickness;
         let at = |p: DVec3, t: f64| if collider.motion.is_static() { p } else { collider.motion.apply(p, t) };
-        let near = |b: &Aabb, element: &[u32]| {
-            let (lo, hi) = element
-                .iter()
-                .map(|&v| end[v as usize])
-                .fold((DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)), |(lo, hi), p| {
-                    (lo.min(p), hi.max(p))
-                });
-            lo.x <= b.maxs.x
-                && hi.x >= b.mins.x
-                && lo.y <= b.maxs.y
-                && hi.y >= b.mins.y
-                && lo.z <= b.maxs.z
-                && hi.z >= b.mins.z
-        };
+        let near = |b: &Aabb, element: &[u32]| aabb(element.iter().map(|&v| end[v as usize]), 0.0).intersects(b);
         for &p in f.points.iter().filter(|_| points) {
             let ends = [at(p, t0), at(p, t1)];
             let b = aabb([ends[1]], reach);
@@ -617,11 +604,15 @@ fn point_triangle_contact(
     let (c, alpha) = closest_on_triangle(p, x);
     let nearest =
         (0..3).filter(|&k| alpha[k] != 0.0).map(|k| (x[k] - c).length_squared()).fold(f64::INFINITY, f64::min);
-    let on_surface = (0..3).map(|k| alpha[k] * positions.0[triangle[k] as usize]).sum();
+    // Where the element's point was at the step's start, when the closest was taken at its end.
+    let on_surface = match at {
+        ClosestAt::Start => c,
+        ClosestAt::End => (0..3).map(|k| alpha[k] * positions.0[triangle[k] as usize]).sum(),
+    };
     Candidate {
         vertices: [triangle[0], triangle[1], triangle[2], triangle[0]],
         alpha: [alpha[0], alpha[1], alpha[2], 0.0],
-        on_surface: if at == ClosestAt::Start { c } else { on_surface },
+        on_surface,
         on_feature: p0,
         later: p1,
         nearest,

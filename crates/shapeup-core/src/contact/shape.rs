@@ -77,8 +77,9 @@ pub struct MeshShape {
     pub thickness: f64,
     /// The triangles of zero area ([`MeshShape::degenerate_triangles`]).
     degenerate: Vec<usize>,
-    /// Open meshes: the edges on one face (sorted ends) and the vertices on them.
-    rim: std::collections::HashSet<(u32, u32)>,
+    /// Open meshes, per triangle (a, b, c): whether its edges ab, bc, ca are on one face only
+    /// (empty for a closed mesh); and per vertex, whether it is on such an edge.
+    rim_edges: Vec<[bool; 3]>,
     rim_vertices: Vec<bool>,
 }
 
@@ -130,22 +131,15 @@ impl MeshShape {
                 triangles.len()
             )));
         }
-        let (mut rim, mut rim_vertices) = (std::collections::HashSet::new(), vec![false; positions.len()]);
-        if !closed {
-            let mut faces: std::collections::HashMap<(u32, u32), usize> = std::collections::HashMap::new();
-            for t in triangles {
-                for k in 0..3 {
-                    let (a, b) = (t[k], t[(k + 1) % 3]);
-                    *faces.entry((a.min(b), a.max(b))).or_default() += 1;
-                }
-            }
-            for (&(a, b), _) in faces.iter().filter(|(_, n)| **n == 1) {
-                rim.insert((a, b));
-                rim_vertices[a as usize] = true;
-                rim_vertices[b as usize] = true;
-            }
-        }
-        Ok(MeshShape { mesh, closed, thickness, degenerate, rim, rim_vertices })
+        let (rim_edges, rim_vertices) = if closed {
+            (Vec::new(), Vec::new())
+        } else {
+            let (edges, counts, triangle_edges) = crate::topology::indexed_edges(mesh.indices());
+            let on_one = |e: u32| counts[e as usize] == 1;
+            let rim_edges = triangle_edges.iter().map(|t| t.map(on_one)).collect();
+            (rim_edges, crate::topology::boundary_vertices(positions.len(), &edges, &counts))
+        };
+        Ok(MeshShape { mesh, closed, thickness, degenerate, rim_edges, rim_vertices })
     }
 
     /// The indices of the triangles of zero area (to round-off: A ≤ 1e-12 ℓ², ℓ the longest
@@ -178,21 +172,16 @@ impl MeshShape {
 
     /// Whether a closest point on `face` at `location` lies on the rim of an open mesh.
     fn on_rim(&self, face: u32, location: TrianglePointLocation) -> bool {
-        if self.rim.is_empty() {
-            return false;
-        }
-        let Some(t) = self.mesh.indices().get(face as usize) else { return false };
+        let Some(rim) = self.rim_edges.get(face as usize) else { return false };
         match location {
-            TrianglePointLocation::OnVertex(i) => t.get(i as usize).is_some_and(|&v| self.rim_vertices[v as usize]),
-            // parry's edges: 0 = AB, 1 = BC, 2 = AC.
-            TrianglePointLocation::OnEdge(i, _) => {
-                let (a, b) = match i {
-                    0 => (t[0], t[1]),
-                    1 => (t[1], t[2]),
-                    _ => (t[0], t[2]),
-                };
-                self.rim.contains(&(a.min(b), a.max(b)))
-            }
+            TrianglePointLocation::OnVertex(i) => self
+                .mesh
+                .indices()
+                .get(face as usize)
+                .and_then(|t| t.get(i as usize))
+                .is_some_and(|&v| self.rim_vertices[v as usize]),
+            // parry's edges 0, 1, 2 are AB, BC and AC: ours in the same order.
+            TrianglePointLocation::OnEdge(i, _) => rim.get(i as usize).copied().unwrap_or(false),
             TrianglePointLocation::OnFace(..) | TrianglePointLocation::OnSolid => false,
         }
     }
