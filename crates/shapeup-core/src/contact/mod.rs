@@ -11,6 +11,7 @@
 //! or a static solve runs when something can touch.
 
 pub mod collider;
+mod crossing;
 mod features;
 mod gap;
 pub mod model;

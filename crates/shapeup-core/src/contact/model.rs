@@ -36,6 +36,7 @@
 //!    its prediction).
 
 use super::collider::Collider;
+use super::crossing::{ElementPair, stop_crossings};
 use super::features::{
     FeatureContact, Features, PREDICTION_SLACK, detect_feature_contacts, detect_round_contacts_at_end, longest_edge,
 };
@@ -75,6 +76,11 @@ pub struct ContactModel {
     pairs: Vec<Pair>,
     /// How many of `pairs` are self contacts.
     self_pairs: usize,
+    /// The element pairs of the step's self contacts, each with its distance at the start
+    /// (before [`Pair`]s of the same features are merged): for the crossing check.
+    elements: Vec<ElementPair>,
+    /// Vertices the crossing check of the last step stopped.
+    stopped: usize,
     /// The feature contacts (their gaps are `pairs[self_pairs..]`), with their collider's μ
     /// and motion.
     feature_contacts: Vec<FeatureContact>,
@@ -120,6 +126,9 @@ pub struct ContactStats {
     pub self_touching: usize,
     /// Vertices in a touching contact.
     pub vertices: usize,
+    /// Vertices put back where the step started because their paths made the surface pass
+    /// through itself ([`crate::contact`]'s crossing check; 0 without self-collision).
+    pub stopped: usize,
 }
 
 /// Most passes of the end-of-step projection of the feature contacts.
@@ -142,6 +151,8 @@ impl ContactModel {
             contacts: Vec::new(),
             pairs: Vec::new(),
             self_pairs: 0,
+            elements: Vec::new(),
+            stopped: 0,
             feature_contacts: Vec::new(),
             end_features: Vec::new(),
             predicted: Vec::new(),
@@ -193,6 +204,7 @@ impl ContactModel {
             touching: self.touching_count,
             self_touching: self.self_count,
             vertices: self.touching.iter().filter(|&&t| t).count(),
+            stopped: self.stopped,
         }
     }
 
@@ -237,13 +249,16 @@ impl ContactModel {
         self.pairs.clear();
         self.feature_contacts.clear();
         self.self_pairs = 0;
+        self.elements.clear();
         let has_features = self.has_features();
         if let Some(surface) = &mut self.surface {
             let self_collision = self.params.self_collision;
             let mut trees = Trees { triangles: self_collision, edges: self_collision, vertices: self_collision };
-            if has_features {
+            if has_features || self_collision {
                 self.predicted.clear();
                 self.predicted.extend_from_slice(predicted);
+            }
+            if has_features {
                 self.longest = longest_edge(surface, start).max(longest_edge(surface, predicted));
                 for f in &self.features {
                     let (points, segments) = f.can_cut(self.longest, thickness);
@@ -254,7 +269,7 @@ impl ContactModel {
             surface.refit(start, predicted, thickness, trees);
             self.refitted = trees;
             if self_collision {
-                self.pairs = surface.self_contacts(start, predicted, thickness);
+                (self.pairs, self.elements) = surface.self_contacts(start, predicted, thickness);
                 self.self_pairs = self.pairs.len();
             }
             if trees.triangles || trees.edges {
@@ -492,6 +507,7 @@ impl ContactModel {
             self.separate_self_contacts(q, inverse_mass);
             self.project_out_of_colliders(q);
         }
+        self.stopped = self.stop_crossings(q);
         // What touches at the end: a force on, or within the thickness (plus round-off).
         self.touching.fill(false);
         let tolerance = 1e-3 * self.params.thickness.max(1e-9);
@@ -524,6 +540,41 @@ impl ContactModel {
             }
         }
         self.forces.fill(DVec3::ZERO);
+    }
+
+    /// In a time step with self-collision, the fail-safe ([`super::crossing`]): the vertices
+    /// of element pairs whose paths from the step's start to `q` cross are put back at the
+    /// start. Checked: the step's own pairs, and the pairs of the elements with a vertex that
+    /// ended half the thickness or more from its prediction (less the surface's mean
+    /// deviation from it, a translation that changes no crossing), found from their own
+    /// boxes against the step's trees: a pair of the others is either among the step's own or
+    /// farther apart than it moved. Returns how many were stopped.
+    fn stop_crossings(&self, q: &mut [DVec3]) -> usize {
+        let Some(surface) = &self.surface else { return 0 };
+        if !self.params.self_collision || self.times.1 <= self.times.0 || surface.vertices().is_empty() {
+            return 0;
+        }
+        let (thickness, start, predicted) = (self.params.thickness, &self.start, &self.predicted);
+        let vertices = surface.vertices();
+        // In the frame of the step's trees (they take out `drift`), shifted by the mean
+        // deviation from the prediction.
+        let mean =
+            vertices.par_iter().map(|&v| q[v as usize] - predicted[v as usize]).sum::<DVec3>() / vertices.len() as f64;
+        let shift = surface.drift() + mean;
+        // Grazing within a thousandth of the thickness counts as crossing.
+        let tolerance = (1e-3 * thickness).max(1e-12);
+        let more = |q: &[DVec3]| -> Vec<ElementPair> {
+            let moved: Vec<bool> = (0..q.len())
+                .into_par_iter()
+                .map(|v| (q[v] - predicted[v] - mean).length() >= 0.5 * thickness)
+                .collect();
+            if !vertices.iter().any(|&v| moved[v as usize]) {
+                return Vec::new();
+            }
+            let end: Vec<DVec3> = q.par_iter().map(|&p| p - shift).collect();
+            surface.pairs_of_moved(&moved, start, &end, tolerance)
+        };
+        stop_crossings(&self.elements, more, vertices, start, q, tolerance)
     }
 
     /// Whether a collider has features (points or segments) that can cut into the surface.

@@ -12,9 +12,10 @@
 //! relative predicted motion is a contact, with the normal from the second closest point to
 //! the first (the side it started on).
 
+use super::crossing::ElementPair;
 use super::gap::Pair;
 use glam::DVec3;
-use parry3d_f64::bounding_volume::Aabb;
+use parry3d_f64::bounding_volume::{Aabb, BoundingVolume};
 use parry3d_f64::partitioning::{Bvh, BvhBuildStrategy, BvhWorkspace};
 use rayon::prelude::*;
 
@@ -137,7 +138,7 @@ pub(crate) fn detect_self_contacts(
     thickness: f64,
 ) -> Vec<Pair> {
     surface.refit(start, predicted, thickness, Trees { triangles: true, edges: true, vertices: true });
-    surface.self_contacts(start, predicted, thickness)
+    surface.self_contacts(start, predicted, thickness).0
 }
 
 /// Which of a surface's BVHs a step needs.
@@ -208,11 +209,16 @@ impl Surface {
 
     /// The self contacts of the step, from the trees of the last [`Surface::refit`] (which
     /// must have refitted all three).
-    pub(crate) fn self_contacts(&self, start: &[DVec3], predicted: &[DVec3], thickness: f64) -> Vec<Pair> {
+    pub(crate) fn self_contacts(
+        &self,
+        start: &[DVec3],
+        predicted: &[DVec3],
+        thickness: f64,
+    ) -> (Vec<Pair>, Vec<ElementPair>) {
         let (Some(triangle_bvh), Some(edge_bvh), Some(vertex_bvh)) =
             (self.triangle_tree.bvh.as_ref(), self.edge_tree.bvh.as_ref(), self.vertex_tree.bvh.as_ref())
         else {
-            return Vec::new();
+            return (Vec::new(), Vec::new());
         };
         let (triangles, edges, vertices) = (&self.triangles, &self.edges, &self.vertices);
         // Candidates, each passed to the narrow phase as it is met (no list of candidates):
@@ -220,7 +226,7 @@ impl Surface {
         // tree, edge–edge pairs from one of the edge tree against itself, less those that
         // share a vertex. The two traversals run side by side.
         let (mut contacts, edge_edge) = rayon::join(
-            || -> Vec<Pair> {
+            || -> Vec<(Pair, ElementPair)> {
                 vertex_bvh
                     .leaf_pairs(triangle_bvh, |a, b| a.intersects(b))
                     .filter_map(|(i, k)| {
@@ -234,7 +240,7 @@ impl Surface {
                     })
                     .collect()
             },
-            || -> Vec<Pair> {
+            || -> Vec<(Pair, ElementPair)> {
                 let contact = |i: u32, j: u32| {
                     edge_edge_contact(edges[i as usize], edges[j as usize], start, predicted, thickness)
                 };
@@ -252,44 +258,120 @@ impl Surface {
             },
         );
         contacts.extend(edge_edge);
-        distinct_features(contacts)
+        let (pairs, elements) = contacts.into_iter().unzip();
+        (distinct_features(pairs), elements)
+    }
+
+    /// Every pair of elements (vertex–triangle and edge–edge, not neighbours) of which one has
+    /// a vertex in `moved` and whose boxes meet, each with distance 0: the moved elements'
+    /// boxes swept from `start` to `end` and grown by `grow`, in BVHs of their own, against
+    /// each other and against the step's trees (whose boxes must hold the other elements'
+    /// paths from `start` to `end`). For the end-of-step check ([`super::crossing`]).
+    pub(crate) fn pairs_of_moved(&self, moved: &[bool], start: &[DVec3], end: &[DVec3], grow: f64) -> Vec<ElementPair> {
+        let (Some(triangle_bvh), Some(edge_bvh), Some(vertex_bvh)) =
+            (self.triangle_tree.bvh.as_ref(), self.edge_tree.bvh.as_ref(), self.vertex_tree.bvh.as_ref())
+        else {
+            return Vec::new();
+        };
+        let is_moved = |v: &u32| moved[*v as usize];
+        let (triangles, edges, vertices) = (&self.triangles, &self.edges, &self.vertices);
+        // The moved elements (indices into `items`, `size` vertices each) and their BVH.
+        let pick = |items: &[u32], size: usize| -> (Vec<u32>, Bvh) {
+            let chosen: Vec<u32> =
+                items.chunks(size).enumerate().filter(|(_, e)| e.iter().any(is_moved)).map(|(i, _)| i as u32).collect();
+            let boxes: Vec<Aabb> = chosen
+                .iter()
+                .map(|&i| swept_box(&items[size * i as usize..][..size], start, end, DVec3::ZERO, grow))
+                .collect();
+            (chosen, Bvh::from_leaves(BvhBuildStrategy::Binned, &boxes))
+        };
+        let (my_triangles, my_triangle_bvh) = pick(triangles.as_flattened(), 3);
+        let (my_edges, my_edge_bvh) = pick(edges.as_flattened(), 2);
+        let (my_vertices, my_vertex_bvh) = pick(vertices, 1);
+        // A pair from the step's trees is kept only when the other element's own box meets too.
+        let path = |items: &[u32]| swept_box(items, start, end, DVec3::ZERO, grow);
+        let meet = |a: &[u32], b: &[u32]| path(a).intersects(&path(b));
+        let mut out = Vec::new();
+        let mut vertex_triangle = |v: u32, t: [u32; 3]| {
+            if !t.contains(&v) && meet(&[v], &t) {
+                out.push(ElementPair { vertices: [v, t[0], t[1], t[2]], vertex_triangle: true, distance: 0.0 });
+            }
+        };
+        let overlap = |a: &parry3d_f64::partitioning::BvhNode, b: &parry3d_f64::partitioning::BvhNode| a.intersects(b);
+        for (i, k) in my_vertex_bvh.leaf_pairs(triangle_bvh, overlap) {
+            vertex_triangle(vertices[my_vertices[i as usize] as usize], triangles[k as usize]);
+        }
+        for (i, k) in vertex_bvh.leaf_pairs(&my_triangle_bvh, overlap) {
+            vertex_triangle(vertices[i as usize], triangles[my_triangles[k as usize] as usize]);
+        }
+        for (i, k) in my_vertex_bvh.leaf_pairs(&my_triangle_bvh, overlap) {
+            vertex_triangle(vertices[my_vertices[i as usize] as usize], triangles[my_triangles[k as usize] as usize]);
+        }
+        let mut edge_edge = |e: [u32; 2], f: [u32; 2]| {
+            if !(f.contains(&e[0]) || f.contains(&e[1])) && meet(&e, &f) {
+                out.push(ElementPair { vertices: [e[0], e[1], f[0], f[1]], vertex_triangle: false, distance: 0.0 });
+            }
+        };
+        for (i, j) in my_edge_bvh.leaf_pairs(edge_bvh, overlap) {
+            edge_edge(edges[my_edges[i as usize] as usize], edges[j as usize]);
+        }
+        my_edge_bvh.traverse_bvtt_single_tree::<false>(&mut BvhWorkspace::default(), &mut |i, j| {
+            edge_edge(edges[my_edges[i as usize] as usize], edges[my_edges[j as usize] as usize]);
+        });
+        out
     }
 }
 
 /// The contact of vertex `v` with triangle `t` (narrow phase at x_n), when they are not
-/// neighbours and are close enough (see [`separation`]).
-fn vertex_triangle_contact(v: u32, t: [u32; 3], start: &[DVec3], predicted: &[DVec3], thickness: f64) -> Option<Pair> {
+/// neighbours and are close enough (see [`separation`]), and the pair of elements with
+/// their distance at x_n (for the end-of-step check, [`super::crossing`]).
+fn vertex_triangle_contact(
+    v: u32,
+    t: [u32; 3],
+    start: &[DVec3],
+    predicted: &[DVec3],
+    thickness: f64,
+) -> Option<(Pair, ElementPair)> {
     if t.contains(&v) {
         return None;
     }
     let x = start[v as usize];
     let (c, b) = closest_on_triangle(x, t.map(|i| start[i as usize]));
     let (normal, target) = separation(x - c, thickness, || relative_motion(&[v], &t, start, predicted))?;
-    Some(Pair {
+    let pair = Pair {
         vertices: [v, t[0], t[1], t[2]],
         alpha: [1.0, -b[0], -b[1], -b[2]],
         normal,
         distance: target,
         copies: 1,
-    })
+    };
+    Some((pair, ElementPair { vertices: pair.vertices, vertex_triangle: true, distance: (x - c).length() }))
 }
 
 /// The contact of edges `e` and `f` (narrow phase at x_n), when they share no vertex and are
-/// close enough (see [`separation`]).
-fn edge_edge_contact(e: [u32; 2], f: [u32; 2], start: &[DVec3], predicted: &[DVec3], thickness: f64) -> Option<Pair> {
+/// close enough (see [`separation`]), and the pair of elements as for
+/// [`vertex_triangle_contact`].
+fn edge_edge_contact(
+    e: [u32; 2],
+    f: [u32; 2],
+    start: &[DVec3],
+    predicted: &[DVec3],
+    thickness: f64,
+) -> Option<(Pair, ElementPair)> {
     if f.contains(&e[0]) || f.contains(&e[1]) {
         return None;
     }
     let (p, r) = (e.map(|v| start[v as usize]), f.map(|v| start[v as usize]));
     let (s, t, a, b) = closest_between_segments(p[0], p[1], r[0], r[1]);
     let (normal, target) = separation(a - b, thickness, || relative_motion(&e, &f, start, predicted))?;
-    Some(Pair {
+    let pair = Pair {
         vertices: [e[0], e[1], f[0], f[1]],
         alpha: [1.0 - s, s, -(1.0 - t), -t],
         normal,
         distance: target,
         copies: 1,
-    })
+    };
+    Some((pair, ElementPair { vertices: pair.vertices, vertex_triangle: false, distance: (a - b).length() }))
 }
 
 /// The pairs whose closest features differ, in the order found, each with the

@@ -144,6 +144,9 @@ pub struct StepTotals {
     pub self_contacts: Vec<usize>,
     /// Vertices in a touching contact at the end of each step (the frames' `contact` flag).
     pub contact_vertices: Vec<usize>,
+    /// Vertices the self-collision crossing check put back where their step started, over
+    /// the run ([`crate::contact::ContactStats::stopped`]).
+    pub crossings_stopped: usize,
     /// Seconds in contact detection and end-of-step projection.
     pub contact_seconds: f64,
 }
@@ -197,6 +200,7 @@ impl LoadedScene {
             "contacts": totals.contacts,
             "self_contacts": totals.self_contacts,
             "contact_vertices": totals.contact_vertices,
+            "crossings_stopped": totals.crossings_stopped,
             "rejected": totals.rejected,
             "warnings": warnings.to_json(),
             "timings": {
@@ -318,6 +322,7 @@ impl SceneSimulation {
                 totals.contacts.push(step.contact.touching);
                 totals.self_contacts.push(step.contact.self_touching);
                 totals.contact_vertices.push(step.contact.vertices);
+                totals.crossings_stopped += step.contact.stopped;
             }
             on_step(k, &self.simulation, k % every.max(1) == 0 || k == frames).map_err(RunError::Stopped)?;
         }
