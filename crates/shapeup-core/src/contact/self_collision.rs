@@ -226,7 +226,7 @@ impl Surface {
         // tree, edge–edge pairs from one of the edge tree against itself, less those that
         // share a vertex. The two traversals run side by side.
         let (mut contacts, edge_edge) = rayon::join(
-            || -> Vec<(Pair, ElementPair)> {
+            || -> Vec<(Option<Pair>, ElementPair)> {
                 vertex_bvh
                     .leaf_pairs(triangle_bvh, |a, b| a.intersects(b))
                     .filter_map(|(i, k)| {
@@ -240,7 +240,7 @@ impl Surface {
                     })
                     .collect()
             },
-            || -> Vec<(Pair, ElementPair)> {
+            || -> Vec<(Option<Pair>, ElementPair)> {
                 let contact = |i: u32, j: u32| {
                     edge_edge_contact(edges[i as usize], edges[j as usize], start, predicted, thickness)
                 };
@@ -258,8 +258,8 @@ impl Surface {
             },
         );
         contacts.extend(edge_edge);
-        let (pairs, elements) = contacts.into_iter().unzip();
-        (distinct_features(pairs), elements)
+        let (pairs, elements): (Vec<Option<Pair>>, _) = contacts.into_iter().unzip();
+        (distinct_features(pairs.into_iter().flatten().collect()), elements)
     }
 
     /// Every pair of elements (vertex–triangle and edge–edge, not neighbours) of which one has
@@ -324,28 +324,28 @@ impl Surface {
 
 /// The contact of vertex `v` with triangle `t` (narrow phase at x_n), when they are not
 /// neighbours and are close enough (see [`separation`]), and the pair of elements with
-/// their distance at x_n (for the end-of-step check, [`super::crossing`]).
+/// their distance at x_n (for the end-of-step check, [`super::crossing`]): only the latter
+/// when they touch exactly (no normal).
 fn vertex_triangle_contact(
     v: u32,
     t: [u32; 3],
     start: &[DVec3],
     predicted: &[DVec3],
     thickness: f64,
-) -> Option<(Pair, ElementPair)> {
+) -> Option<(Option<Pair>, ElementPair)> {
     if t.contains(&v) {
         return None;
     }
     let x = start[v as usize];
     let (c, b) = closest_on_triangle(x, t.map(|i| start[i as usize]));
+    let vertices = [v, t[0], t[1], t[2]];
+    let element = ElementPair { vertices, vertex_triangle: true, distance: (x - c).length() };
+    if element.distance < TOUCHING {
+        return Some((None, element));
+    }
     let (normal, target) = separation(x - c, thickness, || relative_motion(&[v], &t, start, predicted))?;
-    let pair = Pair {
-        vertices: [v, t[0], t[1], t[2]],
-        alpha: [1.0, -b[0], -b[1], -b[2]],
-        normal,
-        distance: target,
-        copies: 1,
-    };
-    Some((pair, ElementPair { vertices: pair.vertices, vertex_triangle: true, distance: (x - c).length() }))
+    let pair = Pair { vertices, alpha: [1.0, -b[0], -b[1], -b[2]], normal, distance: target, copies: 1 };
+    Some((Some(pair), element))
 }
 
 /// The contact of edges `e` and `f` (narrow phase at x_n), when they share no vertex and are
@@ -357,21 +357,20 @@ fn edge_edge_contact(
     start: &[DVec3],
     predicted: &[DVec3],
     thickness: f64,
-) -> Option<(Pair, ElementPair)> {
+) -> Option<(Option<Pair>, ElementPair)> {
     if f.contains(&e[0]) || f.contains(&e[1]) {
         return None;
     }
     let (p, r) = (e.map(|v| start[v as usize]), f.map(|v| start[v as usize]));
     let (s, t, a, b) = closest_between_segments(p[0], p[1], r[0], r[1]);
+    let vertices = [e[0], e[1], f[0], f[1]];
+    let element = ElementPair { vertices, vertex_triangle: false, distance: (a - b).length() };
+    if element.distance < TOUCHING {
+        return Some((None, element));
+    }
     let (normal, target) = separation(a - b, thickness, || relative_motion(&e, &f, start, predicted))?;
-    let pair = Pair {
-        vertices: [e[0], e[1], f[0], f[1]],
-        alpha: [1.0 - s, s, -(1.0 - t), -t],
-        normal,
-        distance: target,
-        copies: 1,
-    };
-    Some((pair, ElementPair { vertices: pair.vertices, vertex_triangle: false, distance: (a - b).length() }))
+    let pair = Pair { vertices, alpha: [1.0 - s, s, -(1.0 - t), -t], normal, distance: target, copies: 1 };
+    Some((Some(pair), element))
 }
 
 /// The pairs whose closest features differ, in the order found, each with the
@@ -463,12 +462,16 @@ fn feature_key(c: &Pair) -> FeatureKey {
 /// (depth / h) that throws the layers apart and feeds energy into a crumpled cloth.
 pub(crate) fn separation(d: DVec3, thickness: f64, relative_motion: impl FnOnce() -> f64) -> Option<(DVec3, f64)> {
     let distance = d.length();
-    if distance < 1e-12 || (distance >= thickness && distance >= thickness + 2.0 * relative_motion()) {
+    if distance < TOUCHING || (distance >= thickness && distance >= thickness + 2.0 * relative_motion()) {
         return None;
     }
     let target = if distance < thickness { distance + RECOVERY * (thickness - distance) } else { thickness };
     Some((d / distance, target))
 }
+
+/// Closer than this a pair touches exactly and has no normal: no contact, but its elements are
+/// still checked for crossing at the step's end ([`super::crossing`]).
+const TOUCHING: f64 = 1e-12;
 
 /// The share of its missing distance to the thickness that a pair which starts too close is
 /// given back per step.

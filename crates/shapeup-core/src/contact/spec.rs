@@ -605,6 +605,9 @@ impl ColliderSpec {
                 let positions: Vec<DVec3> = mesh.positions.iter().map(|&p| frame.to_working(place(p))).collect();
                 let centroid = positions.iter().copied().sum::<DVec3>() / positions.len().max(1) as f64;
                 let use_closed = closed.unwrap_or(is_closed);
+                if use_closed && let Some(defect) = closed_mesh_defect(&positions, &mesh.triangles) {
+                    return Err(fail(defect));
+                }
                 let behind = own.map_or(thickness, length);
                 let shape =
                     MeshShape::new(&positions, &mesh.triangles, use_closed, behind).map_err(|e| fail(e.to_string()))?;
@@ -621,6 +624,48 @@ impl ColliderSpec {
             friction: self.friction,
             motion: Motion { velocity: DVec3::from(self.velocity) * frame.scale, spin },
         })
+    }
+}
+
+/// Why a closed mesh cannot tell inside from outside, if it cannot: two triangles that run
+/// along a shared edge the same way (faces not consistently oriented: the inside flips from
+/// face to face), or a signed volume V = Σ (a − o) · ((b − o) × (c − o)) / 6 that is not
+/// positive (faces pointing inward, or nothing enclosed, as a two-sided sheet). Either made
+/// the surface pull in cloth far from it.
+fn closed_mesh_defect(positions: &[DVec3], triangles: &[[u32; 3]]) -> Option<String> {
+    let mut directed: Vec<(u32, u32, usize)> =
+        triangles.iter().enumerate().flat_map(|(t, tri)| (0..3).map(move |k| (tri[k], tri[(k + 1) % 3], t))).collect();
+    directed.sort_unstable();
+    if let Some(w) = directed.windows(2).find(|w| (w[0].0, w[0].1) == (w[1].0, w[1].1)) {
+        return Some(format!(
+            "is closed but its faces are not consistently oriented: triangles {} and {} (from 0) both run from vertex {} to {}; \
+             orient them consistently (Blender: Mesh > Normals > Recalculate Outside) or set closed = false to use it one-sided",
+            w[0].2, w[1].2, w[0].0, w[0].1
+        ));
+    }
+    let corner = |v: u32| positions.get(v as usize).copied().unwrap_or(DVec3::ZERO);
+    let origin = positions.iter().copied().sum::<DVec3>() / positions.len().max(1) as f64;
+    let volume = triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|v| corner(v) - origin);
+            a.dot(b.cross(c))
+        })
+        .sum::<f64>()
+        / 6.0;
+    let (lo, hi) = positions.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+    let size = (hi - lo).length();
+    if volume < 0.0 && -volume > 1e-9 * size.powi(3) {
+        Some(format!(
+            "is closed but its faces point inward (signed volume {volume:.3e}): flip them (Blender: Mesh > Normals > Flip)"
+        ))
+    } else if volume <= 1e-9 * size.powi(3) {
+        Some(format!(
+            "is closed but encloses no volume (signed volume {volume:.3e}, bounding-box diagonal {size:.3e}): \
+             use a box collider, or set closed = false to use it one-sided"
+        ))
+    } else {
+        None
     }
 }
 
@@ -752,6 +797,42 @@ mod direction_tests {
             assert!((a.distance - b.distance).abs() < 1e-12, "{p}: {} against {}", a.distance, b.distance);
             assert!((place(a.point) - b.point).length() < 1e-12 && (turn * a.normal - b.normal).length() < 1e-12);
         }
+    }
+
+    #[test]
+    fn a_closed_mesh_inside_out_inconsistent_or_flat_is_refused() {
+        let cube: Vec<DVec3> =
+            (0..8).map(|i| DVec3::new(f64::from(i & 1), f64::from((i >> 1) & 1), f64::from(i >> 2))).collect();
+        // Outward: −z, +z, −y, +y, −x, +x.
+        let outward: Vec<[u32; 3]> = vec![
+            [0, 2, 3],
+            [0, 3, 1],
+            [4, 5, 7],
+            [4, 7, 6],
+            [0, 1, 5],
+            [0, 5, 4],
+            [2, 6, 7],
+            [2, 7, 3],
+            [0, 4, 6],
+            [0, 6, 2],
+            [1, 3, 7],
+            [1, 7, 5],
+        ];
+        assert_eq!(closed_mesh_defect(&cube, &outward), None);
+        let inward: Vec<[u32; 3]> = outward.iter().map(|&[a, b, c]| [a, c, b]).collect();
+        let message = closed_mesh_defect(&cube, &inward).expect("inside out");
+        assert!(message.contains("point inward") && message.contains("-1.000e0"), "{message}");
+        let mut one_flipped = outward.clone();
+        one_flipped[3] = [4, 6, 7];
+        let message = closed_mesh_defect(&cube, &one_flipped).expect("one face flipped");
+        assert!(message.contains("not consistently oriented") && message.contains("triangles 3 and 8"), "{message}");
+        // A square with both sides as faces (the back split along the other diagonal): every
+        // edge twice, consistently oriented, nothing enclosed.
+        let square = [DVec3::ZERO, DVec3::X, DVec3::new(1.0, 0.0, 1.0), DVec3::Z];
+        let flat = [[0, 1, 2], [2, 3, 0], [1, 0, 3], [3, 2, 1]];
+        assert!(every_edge_twice(&flat));
+        let message = closed_mesh_defect(&square, &flat).expect("flat");
+        assert!(message.contains("no volume"), "{message}");
     }
 
     #[test]

@@ -1362,7 +1362,12 @@ fn bad_colliders_name_the_entry_and_write_nothing() {
     write(&ws.path("open.obj"), "v 0 0 0\nv 1 0 0\nv 0 0 1\nf 1 3 2\n");
     write(&ws.path("huge.obj"), "v 0 0 0\nv 1e100 0 0\nv 0 0 1\nf 1 3 2\n");
     write(&ws.path("segment.obj"), "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n");
+    // A tetrahedron with its faces inward, and a square with both sides as faces.
+    write(&ws.path("inward.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 4 2\nf 1 3 4\nf 2 4 3\n");
+    write(&ws.path("sheet.obj"), "v 0 0 0\nv 1 0 0\nv 1 0 1\nv 0 0 1\nf 1 2 3\nf 3 4 1\nf 2 1 4\nf 4 3 2\n");
     for (bad, needle) in [
+        ("[[colliders]]\ntype = \"mesh\"\npath = \"inward.obj\"\n", "faces point inward"),
+        ("[[colliders]]\ntype = \"mesh\"\npath = \"sheet.obj\"\n", "encloses no volume"),
         ("[[colliders]]\ntype = \"mesh\"\npath = \"huge.obj\"\n", "vertex 1 (from 0) is at (1e100, 0, 0)"),
         ("[[colliders]]\ntype = \"mesh\"\npath = \"segment.obj\"\n", "all 1 of its triangles have zero area"),
         ("[[colliders]]\ntype = \"mesh\"\npath = \"points.obj\"\n", "no faces"),
