@@ -477,10 +477,37 @@ const TOUCHING: f64 = 1e-12;
 /// given back per step.
 pub(crate) const RECOVERY: f64 = 0.2;
 
+/// The closest point to `x` of a triangle `p` without area: the nearest of its edges' closest
+/// points, with its barycentric coordinates.
+fn closest_on_degenerate_triangle(x: DVec3, p: [DVec3; 3]) -> (DVec3, [f64; 3]) {
+    let mut best = (p[0], [1.0, 0.0, 0.0]);
+    let mut nearest = (x - p[0]).length_squared();
+    for (i, j) in [(0, 1), (1, 2), (2, 0)] {
+        let d = p[j] - p[i];
+        let length2 = d.length_squared();
+        let t = if length2 > 0.0 { ((x - p[i]).dot(d) / length2).clamp(0.0, 1.0) } else { 0.0 };
+        let point = p[i] + t * d;
+        let distance = (x - point).length_squared();
+        if distance < nearest {
+            let mut b = [0.0; 3];
+            b[i] = 1.0 - t;
+            b[j] = t;
+            best = (point, b);
+            nearest = distance;
+        }
+    }
+    best
+}
+
 /// The closest point of triangle `p` to `x` and its barycentric coordinates (Ericson §5.1.5).
 pub(crate) fn closest_on_triangle(x: DVec3, p: [DVec3; 3]) -> (DVec3, [f64; 3]) {
     let [a, b, c] = p;
     let (ab, ac, ap) = (b - a, c - a, x - a);
+    // Collinear corners (a crumpled or pushed cloth can bring two together): the region tests
+    // below assume an area, so the closest point of its three edges instead.
+    if ab.cross(ac).length_squared() <= 1e-24 * ab.length_squared() * ac.length_squared() {
+        return closest_on_degenerate_triangle(x, p);
+    }
     let (d1, d2) = (ab.dot(ap), ac.dot(ap));
     if d1 <= 0.0 && d2 <= 0.0 {
         return (a, [1.0, 0.0, 0.0]);
@@ -492,7 +519,7 @@ pub(crate) fn closest_on_triangle(x: DVec3, p: [DVec3; 3]) -> (DVec3, [f64; 3]) 
     }
     let vc = d1 * d4 - d3 * d2;
     if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-        let v = d1 / (d1 - d3);
+        let v = if d1 - d3 > 0.0 { d1 / (d1 - d3) } else { 0.0 };
         return (a + v * ab, [1.0 - v, v, 0.0]);
     }
     let cp = x - c;
@@ -502,12 +529,13 @@ pub(crate) fn closest_on_triangle(x: DVec3, p: [DVec3; 3]) -> (DVec3, [f64; 3]) 
     }
     let vb = d5 * d2 - d1 * d6;
     if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-        let w = d2 / (d2 - d6);
+        let w = if d2 - d6 > 0.0 { d2 / (d2 - d6) } else { 0.0 };
         return (a + w * ac, [1.0 - w, 0.0, w]);
     }
     let va = d3 * d6 - d5 * d4;
     if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
-        let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        let across = (d4 - d3) + (d5 - d6);
+        let w = if across > 0.0 { (d4 - d3) / across } else { 0.0 };
         return (b + w * (c - b), [0.0, 1.0 - w, w]);
     }
     let denom = 1.0 / (va + vb + vc);
@@ -572,6 +600,29 @@ mod tests {
 
     fn v(seed: &mut u64) -> DVec3 {
         DVec3::new(rng(seed), rng(seed), rng(seed))
+    }
+
+    #[test]
+    fn a_triangle_with_two_vertices_at_one_point_has_finite_closest_points() {
+        // Vertices pushed out of a sphere along the same ray land on one point; the edge
+        // regions' parameters were 0/0 there.
+        let (a, c) = (DVec3::ZERO, DVec3::new(0.0, 0.0, 1.0));
+        for x in [
+            DVec3::new(0.0, 1.0, 0.5),
+            DVec3::new(-1.0, 0.0, 2.0),
+            DVec3::new(0.3, 0.0, -0.2),
+            DVec3::new(2.0, 1.0, 0.5),
+        ] {
+            for t in [[a, a, c], [a, c, a], [c, a, a], [a, a, a]] {
+                let (p, b) = closest_on_triangle(x, t);
+                assert!(p.is_finite() && b.iter().all(|w| w.is_finite()), "{x} {t:?}: {p} {b:?}");
+                let on: DVec3 = (0..3).map(|k| b[k] * t[k]).sum();
+                assert!((on - p).length() < 1e-12, "{x} {t:?}");
+                // The closest point of the segment a–c (or the point a).
+                let s = if t.contains(&c) { x.z.clamp(0.0, 1.0) } else { 0.0 };
+                assert!((p - DVec3::new(0.0, 0.0, s)).length() < 1e-12, "{x} {t:?}: {p}");
+            }
+        }
     }
 
     #[test]

@@ -306,7 +306,8 @@ impl Shape {
             }
             _ => {
                 // Closed primitives: an exact ray cast (parry3d's) in the shape's own frame.
-                if self.closest(x0).distance < 0.0 {
+                // A point that does not move enters nothing (parry's ball answers 0/0 for it).
+                if x1 == x0 || self.closest(x0).distance < 0.0 {
                     return None;
                 }
                 let (origin, direction, turn) = match self {
@@ -335,7 +336,8 @@ impl Shape {
                     }
                     Shape::Mesh(_) => None,
                 }?;
-                Some((hit.time_of_impact, turn * from_parry(hit.normal)))
+                let normal = turn * from_parry(hit.normal);
+                (hit.time_of_impact.is_finite() && normal.is_finite()).then_some((hit.time_of_impact, normal))
             }
         }
     }
@@ -435,6 +437,23 @@ mod tests {
     fn sphere_against_samples() {
         let c = DVec3::new(0.1, -0.2, 0.3);
         check(&Shape::Sphere { center: c, radius: 0.7 }, &sphere_samples(c, 0.7, 80), |x| (x - c).length() < 0.7);
+    }
+
+    #[test]
+    fn a_point_that_does_not_move_enters_no_primitive() {
+        // parry's ball ray cast with a zero direction is 0/0: a vertex the step left where it
+        // was got a NaN entry point.
+        let x = DVec3::new(0.0, 0.31, 0.0);
+        for shape in [
+            Shape::Sphere { center: DVec3::ZERO, radius: 0.3 },
+            Shape::Capsule { a: DVec3::new(-1.0, 0.0, 0.0), b: DVec3::new(1.0, 0.0, 0.0), radius: 0.3 },
+            Shape::Box { center: DVec3::ZERO, half: DVec3::splat(0.3), rotation: DQuat::IDENTITY },
+            Shape::Plane { point: DVec3::new(0.0, 0.3, 0.0), normal: DVec3::Y },
+        ] {
+            assert_eq!(shape.segment_entry(x, x), None, "{shape:?}");
+            let (t, n) = shape.segment_entry(x, x - DVec3::Y).expect("a fall through it enters it");
+            assert!(t.is_finite() && n.is_finite() && t > 0.0 && t < 0.1, "{shape:?}: {t} {n}");
+        }
     }
 
     #[test]

@@ -636,6 +636,39 @@ fn a_cloth_starting_inside_the_thickness_is_not_thrown_off() {
     }
 }
 
+#[test]
+fn a_cloth_placed_through_a_sphere_with_a_vertex_at_its_centre_is_pushed_out_and_runs() {
+    // A new user's scene: the 11 × 11 cloth's middle vertex at the sphere's centre, 25 inside.
+    // Pushed out along their rays, collinear vertices landed on one point; the closest point
+    // on such a triangle was 0/0 and the first step failed with "kinetic energy not finite".
+    let text = r#"
+[mesh]
+generate = { kind = "cloth", vertices = [11, 11], size = [1.0, 1.0] }
+normalize = false
+[solver]
+mode = "dynamic"
+iterations = 5
+[[constraints]]
+type = "triangle_strain"
+[[colliders]]
+type = "sphere"
+center = [0.0, 0.0, 0.0]
+radius = 0.3
+"#;
+    let (loaded, mut sim) = start(text);
+    // 25 inside, more within the thickness.
+    let overlapping = loaded.warnings.count("collider_overlaps_rest_shape");
+    assert!((25..50).contains(&overlapping), "{:?}", loaded.warnings.to_json());
+    let thickness = sim.simulation.contact().expect("contact").params().thickness;
+    for k in 0..60 {
+        sim.step().unwrap_or_else(|e| panic!("step {k}: {e}"));
+        let q = sim.simulation.positions();
+        assert!(q.iter().all(|p| p.is_finite()), "step {k}");
+        let deepest = q.iter().map(|p| 0.3 + thickness - p.length()).fold(f64::NEG_INFINITY, f64::max);
+        assert!(deepest < 1e-9, "step {k}: a vertex {deepest} inside the thickness");
+    }
+}
+
 /// Whether segment pq passes through the inside of the box [lo, hi] (slab test, strictly).
 fn segment_enters_box(p: DVec3, q: DVec3, lo: DVec3, hi: DVec3) -> bool {
     let d = q - p;
