@@ -52,7 +52,8 @@ struct Cli {
     /// Worker threads for the parallel local step (default: all cores).
     #[arg(long, global = true, value_name = "N")]
     threads: Option<usize>,
-    /// Errors only: no warnings, no progress bars (RUST_LOG's default level becomes error).
+    /// Errors only on stderr: no warnings, no progress bars (RUST_LOG's default level becomes
+    /// error). The one-line summary of what was written stays on stdout.
     #[arg(short, long, global = true, conflicts_with = "verbose")]
     quiet: bool,
     /// More log output on stderr: -v info, -vv debug, -vvv trace (over RUST_LOG's default
