@@ -298,7 +298,10 @@ impl Simulation {
         let mut contact_stats = ContactStats::default();
         if let Some(contact) = &mut self.contact {
             let t = Instant::now();
-            let inverse_mass: Vec<f64> = self.masses.iter().map(|&m| if m > 0.0 { 1.0 / m } else { 0.0 }).collect();
+            // A vertex a hard group holds must not move: inverse mass 0.
+            let held = self.system.held_mask();
+            let inverse_mass: Vec<f64> =
+                self.masses.iter().zip(&held).map(|(&m, &h)| if m > 0.0 && !h { 1.0 / m } else { 0.0 }).collect();
             contact.finish_step(&mut self.next, &inverse_mass);
             contact_stats = contact.stats();
             contact_seconds += t.elapsed().as_secs_f64();

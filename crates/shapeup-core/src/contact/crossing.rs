@@ -139,12 +139,13 @@ fn coplanar_times(x: [DVec3; 4], d: [DVec3; 4]) -> [Option<f64>; 5] {
 /// Puts back at `start` the vertices of every pair whose paths from `start` to `q` cross,
 /// until none does (see the [module docs](self)). The pairs checked each round are `pairs`
 /// and those `more` gives for the current `q` (the pairs a step's own detection cannot vouch
-/// for); after `MAX_ROUNDS` rounds, every vertex of `all` is put back. Returns how many
-/// vertices were stopped.
+/// for); after `MAX_ROUNDS` rounds, every vertex of `all` is put back. Vertices whose inverse
+/// mass is 0 (hard pins, driven handles) are never put back: their motion is prescribed.
+/// Returns how many vertices were stopped.
 pub(crate) fn stop_crossings(
     pairs: &[ElementPair],
     mut more: impl FnMut(&[DVec3]) -> Vec<ElementPair>,
-    all: &[u32],
+    (all, inverse_mass): (&[u32], &[f64]),
     start: &[DVec3],
     q: &mut [DVec3],
     tolerance: f64,
@@ -163,7 +164,7 @@ pub(crate) fn stop_crossings(
         let mut changed = false;
         for v in crossing.into_iter().flatten() {
             let v = v as usize;
-            if q[v] != start[v] {
+            if q[v] != start[v] && inverse_mass[v] > 0.0 {
                 q[v] = start[v];
                 stopped += 1;
                 changed = true;
@@ -175,7 +176,7 @@ pub(crate) fn stop_crossings(
     }
     for &v in all {
         let v = v as usize;
-        if q[v] != start[v] {
+        if q[v] != start[v] && inverse_mass[v] > 0.0 {
             q[v] = start[v];
             stopped += 1;
         }
@@ -261,11 +262,29 @@ mod tests {
         q[0].y = -0.5;
         q[4].y = -0.5;
         let pairs = [pair(true)];
-        let stopped = stop_crossings(&pairs, |_| Vec::new(), &[0, 1, 2, 3, 4], &start, &mut q, 1e-9);
+        let free = [1.0; 5];
+        let stopped = stop_crossings(&pairs, |_| Vec::new(), (&[0, 1, 2, 3, 4], &free), &start, &mut q, 1e-9);
         assert_eq!(stopped, 1);
         assert_eq!(q[0], start[0]);
         assert_eq!(q[4].y, -0.5);
         assert!(!pairs[0].crosses(&start, &q, 1e-9));
+    }
+
+    #[test]
+    fn a_held_vertex_keeps_its_motion_and_the_others_stop() {
+        // The triangle is driven up through a resting vertex: the vertex (free) is put back,
+        // the driven triangle is not.
+        let start = [DVec3::new(0.2, 0.0, 0.2), TRIANGLE[0] - DVec3::Y, TRIANGLE[1] - DVec3::Y, TRIANGLE[2] - DVec3::Y];
+        let mut q = start;
+        q[0] = DVec3::new(0.2, -0.1, 0.2);
+        for k in 1..4 {
+            q[k] += 2.0 * DVec3::Y;
+        }
+        let driven = q;
+        let inverse_mass = [1.0, 0.0, 0.0, 0.0];
+        stop_crossings(&[pair(true)], |_| Vec::new(), (&[0, 1, 2, 3], &inverse_mass), &start, &mut q, 1e-9);
+        assert_eq!(q[0], start[0]);
+        assert_eq!(&q[1..], &driven[1..]);
     }
 
     #[test]

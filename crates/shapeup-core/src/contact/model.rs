@@ -507,7 +507,7 @@ impl ContactModel {
             self.separate_self_contacts(q, inverse_mass);
             self.project_out_of_colliders(q);
         }
-        self.stopped = self.stop_crossings(q);
+        self.stopped = self.stop_crossings(q, inverse_mass);
         // What touches at the end: a force on, or within the thickness (plus round-off).
         self.touching.fill(false);
         let tolerance = 1e-3 * self.params.thickness.max(1e-9);
@@ -544,12 +544,13 @@ impl ContactModel {
 
     /// In a time step with self-collision, the fail-safe ([`super::crossing`]): the vertices
     /// of element pairs whose paths from the step's start to `q` cross are put back at the
-    /// start. Checked: the step's own pairs, and the pairs of the elements with a vertex that
+    /// start (those with `inverse_mass` 0, held or driven, keep their motion). Checked: the
+    /// step's own pairs, and the pairs of the elements with a vertex that
     /// ended half the thickness or more from its prediction (less the surface's mean
     /// deviation from it, a translation that changes no crossing), found from their own
     /// boxes against the step's trees: a pair of the others is either among the step's own or
     /// farther apart than it moved. Returns how many were stopped.
-    fn stop_crossings(&self, q: &mut [DVec3]) -> usize {
+    fn stop_crossings(&self, q: &mut [DVec3], inverse_mass: &[f64]) -> usize {
         let Some(surface) = &self.surface else { return 0 };
         if !self.params.self_collision || self.times.1 <= self.times.0 || surface.vertices().is_empty() {
             return 0;
@@ -574,7 +575,7 @@ impl ContactModel {
             let end: Vec<DVec3> = q.par_iter().map(|&p| p - shift).collect();
             surface.pairs_of_moved(&moved, start, &end, tolerance)
         };
-        stop_crossings(&self.elements, more, vertices, start, q, tolerance)
+        stop_crossings(&self.elements, more, (vertices, inverse_mass), start, q, tolerance)
     }
 
     /// Whether a collider has features (points or segments) that can cut into the surface.

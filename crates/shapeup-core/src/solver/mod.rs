@@ -227,6 +227,17 @@ impl System {
         self.slots.iter().enumerate().filter_map(|(i, g)| g.as_ref().map(|g| (GroupId(i as u32), g)))
     }
 
+    /// Per vertex, whether a hard group holds it (as of the last assembly).
+    pub fn held_mask(&self) -> Vec<bool> {
+        let mut mask = vec![false; self.num_vertices];
+        for &(v, _) in &self.held {
+            if let Some(m) = mask.get_mut(v as usize) {
+                *m = true;
+            }
+        }
+        mask
+    }
+
     /// Total number of constraints.
     pub fn num_constraints(&self) -> usize {
         self.groups().map(|(_, g)| g.constraints.len()).sum()
