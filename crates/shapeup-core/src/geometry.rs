@@ -171,8 +171,13 @@ pub fn mean_edge_length(rest: &RestGeometry) -> f64 {
 
 /// The diagonal of the axis-aligned bounding box of the rest positions (0 for none).
 pub fn bounding_box_diagonal(rest: &RestGeometry) -> f64 {
-    let Some(&first) = rest.positions.first() else { return 0.0 };
-    let (lo, hi) = rest.positions.iter().fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+    points_diagonal(&rest.positions)
+}
+
+/// The diagonal of the axis-aligned bounding box of `points` (0 for none).
+pub fn points_diagonal(points: &[DVec3]) -> f64 {
+    let Some(&first) = points.first() else { return 0.0 };
+    let (lo, hi) = points.iter().fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p)));
     (hi - lo).length()
 }
 

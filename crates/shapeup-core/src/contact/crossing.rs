@@ -17,7 +17,7 @@
 //! roots in [0, 1] the pair crosses when the vertex is on the triangle (the two edges meet), to
 //! within a tolerance.
 
-use super::self_collision::{closest_between_segments, closest_on_triangle};
+use super::closest::{closest_between_segments, closest_on_triangle};
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -31,6 +31,21 @@ pub(crate) struct ElementPair {
 }
 
 impl ElementPair {
+    /// Vertex `v` and triangle `t` at `distance`, unless `v` is a corner of `t` (neighbours
+    /// are not a pair).
+    pub(crate) fn vertex_triangle(v: u32, t: [u32; 3], distance: f64) -> Option<Self> {
+        (!t.contains(&v)).then_some(ElementPair { vertices: [v, t[0], t[1], t[2]], vertex_triangle: true, distance })
+    }
+
+    /// Edges `e` and `f` at `distance`, unless they share a vertex.
+    pub(crate) fn edge_edge(e: [u32; 2], f: [u32; 2], distance: f64) -> Option<Self> {
+        (!(f.contains(&e[0]) || f.contains(&e[1]))).then_some(ElementPair {
+            vertices: [e[0], e[1], f[0], f[1]],
+            vertex_triangle: false,
+            distance,
+        })
+    }
+
     /// Whether the pair can come within `0` of itself over a step whose vertices move by
     /// `q − start`: the distance at x_n less the largest relative motion of a vertex of one
     /// side against one of the other (any point of an element moves by a convex combination
@@ -277,8 +292,8 @@ mod tests {
         let start = [DVec3::new(0.2, 0.0, 0.2), TRIANGLE[0] - DVec3::Y, TRIANGLE[1] - DVec3::Y, TRIANGLE[2] - DVec3::Y];
         let mut q = start;
         q[0] = DVec3::new(0.2, -0.1, 0.2);
-        for k in 1..4 {
-            q[k] += 2.0 * DVec3::Y;
+        for p in &mut q[1..] {
+            *p += 2.0 * DVec3::Y;
         }
         let driven = q;
         let inverse_mass = [1.0, 0.0, 0.0, 0.0];

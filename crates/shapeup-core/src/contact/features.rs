@@ -31,9 +31,10 @@
 //! offset from P could point inward ([`contact_normal`]). Where the vertices are inside too,
 //! their own contacts take them out first.
 
+use super::closest::{closest_between_segments, closest_on_triangle};
 use super::collider::Collider;
 use super::gap::Pair;
-use super::self_collision::{RECOVERY, Surface, closest_between_segments, closest_on_triangle};
+use super::self_collision::{RECOVERY, Surface};
 use super::shape::Shape;
 use glam::DVec3;
 use parry3d_f64::bounding_volume::{Aabb, BoundingVolume};

@@ -12,6 +12,7 @@
 //! relative predicted motion is a contact, with the normal from the second closest point to
 //! the first (the side it started on).
 
+use super::closest::{closest_between_segments, closest_on_triangle};
 use super::crossing::ElementPair;
 use super::gap::Pair;
 use glam::DVec3;
@@ -207,6 +208,11 @@ impl Surface {
         );
     }
 
+    /// The triangle, edge and vertex BVHs, once all three are built.
+    fn bvhs(&self) -> Option<(&Bvh, &Bvh, &Bvh)> {
+        Some((self.triangle_tree.bvh.as_ref()?, self.edge_tree.bvh.as_ref()?, self.vertex_tree.bvh.as_ref()?))
+    }
+
     /// The self contacts of the step, from the trees of the last [`Surface::refit`] (which
     /// must have refitted all three).
     pub(crate) fn self_contacts(
@@ -215,9 +221,7 @@ impl Surface {
         predicted: &[DVec3],
         thickness: f64,
     ) -> (Vec<Pair>, Vec<ElementPair>) {
-        let (Some(triangle_bvh), Some(edge_bvh), Some(vertex_bvh)) =
-            (self.triangle_tree.bvh.as_ref(), self.edge_tree.bvh.as_ref(), self.vertex_tree.bvh.as_ref())
-        else {
+        let Some((triangle_bvh, edge_bvh, vertex_bvh)) = self.bvhs() else {
             return (Vec::new(), Vec::new());
         };
         let (triangles, edges, vertices) = (&self.triangles, &self.edges, &self.vertices);
@@ -268,9 +272,7 @@ impl Surface {
     /// each other and against the step's trees (whose boxes must hold the other elements'
     /// paths from `start` to `end`). For the end-of-step check ([`super::crossing`]).
     pub(crate) fn pairs_of_moved(&self, moved: &[bool], start: &[DVec3], end: &[DVec3], grow: f64) -> Vec<ElementPair> {
-        let (Some(triangle_bvh), Some(edge_bvh), Some(vertex_bvh)) =
-            (self.triangle_tree.bvh.as_ref(), self.edge_tree.bvh.as_ref(), self.vertex_tree.bvh.as_ref())
-        else {
+        let Some((triangle_bvh, edge_bvh, vertex_bvh)) = self.bvhs() else {
             return Vec::new();
         };
         let is_moved = |v: &u32| moved[*v as usize];
@@ -292,11 +294,8 @@ impl Surface {
         let path = |items: &[u32]| swept_box(items, start, end, DVec3::ZERO, grow);
         let meet = |a: &[u32], b: &[u32]| path(a).intersects(&path(b));
         let mut out = Vec::new();
-        let mut vertex_triangle = |v: u32, t: [u32; 3]| {
-            if !t.contains(&v) && meet(&[v], &t) {
-                out.push(ElementPair { vertices: [v, t[0], t[1], t[2]], vertex_triangle: true, distance: 0.0 });
-            }
-        };
+        let mut vertex_triangle =
+            |v: u32, t: [u32; 3]| out.extend(ElementPair::vertex_triangle(v, t, 0.0).filter(|_| meet(&[v], &t)));
         let overlap = |a: &parry3d_f64::partitioning::BvhNode, b: &parry3d_f64::partitioning::BvhNode| a.intersects(b);
         for (i, k) in my_vertex_bvh.leaf_pairs(triangle_bvh, overlap) {
             vertex_triangle(vertices[my_vertices[i as usize] as usize], triangles[k as usize]);
@@ -307,11 +306,8 @@ impl Surface {
         for (i, k) in my_vertex_bvh.leaf_pairs(&my_triangle_bvh, overlap) {
             vertex_triangle(vertices[my_vertices[i as usize] as usize], triangles[my_triangles[k as usize] as usize]);
         }
-        let mut edge_edge = |e: [u32; 2], f: [u32; 2]| {
-            if !(f.contains(&e[0]) || f.contains(&e[1])) && meet(&e, &f) {
-                out.push(ElementPair { vertices: [e[0], e[1], f[0], f[1]], vertex_triangle: false, distance: 0.0 });
-            }
-        };
+        let mut edge_edge =
+            |e: [u32; 2], f: [u32; 2]| out.extend(ElementPair::edge_edge(e, f, 0.0).filter(|_| meet(&e, &f)));
         for (i, j) in my_edge_bvh.leaf_pairs(edge_bvh, overlap) {
             edge_edge(edges[my_edges[i as usize] as usize], edges[j as usize]);
         }
@@ -333,18 +329,16 @@ fn vertex_triangle_contact(
     predicted: &[DVec3],
     thickness: f64,
 ) -> Option<(Option<Pair>, ElementPair)> {
-    if t.contains(&v) {
-        return None;
-    }
     let x = start[v as usize];
+    let mut element = ElementPair::vertex_triangle(v, t, 0.0)?;
     let (c, b) = closest_on_triangle(x, t.map(|i| start[i as usize]));
-    let vertices = [v, t[0], t[1], t[2]];
-    let element = ElementPair { vertices, vertex_triangle: true, distance: (x - c).length() };
+    element.distance = (x - c).length();
     if element.distance < TOUCHING {
         return Some((None, element));
     }
     let (normal, target) = separation(x - c, thickness, || relative_motion(&[v], &t, start, predicted))?;
-    let pair = Pair { vertices, alpha: [1.0, -b[0], -b[1], -b[2]], normal, distance: target, copies: 1 };
+    let alpha = [1.0, -b[0], -b[1], -b[2]];
+    let pair = Pair { vertices: element.vertices, alpha, normal, distance: target, copies: 1 };
     Some((Some(pair), element))
 }
 
@@ -358,18 +352,16 @@ fn edge_edge_contact(
     predicted: &[DVec3],
     thickness: f64,
 ) -> Option<(Option<Pair>, ElementPair)> {
-    if f.contains(&e[0]) || f.contains(&e[1]) {
-        return None;
-    }
+    let mut element = ElementPair::edge_edge(e, f, 0.0)?;
     let (p, r) = (e.map(|v| start[v as usize]), f.map(|v| start[v as usize]));
     let (s, t, a, b) = closest_between_segments(p[0], p[1], r[0], r[1]);
-    let vertices = [e[0], e[1], f[0], f[1]];
-    let element = ElementPair { vertices, vertex_triangle: false, distance: (a - b).length() };
+    element.distance = (a - b).length();
     if element.distance < TOUCHING {
         return Some((None, element));
     }
     let (normal, target) = separation(a - b, thickness, || relative_motion(&e, &f, start, predicted))?;
-    let pair = Pair { vertices, alpha: [1.0 - s, s, -(1.0 - t), -t], normal, distance: target, copies: 1 };
+    let alpha = [1.0 - s, s, -(1.0 - t), -t];
+    let pair = Pair { vertices: element.vertices, alpha, normal, distance: target, copies: 1 };
     Some((Some(pair), element))
 }
 
@@ -477,190 +469,10 @@ const TOUCHING: f64 = 1e-12;
 /// given back per step.
 pub(crate) const RECOVERY: f64 = 0.2;
 
-/// The closest point to `x` of a triangle `p` without area: the nearest of its edges' closest
-/// points, with its barycentric coordinates.
-fn closest_on_degenerate_triangle(x: DVec3, p: [DVec3; 3]) -> (DVec3, [f64; 3]) {
-    let mut best = (p[0], [1.0, 0.0, 0.0]);
-    let mut nearest = (x - p[0]).length_squared();
-    for (i, j) in [(0, 1), (1, 2), (2, 0)] {
-        let d = p[j] - p[i];
-        let length2 = d.length_squared();
-        let t = if length2 > 0.0 { ((x - p[i]).dot(d) / length2).clamp(0.0, 1.0) } else { 0.0 };
-        let point = p[i] + t * d;
-        let distance = (x - point).length_squared();
-        if distance < nearest {
-            let mut b = [0.0; 3];
-            b[i] = 1.0 - t;
-            b[j] = t;
-            best = (point, b);
-            nearest = distance;
-        }
-    }
-    best
-}
-
-/// The closest point of triangle `p` to `x` and its barycentric coordinates (Ericson §5.1.5).
-pub(crate) fn closest_on_triangle(x: DVec3, p: [DVec3; 3]) -> (DVec3, [f64; 3]) {
-    let [a, b, c] = p;
-    let (ab, ac, ap) = (b - a, c - a, x - a);
-    // Collinear corners (a crumpled or pushed cloth can bring two together): the region tests
-    // below assume an area, so the closest point of its three edges instead.
-    if ab.cross(ac).length_squared() <= 1e-24 * ab.length_squared() * ac.length_squared() {
-        return closest_on_degenerate_triangle(x, p);
-    }
-    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
-    if d1 <= 0.0 && d2 <= 0.0 {
-        return (a, [1.0, 0.0, 0.0]);
-    }
-    let bp = x - b;
-    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
-    if d3 >= 0.0 && d4 <= d3 {
-        return (b, [0.0, 1.0, 0.0]);
-    }
-    let vc = d1 * d4 - d3 * d2;
-    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-        let v = if d1 - d3 > 0.0 { d1 / (d1 - d3) } else { 0.0 };
-        return (a + v * ab, [1.0 - v, v, 0.0]);
-    }
-    let cp = x - c;
-    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
-    if d6 >= 0.0 && d5 <= d6 {
-        return (c, [0.0, 0.0, 1.0]);
-    }
-    let vb = d5 * d2 - d1 * d6;
-    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-        let w = if d2 - d6 > 0.0 { d2 / (d2 - d6) } else { 0.0 };
-        return (a + w * ac, [1.0 - w, 0.0, w]);
-    }
-    let va = d3 * d6 - d5 * d4;
-    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
-        let across = (d4 - d3) + (d5 - d6);
-        let w = if across > 0.0 { (d4 - d3) / across } else { 0.0 };
-        return (b + w * (c - b), [0.0, 1.0 - w, w]);
-    }
-    let denom = 1.0 / (va + vb + vc);
-    let (v, w) = (vb * denom, vc * denom);
-    if !(v.is_finite() && w.is_finite()) {
-        // A degenerate triangle: its closest vertex.
-        let d = [a, b, c].map(|q| (q - x).length_squared());
-        let k = if d[0] <= d[1] && d[0] <= d[2] {
-            0
-        } else if d[1] <= d[2] {
-            1
-        } else {
-            2
-        };
-        let mut bary = [0.0; 3];
-        bary[k] = 1.0;
-        return ([a, b, c][k], bary);
-    }
-    (a + ab * v + ac * w, [1.0 - v - w, v, w])
-}
-
-/// The closest points a = p0 + s (p1 − p0), b = q0 + t (q1 − q0) of two segments (Ericson
-/// §5.1.9), as (s, t, a, b).
-pub(crate) fn closest_between_segments(p0: DVec3, p1: DVec3, q0: DVec3, q1: DVec3) -> (f64, f64, DVec3, DVec3) {
-    let (d1, d2, r) = (p1 - p0, q1 - q0, p0 - q0);
-    let (a, e, f) = (d1.length_squared(), d2.length_squared(), d2.dot(r));
-    const EPS: f64 = 1e-24;
-    let (s, t) = if a <= EPS && e <= EPS {
-        (0.0, 0.0)
-    } else if a <= EPS {
-        (0.0, (f / e).clamp(0.0, 1.0))
-    } else {
-        let c = d1.dot(r);
-        if e <= EPS {
-            ((-c / a).clamp(0.0, 1.0), 0.0)
-        } else {
-            let b = d1.dot(d2);
-            let denom = a * e - b * b;
-            let mut s = if denom > EPS * a * e { ((b * f - c * e) / denom).clamp(0.0, 1.0) } else { 0.0 };
-            let mut t = (b * s + f) / e;
-            if t < 0.0 {
-                t = 0.0;
-                s = (-c / a).clamp(0.0, 1.0);
-            } else if t > 1.0 {
-                t = 1.0;
-                s = ((b - c) / a).clamp(0.0, 1.0);
-            }
-            (s, t)
-        }
-    };
-    (s, t, p0 + s * d1, q0 + t * d2)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn rng(seed: &mut u64) -> f64 {
-        *seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        ((*seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-    }
-
-    fn v(seed: &mut u64) -> DVec3 {
-        DVec3::new(rng(seed), rng(seed), rng(seed))
-    }
-
-    #[test]
-    fn a_triangle_with_two_vertices_at_one_point_has_finite_closest_points() {
-        // Vertices pushed out of a sphere along the same ray land on one point; the edge
-        // regions' parameters were 0/0 there.
-        let (a, c) = (DVec3::ZERO, DVec3::new(0.0, 0.0, 1.0));
-        for x in [
-            DVec3::new(0.0, 1.0, 0.5),
-            DVec3::new(-1.0, 0.0, 2.0),
-            DVec3::new(0.3, 0.0, -0.2),
-            DVec3::new(2.0, 1.0, 0.5),
-        ] {
-            for t in [[a, a, c], [a, c, a], [c, a, a], [a, a, a]] {
-                let (p, b) = closest_on_triangle(x, t);
-                assert!(p.is_finite() && b.iter().all(|w| w.is_finite()), "{x} {t:?}: {p} {b:?}");
-                let on: DVec3 = (0..3).map(|k| b[k] * t[k]).sum();
-                assert!((on - p).length() < 1e-12, "{x} {t:?}");
-                // The closest point of the segment a–c (or the point a).
-                let s = if t.contains(&c) { x.z.clamp(0.0, 1.0) } else { 0.0 };
-                assert!((p - DVec3::new(0.0, 0.0, s)).length() < 1e-12, "{x} {t:?}: {p}");
-            }
-        }
-    }
-
-    #[test]
-    fn triangle_closest_point_beats_every_sample() {
-        let mut seed = 5;
-        for _ in 0..200 {
-            let (x, p) = (v(&mut seed) * 2.0, [v(&mut seed), v(&mut seed), v(&mut seed)]);
-            let (c, b) = closest_on_triangle(x, p);
-            assert!((b.iter().sum::<f64>() - 1.0).abs() < 1e-12 && b.iter().all(|&w| w >= -1e-12));
-            assert!((p[0] * b[0] + p[1] * b[1] + p[2] * b[2] - c).length() < 1e-12);
-            let d = (x - c).length();
-            for i in 0..=30 {
-                for j in 0..=30 - i {
-                    let (u, w) = (i as f64 / 30.0, j as f64 / 30.0);
-                    let s = p[0] * (1.0 - u - w) + p[1] * u + p[2] * w;
-                    assert!(d <= (x - s).length() + 1e-12);
-                }
-            }
-        }
-    }
-
-    #[test]
-    fn segment_closest_points_beat_every_sample() {
-        let mut seed = 9;
-        for _ in 0..200 {
-            let (p0, p1, q0, q1) = (v(&mut seed), v(&mut seed), v(&mut seed), v(&mut seed));
-            let (s, t, a, b) = closest_between_segments(p0, p1, q0, q1);
-            assert!((0.0..=1.0).contains(&s) && (0.0..=1.0).contains(&t));
-            let d = (a - b).length();
-            for i in 0..=40 {
-                for j in 0..=40 {
-                    let x = p0 + (p1 - p0) * (i as f64 / 40.0);
-                    let y = q0 + (q1 - q0) * (j as f64 / 40.0);
-                    assert!(d <= (x - y).length() + 1e-12);
-                }
-            }
-        }
-    }
+    use crate::contact::closest::tests::v;
 
     #[test]
     fn the_broad_phase_misses_no_pair_a_brute_force_search_finds() {

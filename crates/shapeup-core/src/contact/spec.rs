@@ -653,8 +653,7 @@ fn closed_mesh_defect(positions: &[DVec3], triangles: &[[u32; 3]]) -> Option<Str
         })
         .sum::<f64>()
         / 6.0;
-    let (lo, hi) = positions.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| (lo.min(p), hi.max(p)));
-    let size = (hi - lo).length();
+    let size = crate::geometry::points_diagonal(positions);
     if volume < 0.0 && -volume > 1e-9 * size.powi(3) {
         Some(format!(
             "is closed but its faces point inward (signed volume {volume:.3e}): flip them (Blender: Mesh > Normals > Flip)"
