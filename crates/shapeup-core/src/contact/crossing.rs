@@ -1,15 +1,19 @@
 //! The fail-safe of self-collision: at the end of a time step, the element pairs whose paths
 //! from the step's start x_n to its end q cross (a vertex through a triangle, an edge through
-//! an edge) are found by a continuous check, and their vertices are stopped: put back at x_n.
-//! Repeated until nothing crosses, so a step never makes the surface pass through itself:
-//! x_n had no crossing, and a step that stops every vertex is x_n again.
+//! an edge) are found by a continuous check, and their vertices are gathered in rigid impact
+//! zones (Bridson, Fedkiw and Anderson, "Robust Treatment of Collisions, Contact and Friction
+//! for Cloth Animation", SIGGRAPH 2002, §7.3; Harmon et al., "Robust Treatment of Simultaneous
+//! Collisions", SIGGRAPH 2008): each zone moves as a rigid body with its vertices' linear and
+//! angular momentum, so no pair inside it crosses. Zones merge until nothing crosses; a step
+//! never makes the surface pass through itself, as x_n had no crossing and, after
+//! `MAX_ROUNDS`, the step is x_n again.
 //!
 //! The contacts of a step keep pairs apart only as far as a finite number of iterations and
 //! projections can: a fold pressed between a collider and itself, where the collider's
-//! projection has the last word, let a vertex slip through a triangle. Stopping is the
-//! simplest of the fail-safes of Bridson, Fedkiw and Anderson ("Robust Treatment of Collisions,
-//! Contact and Friction for Cloth Animation", SIGGRAPH 2002, §7.3, rigid impact zones): a
-//! stopped vertex loses its velocity for that step, which is rare and local.
+//! projection has the last word, let a vertex slip through a triangle. A zone keeps its
+//! momentum (the fold goes on falling, turning, sliding) and loses only the motion that
+//! crossed: an inelastic impact. Stopping the vertices instead (putting them back at x_n)
+//! froze whole cloths in mid-air when a coarse step crossed every frame.
 //!
 //! The continuous check of a pair (Provot, "Collision and self-collision handling in cloth
 //! model dedicated to design garments", 1997): the four points, moving linearly over the step,
@@ -63,6 +67,15 @@ impl ElementPair {
         most.sqrt() >= self.distance
     }
 
+    /// Whether a vertex of one side is within `tolerance` of one of the other at `start`: two
+    /// vertices at one place (pushed onto one point by a collider) are as neighbours, with no
+    /// side to keep (the self contacts take them apart).
+    fn coincident(&self, start: &[DVec3], tolerance: f64) -> bool {
+        let split = if self.vertex_triangle { 1 } else { 2 };
+        let (first, second) = self.vertices.split_at(split);
+        first.iter().any(|&a| second.iter().any(|&b| start[a as usize].distance(start[b as usize]) <= tolerance))
+    }
+
     /// Whether the pair's paths from `start` to `q` cross (see the [module docs](self)), to
     /// within `tolerance`.
     pub(crate) fn crosses(&self, start: &[DVec3], q: &[DVec3], tolerance: f64) -> bool {
@@ -95,6 +108,12 @@ fn coplanar_times(x: [DVec3; 4], d: [DVec3; 4]) -> [Option<f64>; 5] {
     let (ab0, ab1, ab2) = (a0.cross(b0), a1.cross(b0) + a0.cross(b1), a1.cross(b1));
     let k = [ab0.dot(c0), ab1.dot(c0) + ab0.dot(c1), ab2.dot(c0) + ab1.dot(c1), ab2.dot(c1)];
     let f = |t: f64| ((k[3] * t + k[2]) * t + k[1]) * t + k[0];
+    // The cubic's Bernstein coefficients on [0, 1]: f lies in their convex hull, so when all
+    // have one sign f has no root there (most pairs a step checks: a cheap way out).
+    let bernstein = [k[0], k[0] + k[1] / 3.0, k[0] + (2.0 * k[1] + k[2]) / 3.0, k[0] + k[1] + k[2] + k[3]];
+    if bernstein.iter().all(|&b| b > 0.0) || bernstein.iter().all(|&b| b < 0.0) {
+        return [None; 5];
+    }
     // Turning points: 3 k3 t² + 2 k2 t + k1 = 0.
     let mut ends = [0.0, 1.0, 1.0, 1.0];
     let (qa, qb, qc) = (3.0 * k[3], 2.0 * k[2], k[1]);
@@ -151,52 +170,173 @@ fn coplanar_times(x: [DVec3; 4], d: [DVec3; 4]) -> [Option<f64>; 5] {
     roots
 }
 
-/// Puts back at `start` the vertices of every pair whose paths from `start` to `q` cross,
-/// until none does (see the [module docs](self)). The pairs checked each round are `pairs`
-/// and those `more` gives for the current `q` (the pairs a step's own detection cannot vouch
-/// for); after `MAX_ROUNDS` rounds, every vertex of `all` is put back. Vertices whose inverse
-/// mass is 0 (hard pins, driven handles) are never put back: their motion is prescribed.
-/// Returns how many vertices were stopped.
+/// Resolves every crossing of the step in rigid impact zones (see the [module docs](self)):
+/// the vertices of each pair whose paths from `start` to `q` cross are merged into a zone, and
+/// each zone's vertices are given the rigid motion with the linear and angular momentum their
+/// own motions had ([`rigid_motion`]); repeated, zones merging, until nothing crosses. The pairs
+/// checked each round are `pairs` and those `more` gives for the current `q` (the pairs a
+/// step's own detection cannot vouch for). A zone with a vertex whose inverse mass is 0 (a hard
+/// pin, a driven handle: its motion is prescribed) cannot move rigidly with it: its other
+/// vertices are put back at `start`. A zone whose rigid motion would take a vertex `v` to a
+/// point p where `allowed(v, p)` is false (into a collider) takes half or a quarter of that
+/// motion where that is allowed, else is put back at `start` too. After `MAX_ROUNDS` rounds, every vertex of `all` is put
+/// back (x_n had no crossing). Returns how many vertices' motion was changed.
 pub(crate) fn stop_crossings(
     pairs: &[ElementPair],
     mut more: impl FnMut(&[DVec3]) -> Vec<ElementPair>,
     (all, inverse_mass): (&[u32], &[f64]),
+    allowed: impl Fn(u32, DVec3) -> bool + Sync,
     start: &[DVec3],
     q: &mut [DVec3],
     tolerance: f64,
 ) -> usize {
     const MAX_ROUNDS: usize = 16;
-    let mut stopped = 0;
+    // The motions the step gave, and the zones (allocated at the first crossing).
+    let mut zones: Option<(Vec<DVec3>, ImpactZones)> = None;
+    let changed = |q: &[DVec3], free: &[DVec3]| all.iter().filter(|&&v| q[v as usize] != free[v as usize]).count();
     for _ in 0..MAX_ROUNDS {
         let extra = more(q);
         let view: &[DVec3] = q;
         let crossing: Vec<[u32; 4]> = pairs
             .par_iter()
             .chain(extra.par_iter())
-            .filter(|p| p.may_meet(start, view) && p.crosses(start, view, tolerance))
+            .filter(|p| p.may_meet(start, view) && !p.coincident(start, tolerance) && p.crosses(start, view, tolerance))
             .map(|p| p.vertices)
             .collect();
-        let mut changed = false;
-        for v in crossing.into_iter().flatten() {
-            let v = v as usize;
-            if q[v] != start[v] && inverse_mass[v] > 0.0 {
-                q[v] = start[v];
-                stopped += 1;
-                changed = true;
+        let (free, zones) = zones.get_or_insert_with(|| (view.to_vec(), ImpactZones::new(view.len())));
+        let mut merged = false;
+        for vertices in &crossing {
+            for &v in &vertices[1..] {
+                merged |= zones.union(vertices[0], v);
             }
         }
-        if !changed {
-            return stopped;
+        if !merged {
+            // Nothing crosses, or only pairs inside a zone (whose motion is rigid, so they
+            // keep their side) or one held still against a prescribed motion.
+            return changed(q, free);
+        }
+        for members in zones.members() {
+            // The zone's rigid motion, or as large a part of it as keeps out of the colliders
+            // (a part of a rigid motion is one too).
+            let rigid = members.iter().all(|&v| inverse_mass[v as usize] > 0.0).then_some(()).and_then(|()| {
+                let (centre, motion, turn) = rigid_motion(&members, inverse_mass, start, free);
+                [1.0, 0.5, 0.25].into_iter().find_map(|part| {
+                    let rotation = glam::DQuat::from_scaled_axis(part * turn);
+                    let moved: Vec<DVec3> = members
+                        .iter()
+                        .map(|&v| centre + part * motion + rotation * (start[v as usize] - centre))
+                        .collect();
+                    members.iter().zip(&moved).all(|(&v, &p)| allowed(v, p)).then_some(moved)
+                })
+            });
+            match rigid {
+                Some(moved) => {
+                    for (&v, p) in members.iter().zip(moved) {
+                        q[v as usize] = p;
+                    }
+                }
+                None => {
+                    for &v in &members {
+                        if inverse_mass[v as usize] > 0.0 {
+                            q[v as usize] = start[v as usize];
+                        }
+                    }
+                }
+            }
         }
     }
     for &v in all {
         let v = v as usize;
-        if q[v] != start[v] && inverse_mass[v] > 0.0 {
+        if inverse_mass[v] > 0.0 {
             q[v] = start[v];
-            stopped += 1;
         }
     }
-    stopped
+    zones.map_or(0, |(free, _)| changed(q, &free))
+}
+
+/// Disjoint sets of vertices (union–find with path halving), for the impact zones.
+struct ImpactZones {
+    parent: Vec<u32>,
+    /// Every vertex ever merged (a zone of more than one vertex holds only these).
+    merged: Vec<u32>,
+}
+
+impl ImpactZones {
+    fn new(n: usize) -> Self {
+        ImpactZones { parent: (0..n as u32).collect(), merged: Vec::new() }
+    }
+
+    fn root(&mut self, mut v: u32) -> u32 {
+        while self.parent[v as usize] != v {
+            let up = self.parent[self.parent[v as usize] as usize];
+            self.parent[v as usize] = up;
+            v = up;
+        }
+        v
+    }
+
+    /// Merges the zones of `a` and `b`; whether they were apart.
+    fn union(&mut self, a: u32, b: u32) -> bool {
+        let (ra, rb) = (self.root(a), self.root(b));
+        if ra == rb {
+            return false;
+        }
+        self.parent[ra.max(rb) as usize] = ra.min(rb);
+        self.merged.extend([a, b]);
+        true
+    }
+
+    /// The zones of more than one vertex, each a list of its vertices.
+    fn members(&mut self) -> Vec<Vec<u32>> {
+        let mut merged = std::mem::take(&mut self.merged);
+        merged.sort_unstable();
+        merged.dedup();
+        let mut keyed: Vec<(u32, u32)> = merged.iter().map(|&v| (self.root(v), v)).collect();
+        self.merged = merged;
+        keyed.sort_unstable();
+        keyed.chunk_by(|a, b| a.0 == b.0).map(|zone| zone.iter().map(|&(_, v)| v).collect()).collect()
+    }
+}
+
+/// The rigid motion of `members` from `start` (centre x_c, its motion d_c, rotation vector ω)
+/// with the momentum of their motions `free − start`
+/// (Bridson, Fedkiw and Anderson 2002, §7.3), masses 1 / `inverse_mass`: the centre of mass
+/// x_c moves by the mean motion d_c = Σ mᵢ dᵢ / M, and the zone turns about it by the rotation
+/// vector ω = I⁻¹ L, L = Σ mᵢ rᵢ × (dᵢ − d_c), I = Σ mᵢ (|rᵢ|² 1 − rᵢ rᵢᵀ), rᵢ = xᵢ − x_c.
+/// The turn is at most a quarter turn (the straight paths from a configuration to its turned
+/// image then pass through affine images of it only, where no pair of the zone can cross).
+fn rigid_motion(members: &[u32], inverse_mass: &[f64], start: &[DVec3], free: &[DVec3]) -> (DVec3, DVec3, DVec3) {
+    let mass = |v: u32| 1.0 / inverse_mass[v as usize];
+    let total: f64 = members.iter().map(|&v| mass(v)).sum();
+    let centre = members.iter().map(|&v| mass(v) * start[v as usize]).sum::<DVec3>() / total;
+    let motion = members.iter().map(|&v| mass(v) * (free[v as usize] - start[v as usize])).sum::<DVec3>() / total;
+    let (mut momentum, mut inertia) = (DVec3::ZERO, glam::DMat3::ZERO);
+    for &v in members {
+        let r = start[v as usize] - centre;
+        let d = free[v as usize] - start[v as usize] - motion;
+        momentum += mass(v) * r.cross(d);
+        inertia += mass(v) * (glam::DMat3::from_diagonal(DVec3::splat(r.length_squared())) - outer(r, r));
+    }
+    // A zone on a line (or a point) does not turn about its axis: the inertia is singular
+    // there, and so is the momentum, which a small regularization leaves at 0.
+    let trace = inertia.x_axis.x + inertia.y_axis.y + inertia.z_axis.z;
+    let mut turn = DVec3::ZERO;
+    if trace > 0.0 && trace.is_finite() {
+        let regular = inertia + glam::DMat3::from_diagonal(DVec3::splat(1e-12 * trace));
+        turn = regular.inverse() * momentum;
+        let angle = turn.length();
+        if !angle.is_finite() {
+            turn = DVec3::ZERO;
+        } else if angle > std::f64::consts::FRAC_PI_2 {
+            turn *= std::f64::consts::FRAC_PI_2 / angle;
+        }
+    }
+    (centre, motion, turn)
+}
+
+/// The 3 × 3 matrix a bᵀ.
+fn outer(a: DVec3, b: DVec3) -> glam::DMat3 {
+    glam::DMat3::from_cols(a * b.x, a * b.y, a * b.z)
 }
 
 #[cfg(test)]
@@ -260,6 +400,31 @@ mod tests {
     }
 
     #[test]
+    fn the_bernstein_bound_keeps_every_root() {
+        // Random cubics: where the early way out says "no root", f has one sign on a fine grid.
+        let mut seed = 7u64;
+        let mut next = || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        };
+        let mut skipped = 0;
+        for _ in 0..2000 {
+            let x = [0, 1, 2, 3].map(|_| DVec3::new(next(), next(), next()));
+            let d = [0, 1, 2, 3].map(|_| 0.5 * DVec3::new(next(), next(), next()));
+            if coplanar_times(x, d).iter().all(Option::is_none) {
+                skipped += 1;
+                let f = |t: f64| {
+                    let p = [0, 1, 2, 3].map(|k| x[k] + t * d[k]);
+                    (p[1] - p[0]).cross(p[2] - p[0]).dot(p[3] - p[0])
+                };
+                let first = f(0.0).signum();
+                assert!((0..=1000).all(|i| f(i as f64 / 1000.0).signum() == first));
+            }
+        }
+        assert!(skipped > 100, "{skipped}");
+    }
+
+    #[test]
     fn coplanar_times_are_the_cubics_roots() {
         // A vertex falling at unit speed through the plane y = 0 at t = 0.3.
         let x = [DVec3::new(0.2, 0.3, 0.2), TRIANGLE[0], TRIANGLE[1], TRIANGLE[2]];
@@ -270,19 +435,74 @@ mod tests {
     }
 
     #[test]
-    fn stopping_puts_every_crossing_vertex_back_and_leaves_the_others() {
+    fn a_crossing_pair_moves_as_a_rigid_zone_with_its_momentum_and_the_others_keep_theirs() {
         // Vertex 0 falls through the triangle; vertex 4 falls far away.
         let start = [DVec3::new(0.2, 0.5, 0.2), TRIANGLE[0], TRIANGLE[1], TRIANGLE[2], DVec3::new(5.0, 0.5, 5.0)];
         let mut q = start;
-        q[0].y = -0.5;
+        q[0] = DVec3::new(0.3, -0.5, 0.25);
         q[4].y = -0.5;
+        let free = q;
         let pairs = [pair(true)];
-        let free = [1.0; 5];
-        let stopped = stop_crossings(&pairs, |_| Vec::new(), (&[0, 1, 2, 3, 4], &free), &start, &mut q, 1e-9);
-        assert_eq!(stopped, 1);
-        assert_eq!(q[0], start[0]);
-        assert_eq!(q[4].y, -0.5);
+        let unit = [1.0; 5];
+        let changed =
+            stop_crossings(&pairs, |_| Vec::new(), (&[0, 1, 2, 3, 4], &unit), |_, _| true, &start, &mut q, 1e-9);
+        assert_eq!(changed, 4);
         assert!(!pairs[0].crosses(&start, &q, 1e-9));
+        assert_eq!(q[4], free[4]);
+        // Rigid: every distance in the zone kept.
+        for i in 0..4 {
+            for j in 0..4 {
+                let (before, after) = (start[i].distance(start[j]), q[i].distance(q[j]));
+                assert!((before - after).abs() < 1e-12, "{i} {j}: {before} {after}");
+            }
+        }
+        // Linear momentum Σ dᵢ and angular momentum Σ rᵢ × dᵢ kept (about the start's centre,
+        // to first order in the turn: the zone's own motion is small here).
+        let linear = |p: &[DVec3]| (0..4).map(|i| p[i] - start[i]).sum::<DVec3>();
+        assert!((linear(&q) - linear(&free)).length() < 1e-12);
+        let centre = (0..4).map(|i| start[i]).sum::<DVec3>() / 4.0;
+        let angular = |p: &[DVec3]| (0..4).map(|i| (start[i] - centre).cross(p[i] - start[i])).sum::<DVec3>();
+        let (kept, had) = (angular(&q), angular(&free));
+        assert!((kept - had).length() < 0.05 * had.length(), "{kept} {had}");
+    }
+
+    #[test]
+    fn zones_merge_until_nothing_crosses() {
+        // Vertex 0 falls through the triangle, which a zone then carries down through a second
+        // triangle lying under it: the second pair joins the zone.
+        let below = [TRIANGLE[0] - 0.05 * DVec3::Y, TRIANGLE[1] - 0.05 * DVec3::Y, TRIANGLE[2] - 0.05 * DVec3::Y];
+        let start = [DVec3::new(0.2, 0.5, 0.2), TRIANGLE[0], TRIANGLE[1], TRIANGLE[2], below[0], below[1], below[2]];
+        let mut q = start;
+        q[0].y = -2.0;
+        let first = pair(true);
+        let seconds: Vec<ElementPair> =
+            [0, 1, 2, 3].into_iter().filter_map(|v| ElementPair::vertex_triangle(v, [4, 5, 6], 0.0)).collect();
+        let mut all_pairs = vec![first];
+        all_pairs.extend(&seconds);
+        let unit = [1.0; 7];
+        stop_crossings(&all_pairs, |_| Vec::new(), (&[0, 1, 2, 3, 4, 5, 6], &unit), |_, _| true, &start, &mut q, 1e-9);
+        for p in &all_pairs {
+            assert!(!p.crosses(&start, &q, 1e-9), "{p:?}");
+        }
+        // Momentum kept across the merged zone: it all moves down by 2.5 / 7 on average.
+        let mean = (0..7).map(|i| q[i] - start[i]).sum::<DVec3>() / 7.0;
+        assert!((mean - DVec3::new(0.0, -2.5 / 7.0, 0.0)).length() < 1e-12, "{mean}");
+    }
+
+    #[test]
+    fn vertices_at_one_place_are_no_crossing() {
+        // Vertex 0 sits on the triangle's corner 1 (pushed there with it): leaving downward
+        // is not a crossing, and a vertex falling through the middle still is.
+        let start = [TRIANGLE[0], TRIANGLE[0], TRIANGLE[1], TRIANGLE[2]];
+        let mut q = start;
+        q[0].y = -0.5;
+        assert!(pair(true).coincident(&start, 1e-9));
+        let unit = [1.0; 4];
+        let changed =
+            stop_crossings(&[pair(true)], |_| Vec::new(), (&[0, 1, 2, 3], &unit), |_, _| true, &start, &mut q, 1e-9);
+        assert_eq!(changed, 0);
+        let apart = [DVec3::new(0.2, 0.5, 0.2), TRIANGLE[0], TRIANGLE[1], TRIANGLE[2]];
+        assert!(!pair(true).coincident(&apart, 1e-9));
     }
 
     #[test]
@@ -297,7 +517,15 @@ mod tests {
         }
         let driven = q;
         let inverse_mass = [1.0, 0.0, 0.0, 0.0];
-        stop_crossings(&[pair(true)], |_| Vec::new(), (&[0, 1, 2, 3], &inverse_mass), &start, &mut q, 1e-9);
+        stop_crossings(
+            &[pair(true)],
+            |_| Vec::new(),
+            (&[0, 1, 2, 3], &inverse_mass),
+            |_, _| true,
+            &start,
+            &mut q,
+            1e-9,
+        );
         assert_eq!(q[0], start[0]);
         assert_eq!(&q[1..], &driven[1..]);
     }

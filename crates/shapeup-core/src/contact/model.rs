@@ -79,7 +79,7 @@ pub struct ContactModel {
     /// The element pairs of the step's self contacts, each with its distance at the start
     /// (before [`Pair`]s of the same features are merged): for the crossing check.
     elements: Vec<ElementPair>,
-    /// Vertices the crossing check of the last step stopped.
+    /// Vertices whose motion the crossing check of the last step changed.
     stopped: usize,
     /// The feature contacts (their gaps are `pairs[self_pairs..]`), with their collider's μ
     /// and motion.
@@ -126,8 +126,9 @@ pub struct ContactStats {
     pub self_touching: usize,
     /// Vertices in a touching contact.
     pub vertices: usize,
-    /// Vertices put back where the step started because their paths made the surface pass
-    /// through itself ([`crate::contact`]'s crossing check; 0 without self-collision).
+    /// Vertices whose motion the crossing check changed (moved in a rigid impact zone or put
+    /// back where the step started) because their paths made the surface pass through itself
+    /// ([`crate::contact`]'s crossing check; 0 without self-collision).
     pub stopped: usize,
 }
 
@@ -543,13 +544,14 @@ impl ContactModel {
     }
 
     /// In a time step with self-collision, the fail-safe ([`super::crossing`]): the vertices
-    /// of element pairs whose paths from the step's start to `q` cross are put back at the
-    /// start (those with `inverse_mass` 0, held or driven, keep their motion). Checked: the
+    /// of element pairs whose paths from the step's start to `q` cross move in rigid impact
+    /// zones, or are put back at the start where a zone holds a vertex with `inverse_mass` 0
+    /// (held or driven: it keeps its motion) or would enter a collider. Checked: the
     /// step's own pairs, and the pairs of the elements with a vertex that
     /// ended half the thickness or more from its prediction (less the surface's mean
     /// deviation from it, a translation that changes no crossing), found from their own
     /// boxes against the step's trees: a pair of the others is either among the step's own or
-    /// farther apart than it moved. Returns how many were stopped.
+    /// farther apart than it moved. Returns how many vertices' motion it changed.
     fn stop_crossings(&self, q: &mut [DVec3], inverse_mass: &[f64]) -> usize {
         let Some(surface) = &self.surface else { return 0 };
         if !self.params.self_collision || self.times.1 <= self.times.0 || surface.vertices().is_empty() {
@@ -575,7 +577,16 @@ impl ContactModel {
             let end: Vec<DVec3> = q.par_iter().map(|&p| p - shift).collect();
             surface.pairs_of_moved(&moved, start, &end, tolerance)
         };
-        stop_crossings(&self.elements, more, (vertices, inverse_mass), start, q, tolerance)
+        // A zone may not move a vertex into a collider's thickness (x_n, where a stopped zone
+        // goes, is out of it).
+        let (colliders, (t0, t1)) = (&self.colliders, self.times);
+        let allowed = |v: u32, p: DVec3| {
+            let from = start[v as usize];
+            colliders.iter().all(|c| {
+                c.segment_entry_at(from, t0, p, t1).is_none() && c.closest_at(p, t1).distance >= thickness - tolerance
+            })
+        };
+        stop_crossings(&self.elements, more, (vertices, inverse_mass), allowed, start, q, tolerance)
     }
 
     /// Whether a collider has features (points or segments) that can cut into the surface.

@@ -144,8 +144,8 @@ pub struct StepTotals {
     pub self_contacts: Vec<usize>,
     /// Vertices in a touching contact at the end of each step (the frames' `contact` flag).
     pub contact_vertices: Vec<usize>,
-    /// Vertices the self-collision crossing check put back where their step started, over
-    /// the run ([`crate::contact::ContactStats::stopped`]).
+    /// Vertices whose motion the self-collision crossing check changed, summed over the
+    /// run ([`crate::contact::ContactStats::stopped`]).
     pub crossings_stopped: usize,
     /// Seconds in contact detection and end-of-step projection.
     pub contact_seconds: f64,

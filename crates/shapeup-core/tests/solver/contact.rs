@@ -669,6 +669,42 @@ radius = 0.3
     }
 }
 
+#[test]
+fn vertices_pushed_onto_one_point_go_on_moving_with_self_collision() {
+    // The scene above with self-collision: the vertices a sphere pushed onto one point touch
+    // exactly, with no side to keep. The crossing check took each such pair for a crossing and
+    // put its vertices back where their step started, every step: 53 of 121 stood still for
+    // good. Now they move with the cloth (rigid impact zones, neighbours when at one place).
+    let text = r#"
+[mesh]
+generate = { kind = "cloth", vertices = [11, 11], size = [1.0, 1.0] }
+normalize = false
+[solver]
+mode = "dynamic"
+iterations = 5
+[[constraints]]
+type = "triangle_strain"
+[contact]
+self_collision = true
+[[colliders]]
+type = "sphere"
+center = [0.0, 0.0, 0.0]
+radius = 0.3
+"#;
+    let (_, mut sim) = start(text);
+    let mut still = 0;
+    let steps = 30;
+    for k in 0..steps {
+        let before = sim.simulation.positions().to_vec();
+        sim.step().unwrap_or_else(|e| panic!("step {k}: {e}"));
+        if k > 0 {
+            still += before.iter().zip(sim.simulation.positions()).filter(|(a, b)| a == b).count();
+        }
+    }
+    let n = sim.simulation.positions().len();
+    assert!(still * 50 < n * (steps - 1), "{still} vertex-steps of {} stood still", n * (steps - 1));
+}
+
 /// Whether segment pq passes through the inside of the box [lo, hi] (slab test, strictly).
 fn segment_enters_box(p: DVec3, q: DVec3, lo: DVec3, hi: DVec3) -> bool {
     let d = q - p;
