@@ -547,11 +547,10 @@ impl ContactModel {
     /// of element pairs whose paths from the step's start to `q` cross move in rigid impact
     /// zones, or are put back at the start where a zone holds a vertex with `inverse_mass` 0
     /// (held or driven: it keeps its motion) or would enter a collider. Checked: the
-    /// step's own pairs, and the pairs of the elements with a vertex that
-    /// ended half the thickness or more from its prediction (less the surface's mean
-    /// deviation from it, a translation that changes no crossing), found from their own
-    /// boxes against the step's trees: a pair of the others is either among the step's own or
-    /// farther apart than it moved. Returns how many vertices' motion it changed.
+    /// step's own pairs, and the pairs of the elements with a vertex whose path left its box
+    /// in the step's trees (up to a translation of the whole surface, which changes no
+    /// crossing), found from their own boxes against the step's trees: the paths of the
+    /// others stayed in their boxes, so a pair of them is among the step's own or never met. Returns how many vertices' motion it changed.
     fn stop_crossings(&self, q: &mut [DVec3], inverse_mass: &[f64]) -> usize {
         let Some(surface) = &self.surface else { return 0 };
         if !self.params.self_collision || self.times.1 <= self.times.0 || surface.vertices().is_empty() {
@@ -559,21 +558,31 @@ impl ContactModel {
         }
         let (thickness, start, predicted) = (self.params.thickness, &self.start, &self.predicted);
         let vertices = surface.vertices();
-        // In the frame of the step's trees (they take out `drift`), shifted by the mean
-        // deviation from the prediction.
-        let mean =
-            vertices.par_iter().map(|&v| q[v as usize] - predicted[v as usize]).sum::<DVec3>() / vertices.len() as f64;
-        let shift = surface.drift() + mean;
+        let drift = surface.drift();
+        let grow = 0.5 * thickness;
+        // Whether vertex v's path, less `shift`, left its box in the step's trees (the box of
+        // x_n and the prediction less the trees' drift, grown by half the thickness): its
+        // elements' paths then may leave theirs.
+        let strays = |v: usize, q: &[DVec3], shift: DVec3| {
+            let (a, b) = (start[v], predicted[v] - drift);
+            let end = q[v] - shift;
+            end.cmplt(a.min(b) - DVec3::splat(grow)).any() || end.cmpgt(a.max(b) + DVec3::splat(grow)).any()
+        };
         // Grazing within a thousandth of the thickness counts as crossing.
         let tolerance = (1e-3 * thickness).max(1e-12);
         let more = |q: &[DVec3]| -> Vec<ElementPair> {
-            let moved: Vec<bool> = (0..q.len())
-                .into_par_iter()
-                .map(|v| (q[v] - predicted[v] - mean).length() >= 0.5 * thickness)
-                .collect();
-            if !vertices.iter().any(|&v| moved[v as usize]) {
+            // Any translation of the whole path changes no crossing: of the trees' frame and
+            // that frame moved by the surface's mean deviation from the prediction, the one
+            // fewer vertices stray from.
+            let mean = vertices.par_iter().map(|&v| q[v as usize] - predicted[v as usize]).sum::<DVec3>()
+                / vertices.len() as f64;
+            let frames = [drift, drift + mean];
+            let counts = frames.map(|shift| vertices.par_iter().filter(|&&v| strays(v as usize, q, shift)).count());
+            let shift = if counts[1] < counts[0] { frames[1] } else { frames[0] };
+            if counts[0].min(counts[1]) == 0 {
                 return Vec::new();
             }
+            let moved: Vec<bool> = (0..q.len()).into_par_iter().map(|v| strays(v, q, shift)).collect();
             let end: Vec<DVec3> = q.par_iter().map(|&p| p - shift).collect();
             surface.pairs_of_moved(&moved, start, &end, tolerance)
         };
