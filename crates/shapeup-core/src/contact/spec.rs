@@ -244,8 +244,11 @@ fn invalid(message: impl Into<String>) -> ColliderError {
 fn take<T: serde::de::DeserializeOwned>(entry: &mut Map<String, Value>, key: &str) -> Result<Option<T>, ColliderError> {
     match entry.remove(key) {
         None => Ok(None),
-        // A scene's nan or inf arrives as null (JSON has no such numbers).
-        Some(v) if contains_null(&v) => Err(invalid(format!("`{key}` must hold finite numbers only (not nan or inf)"))),
+        // A TOML scene's nan or inf arrives as null (JSON has no such numbers), as does a JSON
+        // scene's own null.
+        Some(v) if contains_null(&v) => {
+            Err(invalid(format!("`{key}` must hold finite numbers only (not nan, inf or null)")))
+        }
         Some(v) => serde_json::from_value(v).map(Some).map_err(|e| invalid(format!("`{key}`: {e}"))),
     }
 }
@@ -748,6 +751,10 @@ mod tests {
             (r#"{"type": "sphere", "center": [0, 0, 0], "radius": 1e300}"#, "`radius` is too large"),
             (r#"{"type": "box", "min": [-1e300, -1, -1], "max": [1, 1, 1]}"#, "`min` is too large"),
             (r#"{"type": "sphere", "center": [0, null, 0], "radius": 1}"#, "`center` must hold finite numbers only"),
+            (
+                r#"{"type": "sphere", "center": [0, 0, 0], "radius": null}"#,
+                "`radius` must hold finite numbers only (not nan, inf or null)",
+            ),
         ] {
             let message = ColliderSpec::from_entry(entry(text)).expect_err(text).to_string();
             assert!(message.contains(words), "{text}: {message}");
