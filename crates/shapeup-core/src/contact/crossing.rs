@@ -69,7 +69,8 @@ impl ElementPair {
 
     /// Whether a vertex of one side is within `tolerance` of one of the other at `start`: two
     /// vertices at one place (pushed onto one point by a collider) are as neighbours, with no
-    /// side to keep (the self contacts take them apart).
+    /// side to keep (the self contacts take them apart). Their pairs' coplanarity at t = 0
+    /// would count as a crossing at every step, stopping them for good.
     fn coincident(&self, start: &[DVec3], tolerance: f64) -> bool {
         let split = if self.vertex_triangle { 1 } else { 2 };
         let (first, second) = self.vertices.split_at(split);
@@ -503,6 +504,9 @@ mod tests {
         assert_eq!(changed, 0);
         let apart = [DVec3::new(0.2, 0.5, 0.2), TRIANGLE[0], TRIANGLE[1], TRIANGLE[2]];
         assert!(!pair(true).coincident(&apart, 1e-9));
+        let mut q = apart;
+        q[0].y = -0.5;
+        assert!(pair(true).crosses(&apart, &q, 1e-9));
     }
 
     #[test]

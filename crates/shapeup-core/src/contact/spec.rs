@@ -34,10 +34,17 @@ pub struct ContactSettings {
     /// Whether the surface collides with itself (default false).
     pub self_collision: bool,
     /// Distance kept from colliders and between parts of the surface (input units ≥ 0;
-    /// default [`DEFAULT_THICKNESS_FRACTION`] × the mean edge length).
+    /// default [`DEFAULT_THICKNESS_FRACTION`] × the mean edge length). Left out for the
+    /// default; a null (a JSON null, a TOML nan) is refused, not taken for it.
+    #[serde(deserialize_with = "a_number")]
     pub thickness: Option<f64>,
     /// Coulomb μ ≥ 0 of self contact (default 0).
     pub friction: f64,
+}
+
+/// An optional number that, when given, is a number (not null).
+fn a_number<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
+    f64::deserialize(d).map(Some)
 }
 
 impl Default for ContactSettings {

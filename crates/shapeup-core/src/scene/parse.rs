@@ -531,6 +531,10 @@ mod tests {
                  "contact": {"thickness": 1e400}}"#,
                 "s.json: line 2, column 47: number out of range (in `contact.thickness`)",
             ),
+            (
+                r#"{"mesh": {"path": "m.obj"}, "contact": {"thickness": null}}"#,
+                "invalid type: null, expected f64 (in `contact.thickness`)",
+            ),
             (r#"{"mesh": {"path": "m.obj"}, "solver": {"tolerance": "x"}}"#, "(in `solver.tolerance`)"),
             (
                 r#"{"mesh": {"path": "m.o\"bj"}, "constraints": [{}, {"weight": 1e999}]}"#,
