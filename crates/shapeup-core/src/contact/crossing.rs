@@ -191,7 +191,9 @@ pub(crate) fn stop_crossings(
     q: &mut [DVec3],
     tolerance: f64,
 ) -> usize {
-    const MAX_ROUNDS: usize = 16;
+    // Zones grow by the pairs each round finds: a strip whose driven end jumped 0.6 m in a
+    // step needed more than 16 rounds, and the whole strip stood still for 22 steps.
+    const MAX_ROUNDS: usize = 64;
     // The motions the step gave, and the zones (allocated at the first crossing).
     let mut zones: Option<(Vec<DVec3>, ImpactZones)> = None;
     let changed = |q: &[DVec3], free: &[DVec3]| all.iter().filter(|&&v| q[v as usize] != free[v as usize]).count();
