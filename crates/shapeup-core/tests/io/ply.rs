@@ -1004,3 +1004,18 @@ fn read_mesh_on_a_written_rich_file_gives_the_same_mesh() {
     write_mesh_with(&again, &loaded.mesh, &loaded.attributes, WriteFormat::Ply(None)).unwrap();
     assert_eq!(fs::read(&again).unwrap(), fs::read(&path).unwrap());
 }
+
+#[test]
+fn a_stray_carriage_return_before_a_keyword_reads_back_the_same() {
+    // Found by the attribute_roundtrip fuzz target: "ply\n\rformat ..." was read (the keyword
+    // is found between whitespace), kept raw and written back raw, and the copy read as a
+    // header without its format line.
+    let text = b"ply\n\rformat ascii 1.0\ncomment  two spaces kept \nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+    let first = read("cr.ply", text);
+    let (bytes, _) = write(&first.mesh, None);
+    let second = read("copy.ply", &bytes);
+    let (a, b) = (attributes(&first.mesh), attributes(&second.mesh));
+    assert_eq!(a.header_lines(), b.header_lines());
+    assert_eq!(a.header_lines()[0], "format ascii 1.0");
+    assert_eq!(a.header_lines()[1], "comment  two spaces kept ");
+}

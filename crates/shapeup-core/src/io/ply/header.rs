@@ -161,7 +161,9 @@ pub(super) fn parse_header<R: BufRead>(
                 ));
             }
         }
-        header.push(text.to_owned());
+        // Kept as read less the whitespace before its keyword (a comment's own spaces stay): a
+        // stray carriage return before `format`, written back raw, read as no format line.
+        header.push(text.trim_start().to_owned());
     }
 }
 
