@@ -50,14 +50,18 @@ impl ElementPair {
         })
     }
 
+    /// The vertices of each side: the vertex and the triangle's, or each edge's.
+    fn sides(&self) -> (&[u32], &[u32]) {
+        self.vertices.split_at(if self.vertex_triangle { 1 } else { 2 })
+    }
+
     /// Whether the pair can come within `0` of itself over a step whose vertices move by
     /// `q − start`: the distance at x_n less the largest relative motion of a vertex of one
     /// side against one of the other (any point of an element moves by a convex combination
     /// of its vertices' motions).
     fn may_meet(&self, start: &[DVec3], q: &[DVec3]) -> bool {
         let motion = |v: u32| q[v as usize] - start[v as usize];
-        let split = if self.vertex_triangle { 1 } else { 2 };
-        let (first, second) = self.vertices.split_at(split);
+        let (first, second) = self.sides();
         let mut most = 0.0f64;
         for &a in first {
             for &b in second {
@@ -72,8 +76,7 @@ impl ElementPair {
     /// side to keep (the self contacts take them apart). Their pairs' coplanarity at t = 0
     /// would count as a crossing at every step, stopping them for good.
     fn coincident(&self, start: &[DVec3], tolerance: f64) -> bool {
-        let split = if self.vertex_triangle { 1 } else { 2 };
-        let (first, second) = self.vertices.split_at(split);
+        let (first, second) = self.sides();
         first.iter().any(|&a| second.iter().any(|&b| start[a as usize].distance(start[b as usize]) <= tolerance))
     }
 
@@ -180,8 +183,9 @@ fn coplanar_times(x: [DVec3; 4], d: [DVec3; 4]) -> [Option<f64>; 5] {
 /// pin, a driven handle: its motion is prescribed) cannot move rigidly with it: its other
 /// vertices are put back at `start`. A zone whose rigid motion would take a vertex `v` to a
 /// point p where `allowed(v, p)` is false (into a collider) takes half or a quarter of that
-/// motion where that is allowed, else is put back at `start` too. After `MAX_ROUNDS` rounds, every vertex of `all` is put
-/// back (x_n had no crossing). Returns how many vertices' motion was changed.
+/// motion where that is allowed, else is put back at `start` too. After `MAX_ROUNDS` rounds,
+/// every vertex of `all` is put back (x_n had no crossing). Returns how many vertices' motion
+/// was changed.
 pub(crate) fn stop_crossings(
     pairs: &[ElementPair],
     mut more: impl FnMut(&[DVec3]) -> Vec<ElementPair>,
@@ -206,6 +210,9 @@ pub(crate) fn stop_crossings(
             .filter(|p| p.may_meet(start, view) && !p.coincident(start, tolerance) && p.crosses(start, view, tolerance))
             .map(|p| p.vertices)
             .collect();
+        if crossing.is_empty() {
+            return zones.map_or(0, |(free, _)| changed(q, &free));
+        }
         let (free, zones) = zones.get_or_insert_with(|| (view.to_vec(), ImpactZones::new(view.len())));
         let mut merged = false;
         for vertices in &crossing {
@@ -214,8 +221,8 @@ pub(crate) fn stop_crossings(
             }
         }
         if !merged {
-            // Nothing crosses, or only pairs inside a zone (whose motion is rigid, so they
-            // keep their side) or one held still against a prescribed motion.
+            // Only pairs inside a zone cross (its motion is rigid, so they keep their side), or
+            // one held still against a prescribed motion.
             return changed(q, free);
         }
         for members in zones.members() {

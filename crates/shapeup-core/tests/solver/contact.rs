@@ -636,12 +636,8 @@ fn a_cloth_starting_inside_the_thickness_is_not_thrown_off() {
     }
 }
 
-#[test]
-fn a_cloth_placed_through_a_sphere_with_a_vertex_at_its_centre_is_pushed_out_and_runs() {
-    // A new user's scene: the 11 × 11 cloth's middle vertex at the sphere's centre, 25 inside.
-    // Pushed out along their rays, collinear vertices landed on one point; the closest point
-    // on such a triangle was 0/0 and the first step failed with "kinetic energy not finite".
-    let text = r#"
+/// An 11 × 11 cloth whose middle vertex is a sphere's centre (25 vertices inside it).
+const CLOTH_THROUGH_SPHERE: &str = r#"
 [mesh]
 generate = { kind = "cloth", vertices = [11, 11], size = [1.0, 1.0] }
 normalize = false
@@ -655,7 +651,13 @@ type = "sphere"
 center = [0.0, 0.0, 0.0]
 radius = 0.3
 "#;
-    let (loaded, mut sim) = start(text);
+
+#[test]
+fn a_cloth_placed_through_a_sphere_with_a_vertex_at_its_centre_is_pushed_out_and_runs() {
+    // A new user's scene: the 11 × 11 cloth's middle vertex at the sphere's centre, 25 inside.
+    // Pushed out along their rays, collinear vertices landed on one point; the closest point
+    // on such a triangle was 0/0 and the first step failed with "kinetic energy not finite".
+    let (loaded, mut sim) = start(CLOTH_THROUGH_SPHERE);
     // 25 inside, more within the thickness.
     let overlapping = loaded.warnings.count("collider_overlaps_rest_shape");
     assert!((25..50).contains(&overlapping), "{:?}", loaded.warnings.to_json());
@@ -675,23 +677,7 @@ fn vertices_pushed_onto_one_point_go_on_moving_with_self_collision() {
     // exactly, with no side to keep. The crossing check took each such pair for a crossing and
     // put its vertices back where their step started, every step: 53 of 121 stood still for
     // good. Now they move with the cloth (rigid impact zones, neighbours when at one place).
-    let text = r#"
-[mesh]
-generate = { kind = "cloth", vertices = [11, 11], size = [1.0, 1.0] }
-normalize = false
-[solver]
-mode = "dynamic"
-iterations = 5
-[[constraints]]
-type = "triangle_strain"
-[contact]
-self_collision = true
-[[colliders]]
-type = "sphere"
-center = [0.0, 0.0, 0.0]
-radius = 0.3
-"#;
-    let (_, mut sim) = start(text);
+    let (_, mut sim) = start(&format!("{CLOTH_THROUGH_SPHERE}[contact]\nself_collision = true\n"));
     let mut still = 0;
     let steps = 30;
     for k in 0..steps {
