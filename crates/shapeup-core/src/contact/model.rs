@@ -503,10 +503,15 @@ impl ContactModel {
                 pushed = true;
             }
         }
-        pushed |= self.project_out_of_colliders(q) > 0;
+        let mut pressed = Vec::new();
+        pushed |= self.project_out_of_colliders(q, &mut pressed) > 0;
         if pushed && self.self_pairs > 0 {
-            self.separate_self_contacts(q, inverse_mass);
-            self.project_out_of_colliders(q);
+            // A layer the colliders pushed to the thickness stays there: the correction goes
+            // to the layer above it. Shared by both, it pushed the lower one back in, the
+            // projection then put both at the thickness, and two coplanar layers crossed in
+            // the plane, where no path check sees it.
+            self.separate_self_contacts_on(q, inverse_mass, &pressed);
+            self.project_out_of_colliders(q, &mut pressed);
         }
         self.stopped = self.stop_crossings(q, inverse_mass);
         // What touches at the end: a force on, or within the thickness (plus round-off).
@@ -545,12 +550,14 @@ impl ContactModel {
 
     /// In a time step with self-collision, the fail-safe ([`super::crossing`]): the vertices
     /// of element pairs whose paths from the step's start to `q` cross move in rigid impact
-    /// zones, or are put back at the start where a zone holds a vertex with `inverse_mass` 0
-    /// (held or driven: it keeps its motion) or would enter a collider. Checked: the
-    /// step's own pairs, and the pairs of the elements with a vertex whose path left its box
-    /// in the step's trees (up to a translation of the whole surface, which changes no
-    /// crossing), found from their own boxes against the step's trees: the paths of the
-    /// others stayed in their boxes, so a pair of them is among the step's own or never met. Returns how many vertices' motion it changed.
+    /// zones (pushed back out of a collider they would enter), or are put back at the start
+    /// where a zone holds a vertex with `inverse_mass` 0 (held or driven: it keeps its motion)
+    /// or cannot keep out of a collider. Checked: the step's own pairs (every pair whose boxes
+    /// in the step's trees meet), and the pairs of the elements with a vertex whose path left
+    /// its box in the step's trees (up to a translation of the whole surface, which changes no
+    /// crossing), found from their own boxes against the step's trees: the paths of the others
+    /// stayed in their boxes, so a pair of them is among the step's own or never met. Returns
+    /// how many vertices' motion it changed.
     fn stop_crossings(&self, q: &mut [DVec3], inverse_mass: &[f64]) -> usize {
         let Some(surface) = &self.surface else { return 0 };
         if !self.params.self_collision || self.times.1 <= self.times.0 || surface.vertices().is_empty() {
@@ -586,16 +593,27 @@ impl ContactModel {
             let end: Vec<DVec3> = q.par_iter().map(|&p| p - shift).collect();
             surface.pairs_of_moved(&moved, start, &end, tolerance)
         };
-        // A zone may not move a vertex into a collider's thickness (x_n, where a stopped zone
-        // goes, is out of it).
+        // Where a zone's vertex would end in a collider's thickness, the push back out of it
+        // (x_n, where a stopped zone goes, is out of it); none where its path went through.
         let (colliders, (t0, t1)) = (&self.colliders, self.times);
-        let allowed = |v: u32, p: DVec3| {
+        let outside = |v: u32, p: DVec3| {
             let from = start[v as usize];
-            colliders.iter().all(|c| {
-                c.segment_entry_at(from, t0, p, t1).is_none() && c.closest_at(p, t1).distance >= thickness - tolerance
-            })
+            let mut push: Option<DVec3> = None;
+            for c in colliders {
+                if c.segment_entry_at(from, t0, p, t1).is_some() {
+                    return Some(DVec3::ZERO);
+                }
+                let near = c.closest_at(p, t1);
+                if near.distance < thickness - tolerance {
+                    let out = near.point + thickness * near.normal - p;
+                    if push.is_none_or(|q| out.length_squared() > q.length_squared()) {
+                        push = Some(out);
+                    }
+                }
+            }
+            push
         };
-        stop_crossings(&self.elements, more, (vertices, inverse_mass), allowed, start, q, tolerance)
+        stop_crossings(&self.elements, more, (vertices, inverse_mass), outside, start, q, tolerance)
     }
 
     /// Whether a collider has features (points or segments) that can cut into the surface.
@@ -694,7 +712,19 @@ impl ContactModel {
     /// Up to 4 Gauss–Seidel passes of position corrections over the self contacts still too
     /// close, each shared by `inverse_mass`.
     fn separate_self_contacts(&self, q: &mut [DVec3], inverse_mass: &[f64]) {
+        self.separate_self_contacts_on(q, inverse_mass, &[]);
+    }
+
+    /// [`Self::separate_self_contacts`], where a vertex with a nonzero `pressed` normal (a
+    /// collider's, outward: it rests on that collider) is held against a correction that
+    /// would push it into the collider. `pressed` is empty or has one entry per vertex.
+    fn separate_self_contacts_on(&self, q: &mut [DVec3], inverse_mass: &[f64], pressed: &[DVec3]) {
         let thickness = self.params.thickness;
+        // The vertex's share of a correction along `a` n.
+        let share = |v: usize, a: f64, normal: DVec3| match pressed.get(v) {
+            Some(&n) if n != DVec3::ZERO && a * normal.dot(n) < 0.0 => 0.0,
+            _ => inverse_mass[v],
+        };
         for _ in 0..4 {
             let mut worst = 0.0f64;
             for c in &self.pairs {
@@ -702,14 +732,22 @@ impl ContactModel {
                 if gap >= 0.0 {
                     continue;
                 }
-                let w: f64 = c.terms().map(|(v, a)| a * a * inverse_mass[v]).sum();
+                let whole: f64 = c.terms().map(|(v, a)| a * a * inverse_mass[v]).sum();
+                let mut w: f64 = c.terms().map(|(v, a)| a * a * share(v, a, c.normal)).sum();
+                // What is left free must be able to move the pair: an edge held but for an
+                // end at its far side would be thrown 1/α² as far as the gap.
+                let held = w < 0.25 * whole;
+                if held {
+                    w = whole;
+                }
                 if w <= 0.0 {
                     continue;
                 }
                 worst = worst.max(-gap);
                 let scale = -gap / w;
                 for (v, a) in c.terms() {
-                    q[v] += scale * a * inverse_mass[v] * c.normal;
+                    let m = if held { inverse_mass[v] } else { share(v, a, c.normal) };
+                    q[v] += scale * a * m * c.normal;
                 }
             }
             if worst <= 1e-3 * thickness {
@@ -720,8 +758,10 @@ impl ContactModel {
 
     /// Moves every active vertex of `q` out of its contacts' half-spaces and of every collider
     /// (as it is at the step's end) to the thickness, with Coulomb friction on the push, and
-    /// stops a path that crossed a collider where it entered. Returns how many moved.
-    fn project_out_of_colliders(&self, q: &mut [DVec3]) -> usize {
+    /// stops a path that crossed a collider where it entered. Returns how many moved; fills
+    /// `pressed` with, per vertex, the sum of the outward normals of what it ended within the
+    /// thickness of (zero for none).
+    fn project_out_of_colliders(&self, q: &mut [DVec3], pressed: &mut Vec<DVec3>) -> usize {
         let thickness = self.params.thickness;
         let (t0, t1) = self.times;
         let colliders = &self.colliders;
@@ -729,15 +769,21 @@ impl ContactModel {
         let start = &self.start;
         let by_vertex = &self.by_vertex;
         let contacts = &self.contacts;
+        // Within the thickness, plus round-off.
+        let near_enough = thickness * (1.0 + 1e-6);
+        pressed.clear();
+        pressed.resize(q.len(), DVec3::ZERO);
         q.par_iter_mut()
+            .zip(pressed.par_iter_mut())
             .enumerate()
-            .map(|(v, p)| {
+            .map(|(v, (p, touched))| {
                 if !active[v] {
                     return false;
                 }
                 let first = *p;
                 for _ in 0..2 {
                     let before = *p;
+                    *touched = DVec3::ZERO;
                     // The step's own contacts first: the side each started on.
                     for &i in &by_vertex[v] {
                         let c = &contacts[i as usize];
@@ -749,6 +795,9 @@ impl ContactModel {
                                 let slip = *p - start[v] - c.shift;
                                 *p -= coulomb(slip - c.normal.dot(slip) * c.normal, c.friction * -g);
                             }
+                        }
+                        if c.gap(*p) <= 1e-6 * thickness {
+                            *touched += c.normal;
                         }
                     }
                     for c in colliders {
@@ -763,6 +812,9 @@ impl ContactModel {
                                 let slip = *p - start[v] - c.displacement(*p, t0, t1);
                                 *p -= coulomb(slip - near.normal.dot(slip) * near.normal, c.friction * depth);
                             }
+                        }
+                        if near.distance < near_enough {
+                            *touched += near.normal;
                         }
                     }
                     if *p == before {

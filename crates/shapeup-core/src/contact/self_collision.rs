@@ -321,7 +321,10 @@ impl Surface {
 /// The contact of vertex `v` with triangle `t` (narrow phase at x_n), when they are not
 /// neighbours and are close enough (see [`separation`]), and the pair of elements with
 /// their distance at x_n (for the end-of-step check, [`super::crossing`]): only the latter
-/// when they touch exactly (no normal).
+/// when they touch exactly (no normal) or are too far apart for a contact. Every pair whose
+/// boxes meet is an element: the check searches again only around vertices that left their
+/// boxes, so a pair of the others it does not get here it never checks (a pair left out for
+/// being far from its prediction crossed where the end strayed from it within the boxes).
 fn vertex_triangle_contact(
     v: u32,
     t: [u32; 3],
@@ -336,7 +339,9 @@ fn vertex_triangle_contact(
     if element.distance < TOUCHING {
         return Some((None, element));
     }
-    let (normal, target) = separation(x - c, thickness, || relative_motion(&[v], &t, start, predicted))?;
+    let Some((normal, target)) = separation(x - c, thickness, || relative_motion(&[v], &t, start, predicted)) else {
+        return Some((None, element));
+    };
     let alpha = [1.0, -b[0], -b[1], -b[2]];
     let pair = Pair { vertices: element.vertices, alpha, normal, distance: target, copies: 1 };
     Some((Some(pair), element))
@@ -359,7 +364,9 @@ fn edge_edge_contact(
     if element.distance < TOUCHING {
         return Some((None, element));
     }
-    let (normal, target) = separation(a - b, thickness, || relative_motion(&e, &f, start, predicted))?;
+    let Some((normal, target)) = separation(a - b, thickness, || relative_motion(&e, &f, start, predicted)) else {
+        return Some((None, element));
+    };
     let alpha = [1.0 - s, s, -(1.0 - t), -t];
     let pair = Pair { vertices: element.vertices, alpha, normal, distance: target, copies: 1 };
     Some((Some(pair), element))
@@ -540,6 +547,29 @@ mod tests {
         let missing: Vec<_> = brute.iter().filter(|k| found.binary_search(k).is_err()).take(4).collect();
         assert!(found == brute, "{} contacts, {} by brute force; missing e.g. {missing:?}", found.len(), brute.len());
         assert_eq!(copies as usize, element_pairs);
+    }
+
+    #[test]
+    fn a_pair_too_far_for_a_contact_whose_boxes_meet_is_still_an_element() {
+        // Vertex 3 (of a second triangle) lies in the plane of triangle 0 1 2, inside its box
+        // but 0.42 from its hypotenuse, and nothing moves: no contact, but the end-of-step
+        // check, which searches again only around vertices that leave their boxes, must still
+        // be given the pair.
+        let start = [
+            DVec3::ZERO,
+            DVec3::X,
+            DVec3::Z,
+            DVec3::new(0.8, 0.0, 0.8),
+            DVec3::new(1.0, 0.0, 0.8),
+            DVec3::new(0.8, 0.0, 1.0),
+        ];
+        let mut surface = Surface::new(&[[0, 1, 2], [3, 4, 5]], &[true; 6]);
+        surface.refit(&start, &start, 0.01, Trees { triangles: true, edges: true, vertices: true });
+        let (pairs, elements) = surface.self_contacts(&start, &start, 0.01);
+        assert!(pairs.is_empty());
+        let element = elements.iter().find(|e| e.vertex_triangle && e.vertices == [3, 0, 1, 2]).copied();
+        let distance = element.map(|e| e.distance).unwrap_or_default();
+        assert!((distance - 0.6 / 2f64.sqrt()).abs() < 1e-12, "{element:?}");
     }
 
     #[test]

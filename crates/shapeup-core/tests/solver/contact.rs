@@ -293,8 +293,8 @@ fn the_cloth_fold_example_never_intersects_itself() {
 fn a_cloth_crumpling_on_the_floor_beside_a_sphere_never_passes_through_itself() {
     // The Stop 42 trial's scene: a 41 × 41 cloth over an off-centre sphere, its free side
     // crumpling on the floor. The floor's projection, which has the last word, pushed a
-    // vertex of a tight fold through a neighbouring triangle from step 31; the end-of-step
-    // crossing check stops such vertices. Every step is checked by the independent test.
+    // vertex of a tight fold through a neighbouring triangle from step 31. Every step is
+    // checked by the independent test.
     let text = r#"
 [mesh]
 generate = { kind = "cloth", vertices = [41, 41], size = [1.0, 1.0] }
@@ -329,8 +329,10 @@ friction = 0.3
         let bad = intersecting_pairs(sim.simulation.positions(), &loaded.mesh.triangles);
         assert_eq!(bad, 0, "step {k}: {bad} pairs of triangles intersect");
     }
-    // The check did act (without it the fold crossed); and only locally.
-    assert!(stopped > 0 && stopped < 90 * 1681 / 10, "{stopped} vertices stopped");
+    // Since the self corrections after a collider's push leave the layer it pushed where it
+    // is (and move the one above), the fold no longer needs the check here; where it acts, it
+    // acts locally.
+    assert!(stopped < 90 * 1681 / 10, "{stopped} vertices stopped");
 }
 
 #[test]
@@ -927,4 +929,74 @@ fn a_cloth_hanging_on_a_thin_bar_is_not_cut_by_it() {
     assert!(hanging, "the cloth never hung down from the bar");
     let top = sim.simulation.positions().iter().map(|p| p.y).fold(f64::NEG_INFINITY, f64::max);
     assert!(top > -0.1, "the cloth fell off the bar");
+}
+
+/// Two 21 × 21 sheets of 0.6 m, 3 cm apart, the upper one turned 0.3 rad and moved 5 cm
+/// along x, as one OBJ in `dir`.
+fn two_turned_sheets(dir: &std::path::Path) -> PathBuf {
+    let (n, size) = (21, 0.6);
+    let mut obj = String::new();
+    for (sheet, (y, turn, dx)) in [(0.0f64, 0.0f64, 0.0), (0.03, 0.3, 0.05)].into_iter().enumerate() {
+        let (c, s) = (turn.cos(), turn.sin());
+        for i in 0..n {
+            for j in 0..n {
+                let (x, z) = (size * (i as f64 / (n - 1) as f64 - 0.5), size * (j as f64 / (n - 1) as f64 - 0.5));
+                obj.push_str(&format!("v {} {y} {}\n", c * x - s * z + dx, s * x + c * z));
+            }
+        }
+        let v = |i: usize, j: usize| sheet * n * n + i * n + j + 1;
+        for i in 0..n - 1 {
+            for j in 0..n - 1 {
+                let (a, b, c, d) = (v(i, j), v(i, j + 1), v(i + 1, j), v(i + 1, j + 1));
+                obj.push_str(&format!("f {a} {c} {b}\nf {b} {c} {d}\n"));
+            }
+        }
+    }
+    let path = dir.join("two_sheets.obj");
+    std::fs::write(&path, obj).unwrap();
+    path
+}
+
+#[test]
+fn two_sheets_pressed_flat_on_a_box_keep_their_order_and_do_not_freeze() {
+    // A user trial's scene: two sheets fall onto a box's top face and hang over its sides. The
+    // self corrections after the box's push were shared by both layers, so they pushed the
+    // lower one back into the box; the box put it out again, level with the upper one, and
+    // two coplanar layers crossed in the plane, where no path check sees it (in 72 of 120
+    // steps at 2 iterations). At 10 iterations the crossing check stopped the zones lying on
+    // the box instead, and 16 vertices of the hanging sides stood still for good.
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = two_turned_sheets(dir.path());
+    let (lo, hi) = (DVec3::new(-0.1, -0.4, -0.1), DVec3::new(0.1, -0.1, 0.1));
+    let thickness = 0.005;
+    for iterations in [2, 10] {
+        let text = format!(
+            "[mesh]\npath = {mesh:?}\nnormalize = false\n\
+             [solver]\nmode = \"dynamic\"\niterations = {iterations}\ntime_step = 0.0333333333\ndensity = 50.0\n\
+             [[constraints]]\ntype = \"triangle_strain\"\nweight = 10.0\n\
+             [contact]\nself_collision = true\nthickness = {thickness}\n\
+             [[colliders]]\ntype = \"box\"\nmin = [{}, {}, {}]\nmax = [{}, {}, {}]\n\
+             [[colliders]]\ntype = \"plane\"\npoint = [0.0, -0.4, 0.0]\nnormal = [0.0, 1.0, 0.0]\n",
+            lo.x, lo.y, lo.z, hi.x, hi.y, hi.z
+        );
+        let (loaded, mut sim) = start(&text);
+        // How long each vertex has stood exactly still while clear of the box and floor.
+        let mut still = vec![0usize; loaded.mesh.positions.len()];
+        let mut longest = 0;
+        for k in 0..120 {
+            let before = sim.simulation.positions().to_vec();
+            sim.step().unwrap_or_else(|e| panic!("{iterations} iterations, step {k}: {e}"));
+            let q = sim.simulation.positions();
+            let bad = intersecting_pairs(q, &loaded.mesh.triangles);
+            assert_eq!(bad, 0, "{iterations} iterations, step {k}: {bad} pairs of triangles intersect");
+            for (v, (a, b)) in before.iter().zip(q).enumerate() {
+                let clear = (*b - b.clamp(lo, hi)).length() > 5.0 * thickness && b.y > -0.4 + 5.0 * thickness;
+                still[v] = if a == b && clear { still[v] + 1 } else { 0 };
+                longest = longest.max(still[v]);
+            }
+        }
+        if iterations == 10 {
+            assert!(longest < 10, "a vertex clear of the colliders stood still for {longest} steps");
+        }
+    }
 }
