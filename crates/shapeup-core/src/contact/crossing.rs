@@ -182,13 +182,12 @@ fn coplanar_times(x: [DVec3; 4], d: [DVec3; 4]) -> [Option<f64>; 5] {
 /// step's own detection cannot vouch for). A zone with a vertex whose inverse mass is 0 (a hard
 /// pin, a driven handle: its motion is prescribed) cannot move rigidly with it: its other
 /// vertices are put back at `start`. A zone whose rigid motion would take a vertex `v` to a
-/// point p where `outside(v, p)` is a push (into a collider: the push takes p back out to its
-/// thickness, zero where none can: the path passed through) is moved on by the deepest push,
-/// up to 3 times, as a body resting on the collider is; failing that it takes half or a
-/// quarter of its motion (pushed out likewise), else is put back at `start` too. After
-/// `MAX_ROUNDS` rounds,
-/// every vertex of `all` is put back (x_n had no crossing). Returns how many vertices' motion
-/// was changed.
+/// point p where `outside(v, p)` is a push (into a collider or across one: the push takes p
+/// back out to its thickness; zero where none can) is moved on by the deepest push, up to 3
+/// times, as a body resting on the collider is; failing that it takes half, a quarter or none
+/// of its motion (pushed out likewise: a moving collider may have come over `start`), else is
+/// put back at `start` as it is. After `MAX_ROUNDS` rounds, every vertex of `all` is put back
+/// (x_n had no crossing). Returns how many vertices' motion was changed.
 pub(crate) fn stop_crossings(
     pairs: &[ElementPair],
     mut more: impl FnMut(&[DVec3]) -> Vec<ElementPair>,
@@ -232,10 +231,10 @@ pub(crate) fn stop_crossings(
         }
         for members in zones.members() {
             // The zone's rigid motion, or as large a part of it as keeps out of the colliders
-            // (a part of a rigid motion is one too).
+            // (a part of a rigid motion is one too), pushed out of them.
             let rigid = members.iter().all(|&v| inverse_mass[v as usize] > 0.0).then_some(()).and_then(|()| {
                 let (centre, motion, turn) = rigid_motion(&members, inverse_mass, start, free);
-                [1.0, 0.5, 0.25].into_iter().find_map(|part| {
+                [1.0, 0.5, 0.25, 0.0].into_iter().find_map(|part| {
                     let rotation = glam::DQuat::from_scaled_axis(part * turn);
                     let mut moved: Vec<DVec3> = members
                         .iter()

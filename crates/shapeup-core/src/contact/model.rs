@@ -593,22 +593,26 @@ impl ContactModel {
             let end: Vec<DVec3> = q.par_iter().map(|&p| p - shift).collect();
             surface.pairs_of_moved(&moved, start, &end, tolerance)
         };
-        // Where a zone's vertex would end in a collider's thickness, the push back out of it
-        // (x_n, where a stopped zone goes, is out of it); none where its path went through.
+        // Where a zone's vertex would end in a collider's thickness or its path would cross
+        // one, the push back out to the thickness (to where it entered, for a path).
         let (colliders, (t0, t1)) = (&self.colliders, self.times);
         let outside = |v: u32, p: DVec3| {
             let from = start[v as usize];
             let mut push: Option<DVec3> = None;
             for c in colliders {
-                if c.segment_entry_at(from, t0, p, t1).is_some() {
-                    return Some(DVec3::ZERO);
-                }
-                let near = c.closest_at(p, t1);
-                if near.distance < thickness - tolerance {
-                    let out = near.point + thickness * near.normal - p;
-                    if push.is_none_or(|q| out.length_squared() > q.length_squared()) {
-                        push = Some(out);
+                // As the projection does: a path that crossed goes back to where it entered.
+                let out = match c.segment_entry_at(from, t0, p, t1) {
+                    Some((entry, normal)) => entry + thickness * normal - p,
+                    None => {
+                        let near = c.closest_at(p, t1);
+                        if near.distance >= thickness - tolerance {
+                            continue;
+                        }
+                        near.point + thickness * near.normal - p
                     }
+                };
+                if push.is_none_or(|q| out.length_squared() > q.length_squared()) {
+                    push = Some(out);
                 }
             }
             push
