@@ -70,7 +70,9 @@ class Simulation(_Groups, _Contact):
         ``setup_s``, ``total_s``, ``contact_s``) and contact counts at the end of the step
         (0 without contact): ``contacts`` (touching contacts), ``self_contacts`` (of those,
         the surface with itself), ``contact_candidates`` (detected), ``contact_vertices``
-        (vertices touching)."""
+        (vertices touching), ``crossings_stopped`` (vertices whose motion the self-collision
+        crossing check changed) and ``ended_inside`` (vertices left inside a collider:
+        squeezed between two, or held back where a moving collider came over them)."""
         return json.loads(self._native.step(_count(n, "n")))
 
     @property

@@ -123,7 +123,8 @@ impl PySimulation {
                     "setup_s": r.setup_seconds, "total_s": r.total_seconds,
                     "contacts": r.contact.touching, "self_contacts": r.contact.self_touching,
                     "contact_candidates": r.contact.candidates, "contact_vertices": r.contact.vertices,
-                    "crossings_stopped": r.contact.stopped, "contact_s": r.contact_seconds,
+                    "crossings_stopped": r.contact.stopped, "ended_inside": r.contact.inside,
+                    "contact_s": r.contact_seconds,
                 }));
                 if !simulation.kinetic_energy().is_finite() {
                     return Err(SolveError::NonFiniteEnergy);

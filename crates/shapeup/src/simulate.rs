@@ -92,6 +92,7 @@ pub fn run(args: &SimulateArgs<'_>) -> Result<()> {
     let written = frames.written.len();
     let mut warnings = loaded.warnings.clone();
     warnings.extend(frames.warnings.take().unwrap_or_default());
+    totals.add_warnings(&mut warnings);
     let total = start.elapsed().as_secs_f64();
     let simulation = &run.simulation;
     let system = simulation.system();

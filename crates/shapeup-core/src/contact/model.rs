@@ -81,6 +81,8 @@ pub struct ContactModel {
     elements: Vec<ElementPair>,
     /// Vertices whose motion the crossing check of the last step changed.
     stopped: usize,
+    /// Vertices inside a collider after the last step ([`ContactStats::inside`]).
+    inside: usize,
     /// The feature contacts (their gaps are `pairs[self_pairs..]`), with their collider's μ
     /// and motion.
     feature_contacts: Vec<FeatureContact>,
@@ -130,6 +132,10 @@ pub struct ContactStats {
     /// back where the step started) because their paths made the surface pass through itself
     /// ([`crate::contact`]'s crossing check; 0 without self-collision).
     pub stopped: usize,
+    /// Vertices that ended the step inside a collider: squeezed between two colliders (the
+    /// projection out of one pushed them into the other), or held back by the crossing check
+    /// where a moving collider came over them.
+    pub inside: usize,
 }
 
 /// Most passes of the end-of-step projection of the feature contacts.
@@ -154,6 +160,7 @@ impl ContactModel {
             self_pairs: 0,
             elements: Vec::new(),
             stopped: 0,
+            inside: 0,
             feature_contacts: Vec::new(),
             end_features: Vec::new(),
             predicted: Vec::new(),
@@ -206,6 +213,7 @@ impl ContactModel {
             self_touching: self.self_count,
             vertices: self.touching.iter().filter(|&&t| t).count(),
             stopped: self.stopped,
+            inside: self.inside,
         }
     }
 
@@ -504,16 +512,18 @@ impl ContactModel {
             }
         }
         let mut pressed = Vec::new();
-        pushed |= self.project_out_of_colliders(q, &mut pressed) > 0;
+        let (moved, mut squeezed) = self.project_out_of_colliders(q, &mut pressed);
+        pushed |= moved > 0;
         if pushed && self.self_pairs > 0 {
             // A layer the colliders pushed to the thickness stays there: the correction goes
             // to the layer above it. Shared by both, it pushed the lower one back in, the
             // projection then put both at the thickness, and two coplanar layers crossed in
             // the plane, where no path check sees it.
             self.separate_self_contacts_on(q, inverse_mass, &pressed);
-            self.project_out_of_colliders(q, &mut pressed);
+            squeezed = self.project_out_of_colliders(q, &mut pressed).1;
         }
         self.stopped = self.stop_crossings(q, inverse_mass);
+        self.inside = if self.stopped > 0 { self.count_inside(q) } else { squeezed };
         // What touches at the end: a force on, or within the thickness (plus round-off).
         self.touching.fill(false);
         let tolerance = 1e-3 * self.params.thickness.max(1e-9);
@@ -618,6 +628,15 @@ impl ContactModel {
             push
         };
         stop_crossings(&self.elements, more, (vertices, inverse_mass), outside, start, q, tolerance)
+    }
+
+    /// How many active vertices of `q` are inside a collider at the step's end.
+    fn count_inside(&self, q: &[DVec3]) -> usize {
+        let t1 = self.times.1;
+        q.par_iter()
+            .zip(&self.active)
+            .filter(|&(&p, &active)| active && self.colliders.iter().any(|c| c.closest_at(p, t1).distance < 0.0))
+            .count()
     }
 
     /// Whether a collider has features (points or segments) that can cut into the surface.
@@ -762,10 +781,11 @@ impl ContactModel {
 
     /// Moves every active vertex of `q` out of its contacts' half-spaces and of every collider
     /// (as it is at the step's end) to the thickness, with Coulomb friction on the push, and
-    /// stops a path that crossed a collider where it entered. Returns how many moved; fills
+    /// stops a path that crossed a collider where it entered. Returns how many moved and how
+    /// many are left inside one (squeezed between two: still pushed on the last pass); fills
     /// `pressed` with, per vertex, the sum of the outward normals of what it ended within the
     /// thickness of (zero for none).
-    fn project_out_of_colliders(&self, q: &mut [DVec3], pressed: &mut Vec<DVec3>) -> usize {
+    fn project_out_of_colliders(&self, q: &mut [DVec3], pressed: &mut Vec<DVec3>) -> (usize, usize) {
         let thickness = self.params.thickness;
         let (t0, t1) = self.times;
         let colliders = &self.colliders;
@@ -782,7 +802,7 @@ impl ContactModel {
             .enumerate()
             .map(|(v, (p, touched))| {
                 if !active[v] {
-                    return false;
+                    return (false, false);
                 }
                 let first = *p;
                 for _ in 0..2 {
@@ -822,13 +842,15 @@ impl ContactModel {
                         }
                     }
                     if *p == before {
-                        break;
+                        return (*p != first, false);
                     }
                 }
-                *p != first
+                // Still pushed on the last pass: squeezed between two colliders?
+                let inside = colliders.iter().any(|c| c.closest_at(*p, t1).distance < 0.0);
+                (*p != first, inside)
             })
-            .filter(|&moved| moved)
-            .count()
+            .map(|(moved, inside)| (usize::from(moved), usize::from(inside)))
+            .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1))
     }
 }
 

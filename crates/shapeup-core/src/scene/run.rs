@@ -147,6 +147,11 @@ pub struct StepTotals {
     /// Vertices whose motion the self-collision crossing check changed, summed over the
     /// run ([`crate::contact::ContactStats::stopped`]).
     pub crossings_stopped: usize,
+    /// Vertices that ended a step inside a collider, summed over the run
+    /// ([`crate::contact::ContactStats::inside`]).
+    pub ended_inside: usize,
+    /// The first step at whose end a vertex was inside a collider, and how many were.
+    pub first_inside: Option<(usize, usize)>,
     /// Seconds in contact detection and end-of-step projection.
     pub contact_seconds: f64,
 }
@@ -159,6 +164,20 @@ impl StepTotals {
         self.setup_seconds += step.setup_seconds;
         self.rejected += step.rejected;
         self.contact_seconds += step.contact_seconds;
+    }
+}
+
+impl StepTotals {
+    /// What the run should say once: vertices that ended steps inside a collider.
+    pub fn add_warnings(&self, warnings: &mut Warnings) {
+        if let Some((step, count)) = self.first_inside {
+            warnings.add_many(
+                "inside_collider",
+                "vertex-steps ended inside a collider (squeezed between two colliders, or held back by the self-collision check where a moving collider came over them)",
+                self.ended_inside,
+                || format!("{count} vertices at the end of step {step}"),
+            );
+        }
     }
 }
 
@@ -201,6 +220,7 @@ impl LoadedScene {
             "self_contacts": totals.self_contacts,
             "contact_vertices": totals.contact_vertices,
             "crossings_stopped": totals.crossings_stopped,
+            "ended_inside": totals.ended_inside,
             "rejected": totals.rejected,
             "warnings": warnings.to_json(),
             "timings": {
@@ -323,6 +343,10 @@ impl SceneSimulation {
                 totals.self_contacts.push(step.contact.self_touching);
                 totals.contact_vertices.push(step.contact.vertices);
                 totals.crossings_stopped += step.contact.stopped;
+                totals.ended_inside += step.contact.inside;
+                if step.contact.inside > 0 && totals.first_inside.is_none() {
+                    totals.first_inside = Some((k, step.contact.inside));
+                }
             }
             on_step(k, &self.simulation, k % every.max(1) == 0 || k == frames).map_err(RunError::Stopped)?;
         }

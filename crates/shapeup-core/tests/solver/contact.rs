@@ -49,8 +49,34 @@ fn cloth_drapes_over_a_sphere_without_entering_it() {
         let inside =
             sim.simulation.positions().iter().map(|p| (*p - center).length() - 0.3).fold(f64::INFINITY, f64::min);
         assert!(inside >= thickness * (1.0 - 1e-6) - 1e-12, "step {k}: a vertex {inside} from the sphere");
+        assert_eq!(report.contact.inside, 0, "step {k}");
     }
     assert_eq!(sim.simulation.system().factorizations(), 1);
+}
+
+#[test]
+fn a_cloth_squeezed_between_a_sphere_and_the_floor_is_said_once_with_a_count() {
+    // A sphere comes down at 1 m/s through a cloth lying on a plane and on through the plane:
+    // no place is out of both, and the run says how many vertex-steps ended inside one.
+    let text = format!(
+        "{CLOTH}\n[[colliders]]\ntype = \"plane\"\npoint = [0.0, -0.02, 0.0]\nnormal = [0.0, 1.0, 0.0]\n\
+         [[colliders]]\ntype = \"sphere\"\ncenter = [0.0, 0.25, 0.0]\nradius = 0.2\nvelocity = [0.0, -1.0, 0.0]\n"
+    );
+    let (_, mut sim) = start(&text);
+    let (sphere, radius) = (|t: f64| DVec3::new(0.0, 0.25 - t, 0.0), 0.2);
+    let mut inside_by_hand = 0;
+    let totals = sim
+        .run(30, 1, false, |_, simulation, _| -> Result<(), ()> {
+            let (t, q) = (simulation.time(), simulation.positions());
+            inside_by_hand += q.iter().filter(|p| p.y < -0.02 || (**p - sphere(t)).length() < radius).count();
+            Ok(())
+        })
+        .unwrap();
+    assert!(inside_by_hand > 0, "the sphere should have squeezed the cloth");
+    assert_eq!(totals.ended_inside, inside_by_hand);
+    let mut warnings = shapeup_core::warnings::Warnings::new();
+    totals.add_warnings(&mut warnings);
+    assert_eq!(warnings.count("inside_collider"), inside_by_hand, "{:?}", warnings.to_json());
 }
 
 /// A block of tetrahedra resting on the plane y = −0.1 − thickness under gravity tilted by θ
