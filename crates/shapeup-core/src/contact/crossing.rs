@@ -96,7 +96,11 @@ impl ElementPair {
                 (a - b).length() <= tolerance
             }
         };
-        coplanar_times(x, d).into_iter().flatten().any(meet)
+        // Ending on the other side's element is a crossing too (no side left to keep): there
+        // the cubic's root at t = 1 can be lost to round-off (f(1) ≈ 1e-21 with every Bernstein
+        // coefficient positive), and a vertex an upper sheet pressed onto a box, level with the
+        // lower sheet's triangle, lay on it for good.
+        coplanar_times(x, d).into_iter().flatten().any(meet) || meet(1.0)
     }
 }
 
@@ -391,6 +395,25 @@ mod tests {
         let mut short = start;
         short[0].y = 0.01;
         assert!(!pair(true).crosses(&start, &short, 1e-9));
+    }
+
+    #[test]
+    fn a_vertex_that_ends_on_the_triangle_crosses() {
+        // A trial's numbers: the vertex ends exactly level with (and inside) a triangle lying
+        // in y = 0.004, one corner of which slid within the plane.
+        let start = [
+            DVec3::new(0.09537015379801726, 0.008786477051152392, 0.04480825219474272),
+            DVec3::new(0.09000000000002396, 0.004, 0.029999999999988772),
+            DVec3::new(0.12000000000002414, 0.004, 0.05999999999998916),
+            DVec3::new(0.09000000000002395, 0.004, 0.059999999999988965),
+        ];
+        let mut q = start;
+        q[0] = DVec3::new(0.09542479278423913, 0.004, 0.04425638140815717);
+        q[2] = DVec3::new(0.11998917737074065, 0.004, 0.059923763321671826);
+        assert!(pair(true).crosses(&start, &q, 4e-6));
+        // Ending just above it is no crossing.
+        q[0].y += 1e-4;
+        assert!(!pair(true).crosses(&start, &q, 4e-6));
     }
 
     #[test]
