@@ -92,7 +92,10 @@ pub fn run(args: &SimulateArgs<'_>) -> Result<()> {
     let written = frames.written.len();
     let mut warnings = loaded.warnings.clone();
     warnings.extend(frames.warnings.take().unwrap_or_default());
-    totals.add_warnings(&mut warnings);
+    // What the run found names the scene.
+    let mut found = shapeup_core::warnings::Warnings::new();
+    totals.add_warnings(&mut found);
+    warnings.extend(found.for_file(args.scene));
     let total = start.elapsed().as_secs_f64();
     let simulation = &run.simulation;
     let system = simulation.system();
