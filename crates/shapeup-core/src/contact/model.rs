@@ -845,7 +845,15 @@ impl ContactModel {
                         return (*p != first, false);
                     }
                 }
-                // Still pushed on the last pass: squeezed between two colliders?
+                // Still pushed on the last pass: squeezed between two colliders. The still ones
+                // have the last word: a sphere coming down through a cloth on a floor dragged
+                // it 0.19 m under the floor, from where it sprang back at 20 m/s.
+                for c in colliders.iter().filter(|c| c.motion.is_static()) {
+                    let near = c.closest_at(*p, t1);
+                    if near.distance < thickness {
+                        *p = near.point + thickness * near.normal;
+                    }
+                }
                 let inside = colliders.iter().any(|c| c.closest_at(*p, t1).distance < 0.0);
                 (*p != first, inside)
             })
