@@ -1509,7 +1509,7 @@ fn a_cloth_squeezed_between_colliders_is_warned_about_once_naming_the_scene() {
     let r = ws.out("r.json");
     let out = simulate_in(None, &scene, &ws.out("frames"), &["--frames", "30", "--report", r.to_str().unwrap()]);
     assert_eq!(out.code, Some(0), "{}", out.describe());
-    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&r).unwrap()).unwrap();
+    let report = report(&r);
     let inside = report["ended_inside"].as_u64().unwrap();
     assert!(inside > 0, "{report}");
     let line = format!("squeeze.toml: {inside} vertex-steps ended inside a collider");
