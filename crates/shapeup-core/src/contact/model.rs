@@ -278,7 +278,7 @@ impl ContactModel {
             surface.refit(start, predicted, thickness, trees);
             self.refitted = trees;
             if self_collision {
-                (self.pairs, self.elements) = surface.self_contacts(start, predicted, thickness);
+                surface.self_contacts_into(start, predicted, thickness, &mut self.pairs, &mut self.elements);
                 self.self_pairs = self.pairs.len();
             }
             if trees.triangles || trees.edges {
@@ -563,9 +563,9 @@ impl ContactModel {
     /// zones (pushed back out of a collider they would enter), or are put back at the start
     /// where a zone holds a vertex with `inverse_mass` 0 (held or driven: it keeps its motion)
     /// or cannot keep out of a collider. Checked: the step's own pairs (every pair whose boxes
-    /// in the step's trees meet), and the pairs of the elements with a vertex whose path left
-    /// its box in the step's trees (up to a translation of the whole surface, which changes no
-    /// crossing), found from their own boxes against the step's trees: the paths of the others
+    /// in the step's trees meet), and the pairs of the elements with a vertex that ended outside
+    /// the element's box in the step's trees ([`Surface::strays`]; up to a translation of the
+    /// whole surface, which changes no crossing), found from their own boxes against the step's trees: the paths of the others
     /// stayed in their boxes, so a pair of them is among the step's own or never met. Returns
     /// how many vertices' motion it changed.
     fn stop_crossings(&self, q: &mut [DVec3], inverse_mass: &[f64]) -> usize {
@@ -577,13 +577,9 @@ impl ContactModel {
         let vertices = surface.vertices();
         let drift = surface.drift();
         let grow = 0.5 * thickness;
-        // Whether vertex v's path, less `shift`, left its box in the step's trees (the box of
-        // x_n and the prediction less the trees' drift, grown by half the thickness): its
-        // elements' paths then may leave theirs.
-        let strays = |v: usize, q: &[DVec3], shift: DVec3| {
-            let (a, b) = (start[v], predicted[v] - drift);
-            let end = q[v] - shift;
-            end.cmplt(a.min(b) - DVec3::splat(grow)).any() || end.cmpgt(a.max(b) + DVec3::splat(grow)).any()
+        // Whether an element's path, less `shift`, may have left its box in the step's trees.
+        let strays = |element: &[u32], q: &[DVec3], shift: DVec3| {
+            surface.strays(element, (start, predicted), |v| q[v as usize] - shift, grow)
         };
         // Grazing within a thousandth of the thickness counts as crossing.
         let tolerance = (1e-3 * thickness).max(1e-12);
@@ -594,14 +590,13 @@ impl ContactModel {
             let mean = vertices.par_iter().map(|&v| q[v as usize] - predicted[v as usize]).sum::<DVec3>()
                 / vertices.len() as f64;
             let frames = [drift, drift + mean];
-            let counts = frames.map(|shift| vertices.par_iter().filter(|&&v| strays(v as usize, q, shift)).count());
+            let counts = frames.map(|shift| vertices.par_iter().filter(|&&v| strays(&[v], q, shift)).count());
             let shift = if counts[1] < counts[0] { frames[1] } else { frames[0] };
             if counts[0].min(counts[1]) == 0 {
                 return Vec::new();
             }
-            let moved: Vec<bool> = (0..q.len()).into_par_iter().map(|v| strays(v, q, shift)).collect();
             let end: Vec<DVec3> = q.par_iter().map(|&p| p - shift).collect();
-            surface.pairs_of_moved(&moved, start, &end, tolerance)
+            surface.pairs_of_strayed(|element| strays(element, q, shift), start, &end, tolerance)
         };
         // Where a zone's vertex would end in a collider's thickness or its path would cross
         // one, the push back out to the thickness (to where it entered, for a path).

@@ -399,11 +399,14 @@ point = [0.0, -0.3, 0.0]
 normal = [0.0, 1.0, 0.0]
 "#;
     let (loaded, mut sim) = start(text);
-    let mut most_self = 0;
+    // The layers must lie on each other for most of the run. (The largest count of one step,
+    // asked to exceed 100 before, is chaotic: it was 106, and 59 to 137 when only the order
+    // in which the BVH traversal meets the pairs changed.)
+    let mut touching_steps = 0;
     for _ in 0..200 {
-        most_self = most_self.max(sim.step().unwrap().contact.self_touching);
+        touching_steps += usize::from(sim.step().unwrap().contact.self_touching > 20);
     }
-    assert!(most_self > 100, "the layers hardly touched ({most_self} self contacts): the scene tests nothing");
+    assert!(touching_steps > 120, "the layers hardly touched ({touching_steps} steps): the scene tests nothing");
     // Settled: it moves by millimetres a second and holds little elastic energy (about 0.03;
     // layers pushed apart by their whole overlap each step, or edge–edge contacts at edge ends
     // left out, ended near 5 and still rising).
