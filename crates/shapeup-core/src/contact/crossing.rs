@@ -272,12 +272,19 @@ pub(crate) fn stop_crossings(
     // The motions the step gave, and the zones (allocated at the first crossing).
     let mut zones: Option<(Vec<DVec3>, ImpactZones)> = None;
     let changed = |q: &[DVec3], free: &[DVec3]| all.iter().filter(|&&v| q[v as usize] != free[v as usize]).count();
+    // The vertices the last round's zones moved (none before the first round). A pair none of
+    // whose vertices moved crosses as it did then: not at all (a crossing pair's vertices
+    // joined a zone, which moved them or put them back where they started), or inside a zone,
+    // or held against a prescribed motion, which merges nothing either way.
+    let mut moved: Option<Vec<bool>> = None;
     for _ in 0..MAX_ROUNDS {
         let extra = more(q);
         let view: &[DVec3] = q;
+        let again = |p: &&ElementPair| moved.as_deref().is_none_or(|m| p.vertices.iter().any(|&v| m[v as usize]));
         let crossing: Vec<[u32; 4]> = pairs
             .par_iter()
             .chain(extra.par_iter())
+            .filter(again)
             .filter(|p| p.may_meet(start, view) && !p.coincident(start, tolerance) && p.crosses(start, view, tolerance))
             .map(|p| p.vertices)
             .collect();
@@ -296,6 +303,7 @@ pub(crate) fn stop_crossings(
             // one held still against a prescribed motion.
             return changed(q, free);
         }
+        let moved = moved.insert(vec![false; view.len()]);
         for members in zones.members() {
             // The zone's rigid motion, or as large a part of it as keeps out of the colliders
             // (a part of a rigid motion is one too), pushed out of them.
@@ -323,16 +331,21 @@ pub(crate) fn stop_crossings(
                     members.iter().zip(&moved).all(|(&v, &p)| outside(v, p).is_none()).then_some(moved)
                 })
             });
+            let mut place = |v: u32, p: DVec3| {
+                let v = v as usize;
+                moved[v] |= q[v] != p;
+                q[v] = p;
+            };
             match rigid {
-                Some(moved) => {
-                    for (&v, p) in members.iter().zip(moved) {
-                        q[v as usize] = p;
+                Some(rigid) => {
+                    for (&v, p) in members.iter().zip(rigid) {
+                        place(v, p);
                     }
                 }
                 None => {
                     for &v in &members {
                         if inverse_mass[v as usize] > 0.0 {
-                            q[v as usize] = start[v as usize];
+                            place(v, start[v as usize]);
                         }
                     }
                 }
