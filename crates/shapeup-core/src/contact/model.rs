@@ -41,7 +41,7 @@ use super::features::{
     FeatureContact, Features, PREDICTION_SLACK, detect_feature_contacts, detect_round_contacts_at_end, longest_edge,
 };
 use super::gap::{Contact, Pair};
-use super::self_collision::{Surface, Trees, detect_self_contacts};
+use super::self_collision::{EdgeTriangle, Surface, Trees, detect_self_contacts, edges_through_triangles};
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -310,6 +310,17 @@ impl ContactModel {
             let mut fresh = surface.clone();
             detect_self_contacts(&mut fresh, positions, positions, thickness).len()
         })
+    }
+
+    /// With self-collision, how many pairs of an edge and a triangle (sharing no vertex) of the
+    /// surface at rest `positions` pass through or touch each other: a surface caught in
+    /// itself from the start stays so (see `self_collision::edges_through_triangles`).
+    /// Returns the count and the first such pair found (its edge's and its triangle's vertices).
+    pub fn self_intersections_at_rest(&self, positions: &[DVec3]) -> (usize, Option<EdgeTriangle>) {
+        match &self.surface {
+            Some(surface) if self.params.self_collision => edges_through_triangles(&mut surface.clone(), positions),
+            _ => (0, None),
+        }
     }
 
     /// The contact weight W_v of every vertex, given the weight scale of each (its inertia

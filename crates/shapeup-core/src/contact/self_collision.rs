@@ -153,6 +153,51 @@ pub(crate) fn detect_self_contacts(
     pairs
 }
 
+/// How many pairs of an edge and a triangle of the surface at `positions` that share no vertex
+/// meet: the edge passes through the triangle or touches it (closer than [`TOUCHING`]). Such a
+/// surface is caught in itself from the start: self-collision keeps every pair on the side it
+/// starts on, and pairs that touch exactly have no side (no contact normal).
+/// Returns the count and the first pair found.
+pub(crate) fn edges_through_triangles(surface: &mut Surface, positions: &[DVec3]) -> (usize, Option<EdgeTriangle>) {
+    surface.refit(positions, positions, 2.0 * TOUCHING, Trees { triangles: true, edges: true, vertices: false });
+    let (Some(triangle_bvh), Some(edge_bvh)) = (surface.triangle_bvh(), surface.edge_bvh()) else {
+        return (0, None);
+    };
+    let at = |v: u32| positions[v as usize];
+    let (mut count, mut first) = (0, None);
+    for (i, k) in edge_bvh.leaf_pairs(triangle_bvh, |a, b| a.intersects(b)) {
+        let (e, t) = (surface.edges[i as usize], surface.triangles[k as usize]);
+        if !t.contains(&e[0]) && !t.contains(&e[1]) && segment_meets_triangle(at(e[0]), at(e[1]), t.map(at)) {
+            count += 1;
+            first.get_or_insert((e, t));
+        }
+    }
+    (count, first)
+}
+
+/// An edge's and a triangle's vertices.
+pub type EdgeTriangle = ([u32; 2], [u32; 3]);
+
+/// Whether segment p0 p1 passes through triangle `t` or comes within [`TOUCHING`] of it: its
+/// crossing of the triangle's plane lies in the triangle, or an end lies on the triangle, or
+/// it meets one of the triangle's edges (which covers a segment in the triangle's plane).
+fn segment_meets_triangle(p0: DVec3, p1: DVec3, t: [DVec3; 3]) -> bool {
+    let normal = (t[1] - t[0]).cross(t[2] - t[0]);
+    let (d0, d1) = (normal.dot(p0 - t[0]), normal.dot(p1 - t[0]));
+    if d0 * d1 < 0.0 {
+        let crossing = p0 + (d0 / (d0 - d1)) * (p1 - p0);
+        if (crossing - closest_on_triangle(crossing, t).0).length() < TOUCHING {
+            return true;
+        }
+    }
+    let near = |p: DVec3| (p - closest_on_triangle(p, t).0).length() < TOUCHING;
+    let meets = |a: DVec3, b: DVec3| {
+        let (_, _, x, y) = closest_between_segments(p0, p1, a, b);
+        (x - y).length() < TOUCHING
+    };
+    near(p0) || near(p1) || meets(t[0], t[1]) || meets(t[1], t[2]) || meets(t[2], t[0])
+}
+
 /// Which of a surface's BVHs a step needs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) struct Trees {

@@ -241,6 +241,19 @@ impl Scene {
                 )
             },
         );
+        let (caught, first) = model.self_intersections_at_rest(&rest.positions);
+        warnings.add_many(
+            "self_intersection_at_rest",
+            "pairs of an edge and a triangle of the rest shape (not neighbours) pass through or touch each other: \
+             self-collision keeps every pair on the side it starts on, so the surface stays caught in itself \
+             (separate its parts in the input)",
+            caught,
+            || {
+                first.map_or_else(String::new, |(e, t)| {
+                    format!("edge ({}, {}) and triangle ({}, {}, {}), vertices from 0", e[0], e[1], t[0], t[1], t[2])
+                })
+            },
+        );
         Ok(Some(model))
     }
 }

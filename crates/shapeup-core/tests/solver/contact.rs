@@ -302,12 +302,91 @@ fn a_self_collision_thickness_near_the_edge_length_is_warned_about_once() {
 }
 
 #[test]
+fn a_rest_shape_caught_in_itself_is_warned_about_once_with_a_count() {
+    // Two 5 × 5 sheets, one flat (y = 0) and one upright (x = 0.55) passing through it: the
+    // upright sheet's edges that cross y = 0 pierce the flat sheet's triangles. Self-collision
+    // would keep them so; the load says it once, with the number of edge–triangle pairs an
+    // independent test finds. The flat sheet moved aside (x = 2.55) is not caught.
+    let sheets = |x: f64| {
+        let mut obj = String::new();
+        for (k, upright) in [false, true].into_iter().enumerate() {
+            for i in 0..5 {
+                for j in 0..5 {
+                    let (a, b) = (i as f64 / 4.0, j as f64 / 4.0);
+                    let p = if upright { [x, a - 0.5 + 0.013, b] } else { [a, 0.0, b] };
+                    obj.push_str(&format!("v {} {} {}\n", p[0], p[1], p[2]));
+                }
+            }
+            for i in 0..4 {
+                for j in 0..4 {
+                    let v = |i: usize, j: usize| 25 * k + 5 * i + j + 1;
+                    obj.push_str(&format!(
+                        "f {} {} {}\nf {} {} {}\n",
+                        v(i, j),
+                        v(i + 1, j),
+                        v(i, j + 1),
+                        v(i + 1, j),
+                        v(i + 1, j + 1),
+                        v(i, j + 1)
+                    ));
+                }
+            }
+        }
+        obj
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let load = |x: f64| {
+        let path = dir.path().join(format!("sheets{x}.obj"));
+        std::fs::write(&path, sheets(x)).unwrap();
+        let text = format!(
+            "[mesh]\npath = {:?}\nnormalize = false\n[solver]\nmode = \"dynamic\"\n[[constraints]]\n\
+             type = \"triangle_strain\"\nweight = 1.0\n[contact]\nself_collision = true\nthickness = 0.005\n",
+            path.display().to_string()
+        );
+        scene(&text).load().unwrap()
+    };
+    let caught = load(0.55);
+    // Independent count: each sheet's edges against the other's triangles, by where the edge
+    // crosses the other sheet's plane (y = 0, x = 0.55) lying inside the triangle, a
+    // barycentric test in that plane. Two sheets crossing along a line pierce each other both
+    // ways.
+    let mesh = &caught.mesh;
+    let edges = shapeup_core::topology::indexed_edges(&mesh.triangles).0;
+    let mut expected = 0;
+    // (axis across the plane, the plane's offset, the two axes in it, the other sheet's vertices)
+    for (across, offset, (u, w), upright) in [(1, 0.0, (0, 2), false), (0, 0.55, (1, 2), true)] {
+        for e in edges.iter().filter(|e| (e[0] < 25) == upright) {
+            let (p, q) = (mesh.positions[e[0] as usize], mesh.positions[e[1] as usize]);
+            let (a, b) = (p[across] - offset, q[across] - offset);
+            if a * b >= 0.0 {
+                continue;
+            }
+            let x = p + (a / (a - b)) * (q - p);
+            for t in mesh.triangles.iter().filter(|t| (t[0] >= 25) == upright) {
+                let [r0, r1, r2] = t.map(|v| mesh.positions[v as usize]);
+                let area = |o: DVec3, v: DVec3, z: DVec3| (v[u] - o[u]) * (z[w] - o[w]) - (z[u] - o[u]) * (v[w] - o[w]);
+                let (d, s0, s1, s2) = (area(r0, r1, r2), area(x, r1, r2), area(r0, x, r2), area(r0, r1, x));
+                if [s0, s1, s2].iter().all(|&s| s * d >= 0.0) {
+                    expected += 1;
+                }
+            }
+        }
+    }
+    assert!(expected > 0);
+    assert_eq!(caught.warnings.count("self_intersection_at_rest"), expected, "{:?}", caught.warnings.to_json());
+    assert_eq!(caught.warnings.iter().filter(|w| w.kind == "self_intersection_at_rest").count(), 1);
+    let apart = load(2.55);
+    assert_eq!(apart.warnings.count("self_intersection_at_rest"), 0, "{:?}", apart.warnings.to_json());
+}
+
+#[test]
 fn the_cloth_fold_example_never_intersects_itself() {
     // examples/cloth-fold.toml as shipped (41 × 41, folding over a bar onto the ground), 4 s:
     // no two triangles intersect after any step. Before a collider's push was followed by a
     // second pass of self corrections, the bar pushed the inner layer through the outer one.
     let path = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/cloth-fold.toml"));
     let mut loaded = Scene::from_file(&path).unwrap().load().unwrap();
+    assert_eq!(loaded.warnings.count("self_intersection_at_rest"), 0);
     let mut sim = loaded.start_scene_simulation().unwrap();
     let mut most_self = 0;
     for k in 0..240 {
