@@ -576,9 +576,9 @@ impl ContactModel {
     /// or cannot keep out of a collider. Checked: the step's own pairs (every pair whose boxes
     /// in the step's trees meet), and the pairs of the elements with a vertex that ended outside
     /// the element's box in the step's trees ([`Surface::strays`]; up to a translation of the
-    /// whole surface, which changes no crossing), found from their own boxes against the step's trees: the paths of the others
-    /// stayed in their boxes, so a pair of them is among the step's own or never met. Returns
-    /// how many vertices' motion it changed.
+    /// whole surface, which changes no crossing), found from their own boxes against the
+    /// step's trees: the paths of the others stayed in their boxes, so a pair of them is among
+    /// the step's own or never met. Returns how many vertices' motion it changed.
     fn stop_crossings(&self, q: &mut [DVec3], inverse_mass: &[f64]) -> usize {
         let Some(surface) = &self.surface else { return 0 };
         if !self.params.self_collision || self.times.1 <= self.times.0 || surface.vertices().is_empty() {
