@@ -117,7 +117,8 @@ pub(crate) fn closest_between_segments(p0: DVec3, p1: DVec3, q0: DVec3, q1: DVec
 pub(crate) mod tests {
     use super::*;
 
-    fn rng(seed: &mut u64) -> f64 {
+    /// A uniform number in [−1, 1) from a linear congruential generator (Knuth's MMIX).
+    pub(crate) fn rng(seed: &mut u64) -> f64 {
         *seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
         ((*seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
     }

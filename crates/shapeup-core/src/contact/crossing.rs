@@ -22,7 +22,9 @@
 //! within a tolerance.
 
 use super::closest::{closest_between_segments, closest_on_triangle};
+use super::self_collision::swept_box;
 use glam::DVec3;
+use parry3d_f64::bounding_volume::BoundingVolume;
 use rayon::prelude::*;
 
 /// A vertex–triangle pair (`vertices` = the vertex, then the triangle's three) or an edge–edge
@@ -86,20 +88,11 @@ impl ElementPair {
         let x = self.vertices.map(|v| start[v as usize]);
         let e = self.vertices.map(|v| q[v as usize]);
         // Each side's points stay in the box of its vertices' starts and ends: sides whose
-        // boxes are farther apart than the tolerance never meet (most pairs of a step that
-        // may meet by their motions' size; a cheap way out before the cubic).
-        let side = if self.vertex_triangle { 1 } else { 2 };
-        let span = |range: std::ops::Range<usize>| {
-            let (mut lo, mut hi) = (x[range.start].min(e[range.start]), x[range.start].max(e[range.start]));
-            for k in range.start + 1..range.end {
-                lo = lo.min(x[k].min(e[k]));
-                hi = hi.max(x[k].max(e[k]));
-            }
-            (lo, hi)
-        };
-        let ((lo_a, hi_a), (lo_b, hi_b)) = (span(0..side), span(side..4));
-        let reach = DVec3::splat(2.0 * tolerance);
-        if (lo_a - reach).cmpgt(hi_b).any() || (lo_b - reach).cmpgt(hi_a).any() {
+        // boxes are farther apart than twice the tolerance never meet (most pairs of a step
+        // that may meet by their motions' size; a cheap way out before the cubic).
+        let (first, second) = self.sides();
+        let path = |side: &[u32]| swept_box(side, start, q, DVec3::ZERO, tolerance);
+        if !path(first).intersects(&path(second)) {
             return false;
         }
         let d = [0, 1, 2, 3].map(|k| e[k] - x[k]);
@@ -449,6 +442,7 @@ fn outer(a: DVec3, b: DVec3) -> glam::DMat3 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::contact::closest::tests::{rng, v};
 
     fn pair(vertex_triangle: bool) -> ElementPair {
         ElementPair { vertices: [0, 1, 2, 3], vertex_triangle, distance: 0.0 }
@@ -529,14 +523,10 @@ mod tests {
     fn the_bernstein_bound_keeps_every_root() {
         // Random cubics: where the early way out says "no root", f has one sign on a fine grid.
         let mut seed = 7u64;
-        let mut next = || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-        };
         let mut skipped = 0;
         for _ in 0..2000 {
-            let x = [0, 1, 2, 3].map(|_| DVec3::new(next(), next(), next()));
-            let d = [0, 1, 2, 3].map(|_| 0.5 * DVec3::new(next(), next(), next()));
+            let x = [0, 1, 2, 3].map(|_| v(&mut seed));
+            let d = [0, 1, 2, 3].map(|_| 0.5 * v(&mut seed));
             if coplanar_times(x, d).iter().all(Option::is_none) {
                 skipped += 1;
                 let f = |t: f64| {
@@ -556,14 +546,10 @@ mod tests {
         // within the grid's step, and f vanishes there to round-off (what bisection to 2⁻⁶⁰
         // gave, in a few evaluations).
         let mut seed = 11u64;
-        let mut next = || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-        };
         let mut checked = 0;
         for _ in 0..2000 {
-            let x = [0; 4].map(|_| DVec3::new(next(), next(), next()));
-            let d = [0; 4].map(|_| 3.0 * DVec3::new(next(), next(), next()));
+            let x = [0; 4].map(|_| v(&mut seed));
+            let d = [0; 4].map(|_| 3.0 * v(&mut seed));
             let f = |t: f64| {
                 let p = [0, 1, 2, 3].map(|k| x[k] + t * d[k]);
                 (p[1] - p[0]).cross(p[2] - p[0]).dot(p[3] - p[0])
@@ -591,15 +577,11 @@ mod tests {
         // points are within it, the cheap bound lets the pair through; and it rules out most
         // of those that are farther.
         let mut seed = 5u64;
-        let mut next = || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-        };
         let tolerance = 0.01;
         let (mut touching, mut ruled_out) = (0, 0);
         for k in 0..20000 {
             let vertex_triangle = k % 2 == 0;
-            let mut e = [0; 4].map(|_| DVec3::new(next(), next(), next()));
+            let mut e = [0; 4].map(|_| v(&mut seed));
             // Move the first side to within a few tolerances of the other.
             let (a, b) = if vertex_triangle {
                 let (c, _) = closest_on_triangle(e[0], [e[1], e[2], e[3]]);
@@ -609,7 +591,7 @@ mod tests {
                 (a, b)
             };
             let dir = (a - b).normalize_or_zero();
-            let wanted = 3.0 * tolerance * (0.5 * next() + 0.5);
+            let wanted = 3.0 * tolerance * (0.5 * rng(&mut seed) + 0.5);
             let shift = b + wanted * dir - a;
             let side = if vertex_triangle { 1 } else { 2 };
             for p in &mut e[..side] {

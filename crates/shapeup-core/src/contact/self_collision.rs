@@ -114,7 +114,7 @@ fn common_motion(vertices: &[u32], start: &[DVec3], predicted: &[DVec3]) -> DVec
 /// at each instant are the same in any frame that translates, so two elements that come
 /// within the thickness during the step still have meeting boxes; taking out the motion the
 /// surface shares keeps the boxes small.
-fn swept_box(vertices: &[u32], start: &[DVec3], predicted: &[DVec3], drift: DVec3, grow: f64) -> Aabb {
+pub(crate) fn swept_box(vertices: &[u32], start: &[DVec3], predicted: &[DVec3], drift: DVec3, grow: f64) -> Aabb {
     let mut lo = DVec3::splat(f64::INFINITY);
     let mut hi = DVec3::splat(f64::NEG_INFINITY);
     for &v in vertices {
@@ -601,14 +601,8 @@ mod tests {
     use super::*;
     use crate::contact::closest::tests::v;
 
-    #[test]
-    fn the_steps_pairs_and_those_of_its_strayed_elements_hold_every_pair_that_crosses() {
-        // A 10 × 10 sheet folded over itself, its layers 0.02 apart, predicted to fall with a
-        // little noise; at the end a fifth of its vertices strayed far from the prediction
-        // (through the other layer). Every vertex–triangle and edge–edge pair whose paths
-        // cross (tested by brute force) is among the step's elements or the pairs of the
-        // elements that left their boxes, found in the trees' frame (the drift taken out).
-        let n = 10;
+    /// The triangles of an `n` × `n` grid of vertices (row i, column j is vertex i n + j).
+    fn grid_triangles(n: usize) -> Vec<[u32; 3]> {
         let mut triangles = Vec::new();
         for i in 0..n - 1 {
             for j in 0..n - 1 {
@@ -617,20 +611,39 @@ mod tests {
                 triangles.push([k + 1, k + n as u32, k + n as u32 + 1]);
             }
         }
+        triangles
+    }
+
+    /// The vertices of an `n` × `n` unit sheet folded over itself at x = 0.5, its upper half
+    /// `gap` above the lower, each moved by `noise` × a random vector in [−1, 1]³.
+    fn folded_sheet(n: usize, gap: f64, noise: f64, seed: &mut u64) -> Vec<DVec3> {
+        let mut start = Vec::new();
+        for i in 0..n {
+            for j in 0..n {
+                let x = i as f64 / (n - 1) as f64;
+                let (x, y) = if x < 0.5 { (x, 0.0) } else { (1.0 - x, gap) };
+                start.push(DVec3::new(x, y, j as f64 / (n - 1) as f64) + noise * v(seed));
+            }
+        }
+        start
+    }
+
+    #[test]
+    fn the_steps_pairs_and_those_of_its_strayed_elements_hold_every_pair_that_crosses() {
+        // A 10 × 10 sheet folded over itself, its layers 0.02 apart, predicted to fall with a
+        // little noise; at the end a fifth of its vertices strayed far from the prediction
+        // (through the other layer). Every vertex–triangle and edge–edge pair whose paths
+        // cross (tested by brute force) is among the step's elements or the pairs of the
+        // elements that left their boxes, found in the trees' frame (the drift taken out).
+        let n = 10;
+        let triangles = grid_triangles(n);
         let edges = crate::topology::indexed_edges(&triangles).0;
         let (thickness, tolerance) = (0.02, 2e-5);
         let mut seed = 17;
         let mut crossing = 0;
         let mut strayed_only = 0;
         for _ in 0..6 {
-            let mut start = Vec::new();
-            for i in 0..n {
-                for j in 0..n {
-                    let x = i as f64 / (n - 1) as f64;
-                    let (x, y) = if x < 0.5 { (x, 0.0) } else { (1.0 - x, 0.02) };
-                    start.push(DVec3::new(x, y, j as f64 / (n - 1) as f64) + 0.005 * v(&mut seed));
-                }
-            }
+            let start = folded_sheet(n, 0.02, 0.005, &mut seed);
             let fall = DVec3::new(0.0, -0.05, 0.0);
             let predicted: Vec<DVec3> = start.iter().map(|&x| x + fall + 0.005 * v(&mut seed)).collect();
             let end: Vec<DVec3> = predicted
@@ -686,22 +699,8 @@ mod tests {
         // the contacts are exactly those of testing every vertex–triangle and edge–edge pair.
         let mut seed = 3;
         let n = 9;
-        let mut start = Vec::new();
-        for i in 0..n {
-            for j in 0..n {
-                let x = i as f64 / (n - 1) as f64;
-                let (x, y) = if x < 0.5 { (x, 0.0) } else { (1.0 - x, 0.04) };
-                start.push(DVec3::new(x, y, j as f64 / (n - 1) as f64) + 0.02 * v(&mut seed));
-            }
-        }
-        let mut triangles = Vec::new();
-        for i in 0..n - 1 {
-            for j in 0..n - 1 {
-                let k = (i * n + j) as u32;
-                triangles.push([k, k + n as u32, k + 1]);
-                triangles.push([k + 1, k + n as u32, k + n as u32 + 1]);
-            }
-        }
+        let start = folded_sheet(n, 0.04, 0.02, &mut seed);
+        let triangles = grid_triangles(n);
         let thickness = 0.05;
         let mut surface = Surface::new(&triangles, &vec![true; start.len()]);
         // Every pair within the thickness, by brute force, as the constraint it makes: its
