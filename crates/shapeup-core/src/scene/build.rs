@@ -135,6 +135,16 @@ impl Scene {
             || stranded.first().map(|v| format!("vertex {v}")).unwrap_or_default(),
         );
         let contact = self.build_contact(&mesh, &rest, &frame, &mut warnings)?;
+        if let Some(model) = &contact {
+            let inside = pins_inside_colliders(&system, model);
+            warnings.add_many(
+                "pin_inside_collider",
+                "pinned vertices are held at a point inside a collider: contact cannot move them out (a hard pin keeps \
+                 them there, a soft one pulls them back in against it); move the pin or the collider",
+                inside.len(),
+                || inside.first().map(|(v, group)| format!("vertex {v}, group \"{group}\"")).unwrap_or_default(),
+            );
+        }
         // Name the mesh file (or, for a generated mesh, the scene) in what building found.
         let source = if self.mesh.generate.is_some() { self.file.clone() } else { self.mesh_path() };
         let warnings = warnings.for_file(&source);
@@ -258,6 +268,23 @@ impl Scene {
     }
 }
 
+/// The vertices that a group's constraints hold at a point ([`crate::constraints::Constraint::held_points`]:
+/// position handles, soft or hard) inside one of `model`'s colliders (as placed at time 0), with
+/// their group's name, in group and constraint order.
+fn pins_inside_colliders(system: &System, model: &ContactModel) -> Vec<(u32, String)> {
+    let mut inside = Vec::new();
+    for (_, group) in system.groups() {
+        for (vertices, targets) in group.constraints.iter().filter_map(|c| c.held_points()) {
+            for (&v, &target) in vertices.iter().zip(targets) {
+                if model.colliders().iter().any(|c| c.closest_at(target, 0.0).distance < 0.0) {
+                    inside.push((v, group.name.clone()));
+                }
+            }
+        }
+    }
+    inside
+}
+
 /// Iterations of a static solve between two contact detections: a handle drags the surface
 /// over many iterations, so what touches is found again from where it has got to.
 const STATIC_CONTACT_CHUNK: usize = 10;
@@ -282,9 +309,9 @@ pub fn solve_static_with_contact(
 ) -> Result<SolveReport, SolveError> {
     let mut report = SolveReport { initial_energy: system.energy(q)?.total, ..SolveReport::default() };
     if system.contact_weights().is_none() {
-        // W relative to each vertex's diagonal entry of the static matrix.
-        system.prepare()?;
-        let weights = contact.weights(&system.diagonal());
+        // W relative to each vertex's diagonal entry of the static matrix, in its first
+        // factorization.
+        let weights = contact.weights(&system.diagonal_without_contact()?);
         system.set_contact_weights(Some(weights))?;
     }
     let mut previous = q.to_vec();

@@ -26,7 +26,8 @@ impl LoadedScene {
     /// The JSON report of a static solve (`shapeup deform --report`): sizes, each group's
     /// largest violation at rest and in the result (over the rest mesh's mean edge length, so
     /// that a plane group's is the planarity error), the largest vertex displacement over the
-    /// bounding-box diagonal, the energy after each iteration and the timings. `q` is the
+    /// bounding-box diagonal, the energy after each iteration, the factorizations, what touches
+    /// the result (with contact) and the timings. `q` is the
     /// result (working frame), `output` the mesh written from it, `warnings` what loading and
     /// writing said, `total_seconds` the wall-clock time of the whole run.
     pub fn deform_report(
@@ -56,6 +57,8 @@ impl LoadedScene {
         let moved =
             output.positions.iter().zip(&self.mesh.positions).map(|(a, b)| (*a - *b).length()).fold(0.0, f64::max);
         let (nnz_a, nnz_l) = self.system.factor_sizes();
+        // What touches the result (the contact's last projection), as `simulate` counts a step's.
+        let touch = self.contact.as_ref().map(crate::contact::ContactModel::stats).unwrap_or_default();
         json!({
             "vertices": self.mesh.num_vertices(),
             "triangles": self.mesh.num_triangles(),
@@ -77,6 +80,11 @@ impl LoadedScene {
             },
             "rejected": solve.rejected,
             "factor": {"nnz_lower": nnz_a, "nnz_l": nnz_l},
+            "factorizations": self.system.factorizations(),
+            "contacts": touch.touching,
+            "self_contacts": touch.self_touching,
+            "contact_vertices": touch.vertices,
+            "ended_inside": touch.inside,
             "warnings": warnings.to_json(),
             "timings": {
                 "load_s": self.load_seconds,

@@ -713,6 +713,33 @@ impl System {
             && (self.assembly.solved_index.get(v).is_some_and(|&s| s != u32::MAX) || self.assembly.is_fixed(v))
     }
 
+    /// The global matrix's diagonal entry of every vertex without the contact weights (0 for a
+    /// vertex outside the system), from the current weights and inertia: assembles the system if
+    /// it has to, but does not factor it, so that contact weights made from it are in the first
+    /// factorization (a static solve with contact factors once, as a simulation does).
+    ///
+    /// # Errors
+    /// As assembling in [`System::prepare`].
+    pub fn diagonal_without_contact(&mut self) -> Result<Vec<f64>, SolveError> {
+        self.ensure_assembled()?;
+        let g = self.multipliers();
+        let a = &self.assembly;
+        let mut diagonal = vec![0.0; self.num_vertices];
+        for (s, &v) in a.solved.iter().enumerate() {
+            // As `prepare` sums the entry: the groups in order, then the inertia.
+            let slot = a.slot(s, s);
+            let mut entry = 0.0;
+            for (group, &gk) in a.group_lhs.iter().zip(&g) {
+                entry += gk * group[slot];
+            }
+            if let Some(mu) = &self.inertia {
+                entry += mu[v as usize];
+            }
+            diagonal[v as usize] = entry;
+        }
+        Ok(diagonal)
+    }
+
     /// The global matrix's diagonal entry of every vertex (0 for a vertex outside the
     /// system), as of the last factorization ([`System::prepare`]).
     pub fn diagonal(&self) -> Vec<f64> {

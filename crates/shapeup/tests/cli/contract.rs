@@ -1459,6 +1459,73 @@ fn a_static_solve_warns_of_collider_motion_and_zero_area_collider_triangles() {
     assert!(!out.stderr.contains("ignored in static mode") && out.stderr.contains(flat), "{}", out.describe());
 }
 
+/// A static solve with contact factors its matrix once, as a simulation does (the contact
+/// weights are made from the matrix's diagonal before its first factorization), and its report
+/// says what touches the result.
+#[test]
+fn a_static_press_reports_one_factorization_and_what_touches_the_result() {
+    let ws = Workspace::new();
+    let (center, radius, thickness) = (DVec3::new(0.0, -0.25, 0.0), 0.3, 0.01);
+    let cloth = "[mesh]\ngenerate = { kind = \"cloth\", vertices = [11, 11], size = [1.0, 1.0] }\nnormalize = false\n\
+                 [[constraints]]\ntype = \"triangle_strain\"\n[[constraints]]\ntype = \"position\"\nvertices = [0, 10, 110, 120]\n";
+    let sphere = format!(
+        "[contact]\nthickness = {thickness}\n[[colliders]]\ntype = \"sphere\"\ncenter = [0.0, {}, 0.0]\nradius = {radius}\n",
+        center.y
+    );
+    let scene = ws.scene("press.toml", &format!("{cloth}{sphere}"));
+    let out = shapeup(ws.deform_args(&scene));
+    assert_eq!(out.code, Some(0), "{}", out.describe());
+    let r = report(&ws.out("report.json"));
+    assert_eq!(r["factorizations"], 1, "{r}");
+    let result = shapeup_core::io::read_mesh(&ws.out("result.obj")).unwrap().mesh.positions;
+    // Distances from the sphere's surface, independent of the contact model.
+    let gaps: Vec<f64> = result.iter().map(|p| (*p - center).length() - radius).collect();
+    assert!(gaps.iter().all(|&g| g > 0.0), "a vertex inside the sphere");
+    let near = gaps.iter().filter(|&&g| g <= 1.5 * thickness).count();
+    let touching = r["contact_vertices"].as_u64().unwrap() as usize;
+    assert!(touching > 0 && touching <= near, "{touching} touching, {near} within 1.5 thickness");
+    assert!(r["contacts"].as_u64().unwrap() as usize >= touching, "{r}");
+    assert_eq!((r["self_contacts"].as_u64(), r["ended_inside"].as_u64()), (Some(0), Some(0)), "{r}");
+    // Without the collider: nothing touches, one factorization still.
+    let free = ws.scene("free.toml", cloth);
+    let out = shapeup(ws.deform_args(&free));
+    assert_eq!(out.code, Some(0), "{}", out.describe());
+    let r = report(&ws.out("report.json"));
+    assert_eq!((r["factorizations"].as_u64(), r["contacts"].as_u64()), (Some(1), Some(0)), "{r}");
+}
+
+/// A pin held inside a collider is said once, with a count and the first vertex and group:
+/// contact cannot move it out.
+#[test]
+fn pins_held_inside_a_collider_are_warned_about_once() {
+    let ws = Workspace::new();
+    let scene = |name: &str, y: f64| {
+        ws.scene(
+            name,
+            &format!(
+                "[mesh]\ngenerate = {{ kind = \"cloth\", vertices = [11, 11], size = [1.0, 1.0] }}\nnormalize = false\n\
+                 [[constraints]]\ntype = \"triangle_strain\"\n\
+                 [[constraints]]\nname = \"corners\"\ntype = \"position\"\nvertices = [0, 10, 60]\nhard = true\n\
+                 [[colliders]]\ntype = \"sphere\"\ncenter = [0.0, {y}, 0.0]\nradius = 0.2\n"
+            ),
+        )
+    };
+    // The sphere holds the middle vertex (60, at the origin) inside it: one pin of three.
+    let inside = scene("inside.toml", 0.05);
+    let out = shapeup(ws.deform_args(&inside));
+    assert_eq!(out.code, Some(0), "{}", out.describe());
+    let line = "inside.toml: 1 pinned vertices are held at a point inside a collider";
+    assert_eq!(out.stderr.matches(line).count(), 1, "{}", out.describe());
+    assert!(out.stderr.contains("(first: vertex 60, group \"corners\")"), "{}", out.describe());
+    let kinds = report(&ws.out("report.json"))["warnings"].to_string();
+    assert!(kinds.contains("pin_inside_collider"), "{kinds}");
+    // Below the cloth, clear of every pin: no such warning.
+    let clear = scene("clear.toml", -0.5);
+    let out = shapeup(ws.deform_args(&clear));
+    assert_eq!(out.code, Some(0), "{}", out.describe());
+    assert!(!out.stderr.contains("pinned vertices are held"), "{}", out.describe());
+}
+
 #[test]
 fn a_drape_reports_one_factorization_and_contacts_per_step() {
     let ws = Workspace::new();
