@@ -21,8 +21,8 @@
 //! roots in [0, 1] the pair crosses when the vertex is on the triangle (the two edges meet), to
 //! within a tolerance.
 
+use super::boxes::swept_box;
 use super::closest::{closest_between_segments, closest_on_triangle};
-use super::self_collision::swept_box;
 use glam::DVec3;
 use parry3d_f64::bounding_volume::BoundingVolume;
 use rayon::prelude::*;

@@ -31,6 +31,7 @@
 //! offset from P could point inward ([`contact_normal`]). Where the vertices are inside too,
 //! their own contacts take them out first.
 
+use super::boxes::aabb;
 use super::closest::{closest_between_segments, closest_on_triangle};
 use super::collider::Collider;
 use super::gap::Pair;
@@ -150,19 +151,6 @@ pub const PIECE_THICKNESSES: f64 = 8.0;
 
 /// Most pieces of one segment.
 const MAX_PIECES: usize = 4096;
-
-fn to_parry(p: DVec3) -> parry3d_f64::math::Vector {
-    parry3d_f64::math::Vector::new(p.x, p.y, p.z)
-}
-
-fn aabb(points: impl IntoIterator<Item = DVec3>, grow: f64) -> Aabb {
-    let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
-    for p in points {
-        lo = lo.min(p);
-        hi = hi.max(p);
-    }
-    Aabb::new(to_parry(lo - DVec3::splat(grow)), to_parry(hi + DVec3::splat(grow)))
-}
 
 impl Features {
     /// The features of `shape` (see the [module docs](self)); a plane has none (a surface

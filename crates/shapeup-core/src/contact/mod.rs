@@ -10,6 +10,7 @@
 //! line, the editor and Python share). [`solve_with_contact`] is the iteration a time step
 //! or a static solve runs when something can touch.
 
+mod boxes;
 mod closest;
 pub mod collider;
 mod crossing;

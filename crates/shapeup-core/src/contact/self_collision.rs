@@ -12,6 +12,7 @@
 //! relative predicted motion is a contact, with the normal from the second closest point to
 //! the first (the side it started on).
 
+use super::boxes::swept_box;
 use super::closest::{closest_between_segments, closest_on_triangle};
 use super::crossing::ElementPair;
 use super::gap::Pair;
@@ -95,10 +96,6 @@ impl Surface {
     }
 }
 
-fn to_parry(p: DVec3) -> parry3d_f64::math::Vector {
-    parry3d_f64::math::Vector::new(p.x, p.y, p.z)
-}
-
 /// The mean predicted motion of `vertices`: the translation they share (gravity's h² g in a
 /// falling or resting cloth), taken out of every swept box.
 fn common_motion(vertices: &[u32], start: &[DVec3], predicted: &[DVec3]) -> DVec3 {
@@ -107,23 +104,6 @@ fn common_motion(vertices: &[u32], start: &[DVec3], predicted: &[DVec3]) -> DVec
     }
     let sum: DVec3 = vertices.par_iter().map(|&v| predicted[v as usize] - start[v as usize]).sum();
     sum / vertices.len() as f64
-}
-
-/// The box around the points of `vertices` at `start` and at `predicted` less `drift`, grown
-/// by `grow`: the element's sweep in a frame that moves by `drift` over the step. Distances
-/// at each instant are the same in any frame that translates, so two elements that come
-/// within the thickness during the step still have meeting boxes; taking out the motion the
-/// surface shares keeps the boxes small.
-pub(crate) fn swept_box(vertices: &[u32], start: &[DVec3], predicted: &[DVec3], drift: DVec3, grow: f64) -> Aabb {
-    let mut lo = DVec3::splat(f64::INFINITY);
-    let mut hi = DVec3::splat(f64::NEG_INFINITY);
-    for &v in vertices {
-        for p in [start[v as usize], predicted[v as usize] - drift] {
-            lo = lo.min(p);
-            hi = hi.max(p);
-        }
-    }
-    Aabb::new(to_parry(lo - DVec3::splat(grow)), to_parry(hi + DVec3::splat(grow)))
 }
 
 /// The largest predicted motion of any of `others` relative to `first`'s vertices.

@@ -11,6 +11,7 @@
 //! rim is outside, whichever side of the faces' planes it is on (a cloth hanging over the
 //! edge of a roof is beside the roof, not behind it).
 
+use super::boxes::{from_parry, to_parry};
 use glam::{DMat3, DQuat, DVec3};
 use parry3d_f64::query::{PointQueryWithLocation, Ray, RayCast};
 use parry3d_f64::shape::{TriMesh, TriMeshFlags, TrianglePointLocation};
@@ -252,14 +253,6 @@ impl MeshShape {
 /// the faces of a flatter edge passes over it within about ℓ/2 · tan(5°) − t, which is below
 /// 0 for t ≥ 0.044 ℓ (the default thickness is 0.25 of the mean edge length).
 pub const RIDGE_ANGLE_DEG: f64 = 10.0;
-
-fn to_parry(p: DVec3) -> parry3d_f64::math::Vector {
-    parry3d_f64::math::Vector::new(p.x, p.y, p.z)
-}
-
-fn from_parry(p: parry3d_f64::math::Vector) -> DVec3 {
-    DVec3::new(p.x, p.y, p.z)
-}
 
 impl Shape {
     /// The closest surface point of `x`, the outward normal and the signed distance (see
