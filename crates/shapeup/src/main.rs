@@ -49,7 +49,7 @@ mod view;
                        (`shapeup samples`) stands for it when no file of that name exists."
 )]
 struct Cli {
-    /// Worker threads for the parallel local step (default: all cores).
+    /// Worker threads the command runs on (default: RAYON_NUM_THREADS when set, else all cores).
     #[arg(long, global = true, value_name = "N")]
     threads: Option<usize>,
     /// Errors only on stderr: no warnings, no progress bars (RUST_LOG's default level becomes
@@ -305,8 +305,28 @@ fn run(cli: Cli) -> Result<()> {
     {
         bail!("--threads must be between 1 and {MAX_THREADS}, found {n}");
     }
+    // rayon reads RAYON_NUM_THREADS when --threads is not given: the same bounds (0 is rayon's
+    // "all cores"), said rather than ignored.
+    let from_env = match (cli.threads, std::env::var_os("RAYON_NUM_THREADS")) {
+        (None, Some(value)) => match value.to_str().and_then(|v| v.trim().parse::<usize>().ok()) {
+            Some(n) if n <= MAX_THREADS => Some(n),
+            _ => bail!(
+                "RAYON_NUM_THREADS must be a whole number between 0 (all cores) and {MAX_THREADS}, found {:?}",
+                value.to_string_lossy()
+            ),
+        },
+        _ => None,
+    };
+    let threads = cli.threads.or(from_env).unwrap_or(0);
+    let cores = std::thread::available_parallelism().map_or(1, usize::from);
+    if threads > cores {
+        log::warn!(
+            target: logging::TARGET,
+            "{threads} threads on {cores} cores: they take turns on the cores, which slows every parallel loop (give --threads {cores} or fewer)"
+        );
+    }
     rayon::ThreadPoolBuilder::new()
-        .num_threads(cli.threads.unwrap_or(0))
+        .num_threads(threads)
         .stack_size(WORKER_STACK)
         .build_global()
         .map_err(|e| anyhow::anyhow!("cannot start the thread pool: {e}"))?;

@@ -133,8 +133,9 @@ pub struct ContactStats {
     /// ([`crate::contact`]'s crossing check; 0 without self-collision).
     pub stopped: usize,
     /// Vertices that ended the step inside a collider: squeezed between two colliders (the
-    /// projection out of one pushed them into the other), or held back by the crossing check
-    /// where a moving collider came over them.
+    /// projection out of one pushed them into the other), held back by the crossing check
+    /// where a moving collider came over them, or held there by a hard group's pin (contact
+    /// does not move a pinned vertex).
     pub inside: usize,
 }
 
@@ -523,7 +524,7 @@ impl ContactModel {
             }
         }
         let mut pressed = Vec::new();
-        let (moved, mut squeezed) = self.project_out_of_colliders(q, &mut pressed);
+        let (moved, mut squeezed) = self.project_out_of_colliders(q, inverse_mass, &mut pressed);
         pushed |= moved > 0;
         if pushed && self.self_pairs > 0 {
             // A layer the colliders pushed to the thickness stays there: the correction goes
@@ -531,11 +532,29 @@ impl ContactModel {
             // projection then put both at the thickness, and two coplanar layers crossed in
             // the plane, where no path check sees it.
             self.separate_self_contacts_on(q, inverse_mass, &pressed);
-            squeezed = self.project_out_of_colliders(q, &mut pressed).1;
+            squeezed = self.project_out_of_colliders(q, inverse_mass, &mut pressed).1;
         }
         self.stopped = self.stop_crossings(q, inverse_mass);
         self.inside = if self.stopped > 0 { self.count_inside(q) } else { squeezed };
-        // What touches at the end: a force on, or within the thickness (plus round-off).
+        self.record_touching(q);
+    }
+
+    /// Finds the contacts of `q` afresh (a static detection at time `t`) and records what
+    /// touches it and how many vertices are inside a collider, as the end of a step does,
+    /// without moving anything: for the report of a static solve's result, whose last
+    /// detection was some iterations before its end (the surface may have slid off the
+    /// contacts found there), or which ran no iteration at all.
+    pub fn record_touching_at(&mut self, q: &[DVec3], t: f64) {
+        self.begin_step(q, q, t, t);
+        self.end_features.clone_from(&self.feature_contacts);
+        self.stopped = 0;
+        self.inside = self.count_inside(q);
+        self.record_touching(q);
+    }
+
+    /// What touches at the end of a step (a force on, or within the thickness plus round-off):
+    /// [`ContactModel::touching`] and the counts of [`ContactModel::stats`].
+    fn record_touching(&mut self, q: &[DVec3]) {
         self.touching.fill(false);
         let tolerance = 1e-3 * self.params.thickness.max(1e-9);
         let touching_pairs: Vec<usize> = self.pairs[..self.self_pairs]
@@ -785,13 +804,20 @@ impl ContactModel {
         }
     }
 
-    /// Moves every active vertex of `q` out of its contacts' half-spaces and of every collider
-    /// (as it is at the step's end) to the thickness, with Coulomb friction on the push, and
-    /// stops a path that crossed a collider where it entered. Returns how many moved and how
-    /// many are left inside one (squeezed between two: still pushed on the last pass); fills
+    /// Moves every active vertex of `q` that may move (`inverse_mass` > 0: a hard group's pin
+    /// holds the others where it puts them, inside a collider or not) out of its contacts'
+    /// half-spaces and of every collider (as it is at the step's end) to the thickness, with
+    /// Coulomb friction on the push, and stops a path that crossed a collider where it entered.
+    /// Returns how many moved and how many are left inside one (squeezed between two: still
+    /// pushed on the last pass; or held there by a pin); fills
     /// `pressed` with, per vertex, the sum of the outward normals of what it ended within the
     /// thickness of (zero for none).
-    fn project_out_of_colliders(&self, q: &mut [DVec3], pressed: &mut Vec<DVec3>) -> (usize, usize) {
+    fn project_out_of_colliders(
+        &self,
+        q: &mut [DVec3],
+        inverse_mass: &[f64],
+        pressed: &mut Vec<DVec3>,
+    ) -> (usize, usize) {
         let thickness = self.params.thickness;
         let (t0, t1) = self.times;
         let colliders = &self.colliders;
@@ -809,6 +835,9 @@ impl ContactModel {
             .map(|(v, (p, touched))| {
                 if !active[v] {
                     return (false, false);
+                }
+                if inverse_mass.get(v) == Some(&0.0) {
+                    return (false, colliders.iter().any(|c| c.closest_at(*p, t1).distance < 0.0));
                 }
                 let first = *p;
                 for _ in 0..2 {

@@ -269,14 +269,16 @@ impl Scene {
 }
 
 /// The vertices that a group's constraints hold at a point ([`crate::constraints::Constraint::held_points`]:
-/// position handles, soft or hard) inside one of `model`'s colliders (as placed at time 0), with
-/// their group's name, in group and constraint order.
+/// position handles, hard or of a weight above 0) inside one of `model`'s colliders (as placed
+/// at time 0), each once with the first group that holds it there, in group and constraint order.
 fn pins_inside_colliders(system: &System, model: &ContactModel) -> Vec<(u32, String)> {
     let mut inside = Vec::new();
-    for (_, group) in system.groups() {
+    let mut seen = std::collections::HashSet::new();
+    // A soft group of weight 0 pulls nothing.
+    for (_, group) in system.groups().filter(|(_, g)| g.hard || g.multiplier > 0.0) {
         for (vertices, targets) in group.constraints.iter().filter_map(|c| c.held_points()) {
             for (&v, &target) in vertices.iter().zip(targets) {
-                if model.colliders().iter().any(|c| c.closest_at(target, 0.0).distance < 0.0) {
+                if model.colliders().iter().any(|c| c.closest_at(target, 0.0).distance < 0.0) && seen.insert(v) {
                     inside.push((v, group.name.clone()));
                 }
             }
@@ -315,7 +317,10 @@ pub fn solve_static_with_contact(
         system.set_contact_weights(Some(weights))?;
     }
     let mut previous = q.to_vec();
-    let inverse_mass = vec![1.0; q.len()];
+    // A vertex a hard group holds must not move: inverse mass 0 (the mask once assembled).
+    let movable =
+        |system: &System| -> Vec<f64> { system.held_mask().iter().map(|&held| if held { 0.0 } else { 1.0 }).collect() };
+    let mut inverse_mass = movable(system);
     let mut done = 0;
     'chunks: while done < iterations {
         let chunk = STATIC_CONTACT_CHUNK.min(iterations - done);
@@ -324,6 +329,9 @@ pub fn solve_static_with_contact(
         contact.begin_step(q, &predicted, 0.0, 0.0);
         for k in 0..chunk {
             let part = crate::contact::solve_with_contact(system, contact, q, 1)?;
+            if done == 0 {
+                inverse_mass = movable(system);
+            }
             report.local_seconds += part.local_seconds;
             report.global_seconds += part.global_seconds;
             report.setup_seconds += part.setup_seconds;
@@ -468,6 +476,17 @@ impl LoadedScene {
         if let Some(contact) = self.contact.as_mut().filter(|c| c.is_active()) {
             let report = solve_static_with_contact(&mut self.system, contact, &mut q, iterations, after_iteration)
                 .map_err(|source| SceneError::Solve { path: self.scene.file.clone(), source })?;
+            // The report's contacts are those of the result itself.
+            contact.record_touching_at(&q, 0.0);
+            let inside = contact.stats().inside;
+            let mut found = Warnings::new();
+            found.add_many(
+                "inside_collider",
+                "vertices of the result are inside a collider (squeezed between two colliders, held there by a hard pin, or left in by too few iterations)",
+                inside,
+                String::new,
+            );
+            self.warnings.extend(found.for_file(&self.scene.file));
             return Ok((q, report));
         }
         let report = self

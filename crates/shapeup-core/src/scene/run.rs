@@ -181,7 +181,7 @@ impl StepTotals {
         if let Some((step, count)) = self.first_inside {
             warnings.add_many(
                 "inside_collider",
-                "vertex-steps ended inside a collider (squeezed between two colliders, or held back by the self-collision check where a moving collider came over them)",
+                "vertex-steps ended inside a collider (squeezed between two colliders, held back by the self-collision check where a moving collider came over them, or held there by a hard pin)",
                 self.ended_inside,
                 || format!("{count} vertices at the end of step {step}"),
             );

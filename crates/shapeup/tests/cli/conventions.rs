@@ -39,6 +39,29 @@ fn assert_one_line_failure(out: &Output, what: &str) {
     assert!(!out.stderr.contains("panicked"), "{}", out.describe());
 }
 
+/// RAYON_NUM_THREADS, which sizes the pool when --threads is not given, is checked as --threads
+/// is (one line naming it, no output); more threads than cores is said once.
+#[test]
+fn the_thread_count_from_the_environment_is_checked_and_oversubscription_said() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = data("spot.obj");
+    for bad in ["abc", "-1", "5000"] {
+        let out = run_in(dir.path(), &[OsStr::new("info"), mesh.as_os_str()], &[("RAYON_NUM_THREADS", bad)]);
+        assert_one_line_failure(&out, "RAYON_NUM_THREADS");
+        assert!(out.stderr.contains(bad), "{}", out.describe());
+    }
+    let ok = run_in(dir.path(), &[OsStr::new("info"), mesh.as_os_str()], &[("RAYON_NUM_THREADS", "1")]);
+    assert_eq!(ok.code, Some(0), "{}", ok.describe());
+    assert!(ok.stderr.is_empty(), "{}", ok.describe());
+    let cores = std::thread::available_parallelism().map_or(1, usize::from);
+    let many = (cores + 1).to_string();
+    let out =
+        run_in(dir.path(), &[OsStr::new("--threads"), OsStr::new(&many), OsStr::new("info"), mesh.as_os_str()], &[]);
+    assert_eq!(out.code, Some(0), "{}", out.describe());
+    let line = format!("{many} threads on {cores} cores");
+    assert_eq!(out.stderr.matches(&line).count(), 1, "{}", out.describe());
+}
+
 /// The subcommand names `shapeup --help` lists (so that new ones are covered without a list
 /// kept here).
 fn subcommands(dir: &Path) -> Vec<String> {
