@@ -307,7 +307,7 @@ fn run(cli: Cli) -> Result<()> {
     }
     // rayon reads RAYON_NUM_THREADS when --threads is not given: the same bounds (0 is rayon's
     // "all cores"), said rather than ignored.
-    let from_env = match (cli.threads, std::env::var_os("RAYON_NUM_THREADS")) {
+    let from_env = match (cli.threads, std::env::var_os("RAYON_NUM_THREADS").filter(|v| !v.is_empty())) {
         (None, Some(value)) => match value.to_str().and_then(|v| v.trim().parse::<usize>().ok()) {
             Some(n) if n <= MAX_THREADS => Some(n),
             _ => bail!(

@@ -99,6 +99,9 @@ pub struct ContactModel {
     times: (f64, f64),
     /// Per vertex: whether a contact touched it at the end of the last step.
     touching: Vec<bool>,
+    /// How much farther than the thickness the detection makes collider contacts (0 but in
+    /// [`ContactModel::record_touching_at`]).
+    reach_slack: f64,
     touching_count: usize,
     self_count: usize,
     /// Per vertex, its collider contacts (indices into `contacts`).
@@ -171,6 +174,7 @@ impl ContactModel {
             start: Vec::new(),
             times: (0.0, 0.0),
             touching: vec![false; n],
+            reach_slack: 0.0,
             touching_count: 0,
             self_count: 0,
             by_vertex: vec![Vec::new(); n],
@@ -224,7 +228,7 @@ impl ContactModel {
         self.start.clear();
         self.start.extend_from_slice(start);
         self.times = (t0, t1);
-        let thickness = self.params.thickness;
+        let (thickness, reach_slack) = (self.params.thickness, self.reach_slack);
         let colliders = &self.colliders;
         let active = &self.active;
         let contacts: Vec<Contact> = (0..start.len())
@@ -233,7 +237,7 @@ impl ContactModel {
             .flat_map_iter(|v| {
                 let (x, s) = (start[v], predicted[v]);
                 let reach = 2.0 * (s - x);
-                let margin = thickness + reach.length();
+                let margin = thickness + reach_slack + reach.length();
                 colliders.iter().filter_map(move |c| {
                     let near = c.closest_from(x, t0, t1);
                     let (point, normal) = if near.distance < margin + c.displacement(x, t0, t1).length() {
@@ -545,7 +549,11 @@ impl ContactModel {
     /// detection was some iterations before its end (the surface may have slid off the
     /// contacts found there), or which ran no iteration at all.
     pub fn record_touching_at(&mut self, q: &[DVec3], t: f64) {
+        // Vertices resting at the thickness (within round-off of it, outside) touch too: the
+        // detection reaches as far as the test of what touches.
+        self.reach_slack = touching_tolerance(self.params.thickness);
         self.begin_step(q, q, t, t);
+        self.reach_slack = 0.0;
         self.end_features.clone_from(&self.feature_contacts);
         self.stopped = 0;
         self.inside = self.count_inside(q);
@@ -556,7 +564,7 @@ impl ContactModel {
     /// [`ContactModel::touching`] and the counts of [`ContactModel::stats`].
     fn record_touching(&mut self, q: &[DVec3]) {
         self.touching.fill(false);
-        let tolerance = 1e-3 * self.params.thickness.max(1e-9);
+        let tolerance = touching_tolerance(self.params.thickness);
         let touching_pairs: Vec<usize> = self.pairs[..self.self_pairs]
             .par_iter()
             .enumerate()
@@ -895,6 +903,11 @@ impl ContactModel {
             .map(|(moved, inside)| (usize::from(moved), usize::from(inside)))
             .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1))
     }
+}
+
+/// How close to the thickness a contact touches at a step's end (round-off of the projections).
+fn touching_tolerance(thickness: f64) -> f64 {
+    1e-3 * thickness.max(1e-9)
 }
 
 /// Self contacts per parallel task in the per-iteration passes.

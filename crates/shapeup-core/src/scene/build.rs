@@ -226,7 +226,7 @@ impl Scene {
             .collect();
         warnings.add_many(
             "collider_overlaps_rest_shape",
-            "vertices of the rest shape start inside a collider or closer than the contact thickness (they are pushed out at the first step)",
+            "vertices of the rest shape start inside a collider or closer than the contact thickness (they are pushed out: at a simulation's start, by a static solve's iterations; a hard pin keeps its vertices where it holds them)",
             overlapping.len(),
             || overlapping.first().map(|v| format!("vertex {v}")).unwrap_or_default(),
         );
@@ -315,6 +315,8 @@ pub fn solve_static_with_contact(
         // factorization.
         let weights = contact.weights(&system.diagonal_without_contact()?);
         system.set_contact_weights(Some(weights))?;
+        // Factored now, as a solve without contact is, even for 0 iterations.
+        system.prepare()?;
     }
     let mut previous = q.to_vec();
     // A vertex a hard group holds must not move: inverse mass 0 (the mask once assembled).
@@ -479,12 +481,18 @@ impl LoadedScene {
             // The report's contacts are those of the result itself.
             contact.record_touching_at(&q, 0.0);
             let inside = contact.stats().inside;
+            let colliders = contact.colliders();
             let mut found = Warnings::new();
             found.add_many(
                 "inside_collider",
                 "vertices of the result are inside a collider (squeezed between two colliders, held there by a hard pin, or left in by too few iterations)",
                 inside,
-                String::new,
+                || {
+                    q.iter()
+                        .position(|&p| colliders.iter().any(|c| c.closest_at(p, 0.0).distance < 0.0))
+                        .map(|v| format!("vertex {v}"))
+                        .unwrap_or_default()
+                },
             );
             self.warnings.extend(found.for_file(&self.scene.file));
             return Ok((q, report));
