@@ -334,7 +334,21 @@ fn run(cli: Cli) -> Result<()> {
     // thread that reaches it (and at 1 thread runs there) instead of being handed to the pool
     // while the main thread sleeps: a contact step runs some hundred such loops, each two
     // context switches.
+    // The editor's window stays on the main thread: winit opens its event loop nowhere else.
+    if on_main_thread(&cli.command) {
+        return run_command(cli);
+    }
     rayon::scope(move |_| run_command(cli))
+}
+
+/// Whether `command` must run on the main thread (the editor's window).
+fn on_main_thread(command: &Command) -> bool {
+    #[cfg(feature = "gui")]
+    if matches!(command, Command::View { .. }) {
+        return true;
+    }
+    let _ = command;
+    false
 }
 
 /// The pool's threads' stacks: the main thread's 8 MiB, as the command runs on one of them.
