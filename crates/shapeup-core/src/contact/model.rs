@@ -99,9 +99,6 @@ pub struct ContactModel {
     times: (f64, f64),
     /// Per vertex: whether a contact touched it at the end of the last step.
     touching: Vec<bool>,
-    /// How much farther than the thickness the detection makes collider contacts (0 but in
-    /// [`ContactModel::record_touching_at`]).
-    reach_slack: f64,
     touching_count: usize,
     self_count: usize,
     /// Per vertex, its collider contacts (indices into `contacts`).
@@ -174,7 +171,6 @@ impl ContactModel {
             start: Vec::new(),
             times: (0.0, 0.0),
             touching: vec![false; n],
-            reach_slack: 0.0,
             touching_count: 0,
             self_count: 0,
             by_vertex: vec![Vec::new(); n],
@@ -225,10 +221,16 @@ impl ContactModel {
     /// Detection for the step from time t0 (positions `start`) to t1 (predicted `predicted`):
     /// see the [module docs](self). Forces start at 0.
     pub fn begin_step(&mut self, start: &[DVec3], predicted: &[DVec3], t0: f64, t1: f64) {
+        self.detect(start, predicted, (t0, t1), 0.0);
+    }
+
+    /// [`ContactModel::begin_step`], making collider contacts `reach_slack` farther than the
+    /// thickness too.
+    fn detect(&mut self, start: &[DVec3], predicted: &[DVec3], (t0, t1): (f64, f64), reach_slack: f64) {
         self.start.clear();
         self.start.extend_from_slice(start);
         self.times = (t0, t1);
-        let (thickness, reach_slack) = (self.params.thickness, self.reach_slack);
+        let thickness = self.params.thickness;
         let colliders = &self.colliders;
         let active = &self.active;
         let contacts: Vec<Contact> = (0..start.len())
@@ -551,9 +553,7 @@ impl ContactModel {
     pub fn record_touching_at(&mut self, q: &[DVec3], t: f64) {
         // Vertices resting at the thickness (within round-off of it, outside) touch too: the
         // detection reaches as far as the test of what touches.
-        self.reach_slack = touching_tolerance(self.params.thickness);
-        self.begin_step(q, q, t, t);
-        self.reach_slack = 0.0;
+        self.detect(q, q, (t, t), touching_tolerance(self.params.thickness));
         self.end_features.clone_from(&self.feature_contacts);
         self.stopped = 0;
         self.inside = self.count_inside(q);

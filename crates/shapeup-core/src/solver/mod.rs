@@ -400,15 +400,7 @@ impl System {
         self.update_weights();
         self.update_load_rhs();
         self.update_held_rhs();
-        let mut values = vec![0.0; self.assembly.lhs_row_idx.len()];
-        for (group, &gk) in self.assembly.group_lhs.iter().zip(&g) {
-            values.iter_mut().zip(group).for_each(|(v, x)| *v += gk * x);
-        }
-        if let Some(mu) = &self.inertia {
-            for (s, &v) in self.assembly.solved.iter().enumerate() {
-                values[self.assembly.slot(s, s)] += mu[v as usize];
-            }
-        }
+        let mut values = self.values_without_contact(&g);
         if let Some(w) = &self.contact_weights {
             for (s, &v) in self.assembly.solved.iter().enumerate() {
                 values[self.assembly.slot(s, s)] += w[v as usize];
@@ -722,22 +714,27 @@ impl System {
     /// As assembling in [`System::prepare`].
     pub fn diagonal_without_contact(&mut self) -> Result<Vec<f64>, SolveError> {
         self.ensure_assembled()?;
-        let g = self.multipliers();
-        let a = &self.assembly;
+        let values = self.values_without_contact(&self.multipliers());
         let mut diagonal = vec![0.0; self.num_vertices];
-        for (s, &v) in a.solved.iter().enumerate() {
-            // As `prepare` sums the entry: the groups in order, then the inertia.
-            let slot = a.slot(s, s);
-            let mut entry = 0.0;
-            for (group, &gk) in a.group_lhs.iter().zip(&g) {
-                entry += gk * group[slot];
-            }
-            if let Some(mu) = &self.inertia {
-                entry += mu[v as usize];
-            }
-            diagonal[v as usize] = entry;
+        for (s, &v) in self.assembly.solved.iter().enumerate() {
+            diagonal[v as usize] = values[self.assembly.slot(s, s)];
         }
         Ok(diagonal)
+    }
+
+    /// The global matrix's stored values (lower triangle, CSC order) for group multipliers `g`
+    /// and the inertia, without the contact weights.
+    fn values_without_contact(&self, g: &[f64]) -> Vec<f64> {
+        let mut values = vec![0.0; self.assembly.lhs_row_idx.len()];
+        for (group, &gk) in self.assembly.group_lhs.iter().zip(g) {
+            values.iter_mut().zip(group).for_each(|(v, x)| *v += gk * x);
+        }
+        if let Some(mu) = &self.inertia {
+            for (s, &v) in self.assembly.solved.iter().enumerate() {
+                values[self.assembly.slot(s, s)] += mu[v as usize];
+            }
+        }
+        values
     }
 
     /// The global matrix's diagonal entry of every vertex (0 for a vertex outside the
