@@ -78,6 +78,12 @@ impl Assembly {
         // Loaded vertices are unknowns even without rows: a load nothing balances is an
         // unanchored piece (an error), not a vertex silently left where it is.
         let mut loaded = Vec::new();
+        // The rows' own arrays at their final size at once (growing by doubling held up to
+        // twice it; a 556k-vertex mesh has millions of rows).
+        let rows: usize = groups.iter().flat_map(|g| g.iter()).map(|c| c.num_rows()).sum();
+        a.row_weight.reserve_exact(rows);
+        a.row_group.reserve_exact(rows);
+        a.c_ptr.reserve_exact(rows + 1);
         for (g, constraints) in groups.iter().enumerate() {
             let start = a.row_weight.len();
             let mut offsets = Vec::with_capacity(constraints.len() + 1);

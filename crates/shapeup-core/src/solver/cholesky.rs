@@ -6,11 +6,11 @@
 //! when only the values change (weights, time step); solves are in place on an n×3 right side.
 //!
 //! Solves walk L in compressed columns for the three coordinates at once (`triangular.rs`): a
-//! simplicial factor is already stored so; a supernodal one is copied, after each numeric
-//! factorization, into compressed columns without its zero padding. The automatic layout is
+//! simplicial factor is already stored so; a supernodal one is compacted in place, after each
+//! numeric factorization, into compressed columns without its zero padding. The automatic layout is
 //! supernodal: it factors faster (dense blocks; the bunny's springs 34 against 61 ms, strain +
-//! bending 0.35 s faster), and with the solves on the copy the layout no longer changes the
-//! solve. The copy costs one pass over L per factorization.
+//! bending 0.35 s faster), and with the solves on the compacted columns the layout no longer changes the
+//! solve. The compaction costs one pass over L per factorization.
 
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::{LltError, LltRegularization};
@@ -68,28 +68,43 @@ pub(crate) struct SparseCholesky {
 /// A supernodal L (lower triangle, diagonal first in each column) in compressed sparse columns,
 /// in the factor's permuted order. Entries that are exactly zero after a factorization (the
 /// supernodes' padding: 13 % of the bunny's two-ring factor) are left out, so solves do not read
-/// them. The copy is rebuilt from the supernodal structure at each factorization: keeping its
-/// full pattern between them would cost 8 more bytes per entry.
+/// them. The values are compacted in place at the front of the supernodal buffer after each
+/// factorization (an entry only ever moves forward), so the factor is stored once: a separate
+/// copy took 12 more bytes per entry (and up to twice that while it grew), 0.3 GB of the 1.9 GB
+/// a 556k-vertex springs setup peaked at. faer zeroes that buffer before each numeric
+/// factorization, so the compaction leaves nothing behind for the next one.
 #[derive(Default)]
 struct SolveColumns {
     col_ptr: Vec<u32>,
     row_idx: Vec<u32>,
-    values: Vec<f64>,
+    /// How many values lead the supernodal buffer (= `row_idx.len()`).
+    len: usize,
 }
 
 impl SolveColumns {
-    /// Gathers the non-zero entries of a new supernodal factor: column j of supernode s holds
-    /// the diagonal block's rows j.. and then the rows below the block (the diagonal always: it
-    /// is positive).
-    fn gather(
+    /// Compacts a new supernodal factor's non-zero entries to the front of `l_values`, recording
+    /// their rows: column j of supernode s holds the diagonal block's rows j.. and then the rows
+    /// below the block (the diagonal always: it is positive).
+    fn compact(
         &mut self,
         s: &faer::sparse::linalg::cholesky::supernodal::SymbolicSupernodalCholesky<u32>,
-        l_values: &[f64],
+        l_values: &mut [f64],
     ) {
         self.col_ptr.clear();
         self.row_idx.clear();
-        self.values.clear();
+        // The structural count, an upper bound, reserved once: growing by doubling held up to
+        // twice the entries, and their copy during a reallocation.
+        let structural: usize = (0..s.n_supernodes())
+            .map(|k| {
+                let width = (s.supernode_end()[k] - s.supernode_begin()[k]) as usize;
+                let below = (s.col_ptr_for_row_idx()[k + 1] - s.col_ptr_for_row_idx()[k]) as usize;
+                width * (width + 1) / 2 + width * below
+            })
+            .sum();
+        self.row_idx.reserve_exact(structural);
+        self.col_ptr.reserve_exact(s.nrows() + 1);
         self.col_ptr.push(0);
+        let mut write = 0;
         for k in 0..s.n_supernodes() {
             let (first, end) = (s.supernode_begin()[k] as usize, s.supernode_end()[k] as usize);
             let width = end - first;
@@ -97,17 +112,20 @@ impl SolveColumns {
             let ld = width + below.len();
             let base = s.col_ptr_for_val()[k] as usize;
             for j in 0..width {
-                let column = &l_values[base + j * ld..base + (j + 1) * ld];
                 let rows = (first + j..first + width).map(|r| r as u32).chain(below.iter().copied());
-                for (r, &v) in rows.zip(&column[j..]) {
-                    if v != 0.0 || r as usize == first + j {
+                for (i, r) in rows.enumerate() {
+                    // Reads move forward by at least one entry per kept entry: read ≥ write.
+                    let v = l_values[base + j * ld + j + i];
+                    if v != 0.0 || i == 0 {
+                        l_values[write] = v;
                         self.row_idx.push(r);
-                        self.values.push(v);
+                        write += 1;
                     }
                 }
                 self.col_ptr.push(self.row_idx.len() as u32);
             }
         }
+        self.len = write;
     }
 }
 
@@ -164,7 +182,7 @@ impl SparseCholesky {
             }
             // A sparse pattern (springs, strain, one-rings): AMD. Supernodal in every case: it
             // factors faster (the bunny's springs: 34 against 61 ms), and the solves read the
-            // compressed-column copy either way.
+            // compacted columns either way.
             Factorization::Auto => analyze_with(SupernodalThreshold::FORCE_SUPERNODAL, SymmetricOrdering::Amd)?,
         };
         let scratch = symbolic
@@ -224,7 +242,7 @@ impl SparseCholesky {
                 LltError::NonPositivePivot { index } => FactorError::NotPositiveDefinite(index),
             })?;
         if let SymbolicCholeskyRaw::Supernodal(s) = self.symbolic.raw() {
-            self.columns.gather(s, &self.l_values);
+            self.columns.compact(s, &mut self.l_values);
         }
         self.factored = true;
         Ok(())
@@ -246,7 +264,7 @@ impl SparseCholesky {
             }
             SymbolicCholeskyRaw::Supernodal(_) => {
                 let c = &self.columns;
-                LowerColumns { col_ptr: &c.col_ptr, row_idx: &c.row_idx, values: &c.values }
+                LowerColumns { col_ptr: &c.col_ptr, row_idx: &c.row_idx, values: &self.l_values[..c.len] }
             }
         };
         solve_llt(l, x);
@@ -272,15 +290,28 @@ impl SparseCholesky {
         }
     }
 
-    /// [`SparseCholesky::solve_in_place`] with faer's solve on its own storage (the tests'
-    /// reference).
+    /// [`SparseCholesky::solve_in_place`] with faer's own factorization of `values` (into a
+    /// fresh buffer: the solves' one is compacted) and its solve (the tests' reference).
     #[cfg(test)]
-    fn solve_with_faer(&mut self, rhs: &mut [f64]) {
+    fn solve_with_faer(&mut self, values: &[f64], rhs: &mut [f64]) {
         use faer::sparse::linalg::cholesky::LltRef;
         use faer::{Conj, MatMut};
+        let mut l = vec![0.0; self.symbolic.len_val()];
+        let pattern = SymbolicSparseColMatRef::new_checked(self.n, self.n, &self.col_ptr, None, &self.row_idx);
+        let a = SparseColMatRef::<u32, f64>::new(pattern, values);
+        let factored = self.symbolic.factorize_numeric_llt::<f64>(
+            &mut l,
+            a,
+            Side::Lower,
+            LltRegularization::default(),
+            Par::Seq,
+            MemStack::new(&mut self.mem),
+            Default::default(),
+        );
+        assert!(factored.is_ok(), "faer's reference factorization failed");
         let k = rhs.len() / self.n.max(1);
         let b = MatMut::from_column_major_slice_mut(rhs, self.n, k);
-        LltRef::<u32, f64>::new(&self.symbolic, &self.l_values).solve_in_place_with_conj(
+        LltRef::<u32, f64>::new(&self.symbolic, &l).solve_in_place_with_conj(
             Conj::No,
             b,
             SOLVE_PAR,
@@ -379,7 +410,7 @@ mod tests {
                     for k in 1..=3 {
                         let b: Vec<f64> = (0..k * n).map(|i| (i as f64 * 0.37).sin() + (i % 5) as f64).collect();
                         let mut reference = b.clone();
-                        chol.solve_with_faer(&mut reference);
+                        chol.solve_with_faer(&values, &mut reference);
                         let mut x = b.clone();
                         chol.solve_in_place(&mut x);
                         for (i, (a, r)) in x.iter().zip(&reference).enumerate() {

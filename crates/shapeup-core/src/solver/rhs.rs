@@ -191,6 +191,8 @@ impl System {
         let g = self.multipliers();
         let a = &self.assembly;
         self.rhs_map.weighted.clear();
+        // One allocation of the final size (growing by doubling held up to twice it).
+        self.rhs_map.weighted.reserve_exact(a.c_val.len());
         for r in 0..a.num_rows() {
             let w = g[a.row_group[r] as usize] * a.row_weight[r];
             self.rhs_map.weighted.extend(a.c_val[a.c_ptr[r]..a.c_ptr[r + 1]].iter().map(|c| w * c));
