@@ -50,7 +50,7 @@ mod view;
 )]
 struct Cli {
     /// Worker threads the command runs on (default: RAYON_NUM_THREADS when set, else all cores).
-    #[arg(long, global = true, value_name = "N")]
+    #[arg(long, global = true, value_name = "N", allow_negative_numbers = true, value_parser = parse_threads)]
     threads: Option<usize>,
     /// Errors only on stderr: no warnings, no progress bars (RUST_LOG's default level becomes
     /// error). The one-line summary of what was written stays on stdout.
@@ -299,12 +299,17 @@ fn is_broken_pipe(e: &anyhow::Error) -> bool {
 /// thread costs a stack; tens of thousands exhaust the machine before the first iteration).
 const MAX_THREADS: usize = 1024;
 
-fn run(cli: Cli) -> Result<()> {
-    if let Some(n) = cli.threads
-        && !(1..=MAX_THREADS).contains(&n)
-    {
-        bail!("--threads must be between 1 and {MAX_THREADS}, found {n}");
+/// `--threads`: a whole number from 1 to [`MAX_THREADS`] (a negative one is named as such, not
+/// taken for an unknown flag).
+fn parse_threads(s: &str) -> Result<usize, String> {
+    match s.trim().parse::<i64>() {
+        Ok(n) if (1..=MAX_THREADS as i64).contains(&n) => Ok(n as usize),
+        Ok(n) => Err(format!("must be between 1 and {MAX_THREADS}, found {n}")),
+        Err(_) => Err(format!("must be a whole number between 1 and {MAX_THREADS}, found \"{s}\"")),
     }
+}
+
+fn run(cli: Cli) -> Result<()> {
     // rayon reads RAYON_NUM_THREADS when --threads is not given: the same bounds (0 is rayon's
     // "all cores"), said rather than ignored.
     let from_env = match (cli.threads, std::env::var_os("RAYON_NUM_THREADS").filter(|v| !v.is_empty())) {

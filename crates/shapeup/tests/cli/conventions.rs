@@ -39,6 +39,20 @@ fn assert_one_line_failure(out: &Output, what: &str) {
     assert!(!out.stderr.contains("panicked"), "{}", out.describe());
 }
 
+/// --threads takes a whole number from 1 to 1024: a negative one is named as a bad value (not
+/// taken for an unknown flag), as are 0, words and too many; one line, no output.
+#[test]
+fn a_bad_thread_count_is_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = data("spot.obj");
+    for bad in ["-1", "0", "abc", "5000"] {
+        let out =
+            run_in(dir.path(), &[OsStr::new("--threads"), OsStr::new(bad), OsStr::new("info"), mesh.as_os_str()], &[]);
+        assert_one_line_failure(&out, "--threads");
+        assert!(out.stderr.contains(bad) && out.stderr.contains("between 1 and 1024"), "{}", out.describe());
+    }
+}
+
 /// RAYON_NUM_THREADS, which sizes the pool when --threads is not given, is checked as --threads
 /// is (one line naming it, no output); more threads than cores is said once.
 #[test]
