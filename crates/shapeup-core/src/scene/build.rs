@@ -474,6 +474,7 @@ impl LoadedScene {
     ) -> Result<(Vec<DVec3>, SolveReport), SceneError> {
         let iterations = self.static_iterations(iterations);
         self.warn_of_collider_motion();
+        self.warn_of_handle_spin();
         let mut q = self.rest.positions.clone();
         if let Some(contact) = self.contact.as_mut().filter(|c| c.is_active()) {
             let report = solve_static_with_contact(&mut self.system, contact, &mut q, iterations, after_iteration)
@@ -526,6 +527,31 @@ impl LoadedScene {
             "colliders' motion (velocity, spin) ignored in static mode: a static solve keeps each collider where it is at time 0 (`shapeup simulate` moves them)",
             moving.len(),
             || moving.first().map(|i| format!("colliders[{i}]")).unwrap_or_default(),
+        );
+        self.warnings.extend(found.for_file(&self.scene.file));
+    }
+
+    /// Warns, once, of the groups whose `spin` a static solve ignores (it holds a handle at its
+    /// targets at time 0), as [`LoadedScene::warn_of_collider_motion`] does for colliders.
+    fn warn_of_handle_spin(&mut self) {
+        const KIND: &str = "handle_spin_ignored";
+        let spinning: Vec<usize> = self
+            .scene
+            .groups
+            .iter()
+            .enumerate()
+            .filter(|(_, g)| g.targets.spin.is_some_and(|s| s.deg_per_s != 0.0))
+            .map(|(i, _)| i)
+            .collect();
+        if spinning.is_empty() || self.warnings.count(KIND) > 0 {
+            return;
+        }
+        let mut found = Warnings::new();
+        found.add_many(
+            KIND,
+            "groups' spin ignored in static mode: a static solve holds each handle at its targets at time 0 (`shapeup simulate` turns them)",
+            spinning.len(),
+            || spinning.first().map(|i| format!("constraints[{i}]")).unwrap_or_default(),
         );
         self.warnings.extend(found.for_file(&self.scene.file));
     }

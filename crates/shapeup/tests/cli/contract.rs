@@ -1421,7 +1421,8 @@ fn bad_colliders_name_the_entry_and_write_nothing() {
 }
 
 /// What a collider scene gives that is used other than as written is warned of, once: the
-/// motion a static solve ignores, and a mesh collider's zero-area triangles.
+/// motion a static solve ignores (colliders' velocity and spin, handles' spin), and a mesh
+/// collider's zero-area triangles.
 #[test]
 fn a_static_solve_warns_of_collider_motion_and_zero_area_collider_triangles() {
     let ws = Workspace::new();
@@ -1433,6 +1434,7 @@ fn a_static_solve_warns_of_collider_motion_and_zero_area_collider_triangles() {
         &format!(
             "[mesh]\ngenerate = {{ kind = \"cloth\", vertices = [4, 4], size = [1.0, 1.0] }}\n\
              [[constraints]]\ntype = \"edge_spring\"\n[[constraints]]\ntype = \"position\"\nvertices = [0]\n\
+             [[constraints]]\ntype = \"position\"\nvertices = [15]\nspin = {{ axis = [0.0, 1.0, 0.0], deg_per_s = 30.0 }}\n\
              [[colliders]]\ntype = \"mesh\"\npath = \"flat.obj\"\ntranslate = [0.0, -2.0, 0.0]\n\
              {sphere}velocity = [0.0, 1.0, 0.0]\n{sphere}spin = {{ axis = [0.0, 1.0, 0.0], deg_per_s = 5.0 }}\n\
              {sphere}spin = {{ axis = [0.0, 1.0, 0.0], deg_per_s = 0.0 }}\n"
@@ -1443,6 +1445,9 @@ fn a_static_solve_warns_of_collider_motion_and_zero_area_collider_triangles() {
     let motion = "moving.toml: 2 colliders' motion (velocity, spin) ignored in static mode";
     let flat = "flat.obj: 1 zero-area (degenerate) triangles in a mesh collider";
     assert_eq!(out.stderr.matches(motion).count(), 1, "{}", out.describe());
+    let spin = "moving.toml: 1 groups' spin ignored in static mode";
+    assert_eq!(out.stderr.matches(spin).count(), 1, "{}", out.describe());
+    assert!(out.stderr.contains("(first: constraints[2])"), "{}", out.describe());
     assert_eq!(out.stderr.matches(flat).count(), 1, "{}", out.describe());
     assert!(out.stderr.contains("(first: colliders[0], triangle 1 (from 0))"), "{}", out.describe());
     let kinds: Vec<String> = report(&ws.out("report.json"))["warnings"]
@@ -1452,6 +1457,7 @@ fn a_static_solve_warns_of_collider_motion_and_zero_area_collider_triangles() {
         .map(|w| w["kind"].as_str().unwrap().to_owned())
         .collect();
     assert!(kinds.contains(&"collider_motion_ignored".into()), "{kinds:?}");
+    assert!(kinds.contains(&"handle_spin_ignored".into()), "{kinds:?}");
     assert!(kinds.contains(&"degenerate_collider_triangles".into()), "{kinds:?}");
     // Time steps move the colliders: no motion warning there.
     let out = simulate_in(None, &scene, &ws.out("frames"), &["--frames", "2"]);
