@@ -56,7 +56,6 @@ pub(crate) struct SparseCholesky {
     row_idx: Vec<u32>,
     symbolic: SymbolicCholesky<u32>,
     l_values: Vec<f64>,
-    mem: MemBuffer,
     factored: bool,
     /// A supernodal L in compressed columns, for the solves (see the module doc); empty for a
     /// simplicial factor, which is stored so already.
@@ -148,8 +147,9 @@ const ND_MIN_ENTRIES_PER_COLUMN: usize = 6;
 /// ...and the system has at least this many vertices (below, AMD is as good and cheaper).
 const ND_MIN_VERTICES: usize = 1000;
 
-/// The per-iteration solve is sequential: on small machines faer's parallel solve was measured
-/// slower (stack-notes §1), and the local step already uses the cores.
+/// faer's own solve (the tests' reference; the solver's is `triangular.rs`), sequential: on
+/// small machines faer's parallel solve was measured slower (stack-notes §1).
+#[cfg(test)]
 const SOLVE_PAR: Par = Par::Seq;
 
 impl SparseCholesky {
@@ -185,10 +185,6 @@ impl SparseCholesky {
             // compacted columns either way.
             Factorization::Auto => analyze_with(SupernodalThreshold::FORCE_SUPERNODAL, SymmetricOrdering::Amd)?,
         };
-        let scratch = symbolic
-            .factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default())
-            .or(symbolic.solve_in_place_scratch::<f64>(3, SOLVE_PAR));
-        let mem = MemBuffer::try_new(scratch).map_err(|e| FactorError::Other(format!("{e:?}")))?;
         let forward = match symbolic.perm() {
             Some(p) => p.arrays().0.to_vec(),
             None => (0..n as u32).collect(),
@@ -202,7 +198,6 @@ impl SparseCholesky {
             col_ptr,
             row_idx,
             symbolic,
-            mem,
             factored: false,
         })
     }
@@ -228,6 +223,11 @@ impl SparseCholesky {
         self.factored = false;
         let pattern = SymbolicSparseColMatRef::new_checked(self.n, self.n, &self.col_ptr, None, &self.row_idx);
         let a = SparseColMatRef::<u32, f64>::new(pattern, values);
+        // faer's scratch lives for the factorization only (67 MB at 556k springs): it is gone
+        // before the compacted columns' row indices are allocated.
+        let mut mem =
+            MemBuffer::try_new(self.symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()))
+                .map_err(|e| FactorError::Other(format!("{e:?}")))?;
         self.symbolic
             .factorize_numeric_llt::<f64>(
                 &mut self.l_values,
@@ -235,12 +235,13 @@ impl SparseCholesky {
                 Side::Lower,
                 LltRegularization::default(),
                 Par::Seq,
-                MemStack::new(&mut self.mem),
+                MemStack::new(&mut mem),
                 Default::default(),
             )
             .map_err(|e| match e {
                 LltError::NonPositivePivot { index } => FactorError::NotPositiveDefinite(index),
             })?;
+        drop(mem);
         if let SymbolicCholeskyRaw::Supernodal(s) = self.symbolic.raw() {
             self.columns.compact(s, &mut self.l_values);
         }
@@ -297,6 +298,11 @@ impl SparseCholesky {
         use faer::sparse::linalg::cholesky::LltRef;
         use faer::{Conj, MatMut};
         let mut l = vec![0.0; self.symbolic.len_val()];
+        let mut mem = MemBuffer::new(
+            self.symbolic
+                .factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default())
+                .or(self.symbolic.solve_in_place_scratch::<f64>(3, SOLVE_PAR)),
+        );
         let pattern = SymbolicSparseColMatRef::new_checked(self.n, self.n, &self.col_ptr, None, &self.row_idx);
         let a = SparseColMatRef::<u32, f64>::new(pattern, values);
         let factored = self.symbolic.factorize_numeric_llt::<f64>(
@@ -305,7 +311,7 @@ impl SparseCholesky {
             Side::Lower,
             LltRegularization::default(),
             Par::Seq,
-            MemStack::new(&mut self.mem),
+            MemStack::new(&mut mem),
             Default::default(),
         );
         assert!(factored.is_ok(), "faer's reference factorization failed");
@@ -315,7 +321,7 @@ impl SparseCholesky {
             Conj::No,
             b,
             SOLVE_PAR,
-            MemStack::new(&mut self.mem),
+            MemStack::new(&mut mem),
         );
     }
 }
