@@ -80,10 +80,16 @@ impl Assembly {
         let mut loaded = Vec::new();
         // The rows' own arrays at their final size at once (growing by doubling held up to
         // twice it; a 556k-vertex mesh has millions of rows).
-        let rows: usize = groups.iter().flat_map(|g| g.iter()).map(|c| c.num_rows()).sum();
+        let soft = || groups.iter().enumerate().filter(|(g, _)| !hard.get(*g).copied().unwrap_or(false));
+        let rows: usize = soft().flat_map(|(_, g)| g.iter()).map(|c| c.num_rows()).sum();
+        // A row has at most one entry per vertex of its constraint: an upper bound on C's
+        // entries (exact for strain, bending and springs).
+        let entries: usize = soft().flat_map(|(_, g)| g.iter()).map(|c| c.num_rows() * c.vertices().len()).sum();
         a.row_weight.reserve_exact(rows);
         a.row_group.reserve_exact(rows);
         a.c_ptr.reserve_exact(rows + 1);
+        a.c_col.reserve_exact(entries);
+        a.c_val.reserve_exact(entries);
         for (g, constraints) in groups.iter().enumerate() {
             let start = a.row_weight.len();
             let mut offsets = Vec::with_capacity(constraints.len() + 1);
