@@ -31,7 +31,17 @@ pub use spec::{
 
 use crate::solver::{SolveError, SolveReport, System};
 use glam::DVec3;
+use rayon::prelude::*;
 use std::time::Instant;
+
+/// Σ f(v) over `vertices`, the same bits at every thread count: fixed chunks summed in order,
+/// then their sums in order (rayon's `sum` splits by thread count, and a step at 1 and at 2
+/// threads drifted apart from a last-bit difference in the self-collision frame).
+pub(crate) fn ordered_sum(vertices: &[u32], f: impl Fn(u32) -> DVec3 + Sync) -> DVec3 {
+    const CHUNK: usize = 4096;
+    let partial: Vec<DVec3> = vertices.par_chunks(CHUNK).map(|c| c.iter().map(|&v| f(v)).sum()).collect();
+    partial.iter().sum()
+}
 
 /// `iterations` local-global iterations from q with contact (see [`model`]): each a local
 /// step (the constraints' projections, then the contact targets at the same q) and a global

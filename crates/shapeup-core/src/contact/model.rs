@@ -625,8 +625,7 @@ impl ContactModel {
             // Any translation of the whole path changes no crossing: of the trees' frame and
             // that frame moved by the surface's mean deviation from the prediction, the one
             // fewer vertices stray from.
-            let mean = vertices.par_iter().map(|&v| q[v as usize] - predicted[v as usize]).sum::<DVec3>()
-                / vertices.len() as f64;
+            let mean = super::ordered_sum(vertices, |v| q[v as usize] - predicted[v as usize]) / vertices.len() as f64;
             let frames = [drift, drift + mean];
             let counts = frames.map(|shift| vertices.par_iter().filter(|&&v| strays(&[v], q, shift)).count());
             let shift = if counts[1] < counts[0] { frames[1] } else { frames[0] };

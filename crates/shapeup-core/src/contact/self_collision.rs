@@ -102,7 +102,7 @@ fn common_motion(vertices: &[u32], start: &[DVec3], predicted: &[DVec3]) -> DVec
     if vertices.is_empty() {
         return DVec3::ZERO;
     }
-    let sum: DVec3 = vertices.par_iter().map(|&v| predicted[v as usize] - start[v as usize]).sum();
+    let sum = super::ordered_sum(vertices, |v| predicted[v as usize] - start[v as usize]);
     sum / vertices.len() as f64
 }
 
