@@ -76,7 +76,7 @@ enum Command {
         #[arg(short, long, value_name = "OUT")]
         output: Option<PathBuf>,
         /// Total local-global iterations (default: the scene's steps × iterations).
-        #[arg(long, value_name = "N")]
+        #[arg(long, allow_negative_numbers = true, value_name = "N")]
         iterations: Option<usize>,
         /// Write a JSON report (energies per iteration, timings, warnings). Default: the scene's
         /// `[output] report`, if any.
@@ -97,14 +97,14 @@ enum Command {
         /// Scene file (.toml or .json).
         scene: PathBuf,
         /// Time steps to run (overrides the scene's steps).
-        #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
+        #[arg(long, allow_negative_numbers = true, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
         frames: u64,
         /// Output directory for the frames (created if missing). Default: the scene's
         /// `[output] path`.
         #[arg(short, long, value_name = "DIR")]
         output: Option<PathBuf>,
         /// Write only frames that are multiples of K (and always the last).
-        #[arg(long, default_value_t = 1, value_name = "K")]
+        #[arg(long, allow_negative_numbers = true, default_value_t = 1, value_name = "K")]
         every: usize,
         /// Frame format: obj, ply, off, stl, vtu or msh.
         // A string checked by `simulate::run`, so that a bad name is one line of error.
@@ -178,7 +178,7 @@ enum Command {
         #[arg(long, value_name = "MESH")]
         mesh: Option<PathBuf>,
         /// Timed iterations per scenario.
-        #[arg(long, default_value_t = 20, value_name = "N")]
+        #[arg(long, allow_negative_numbers = true, default_value_t = 20, value_name = "N")]
         iterations: usize,
         /// Only these scenarios (springs, strain+bending, iso).
         #[arg(long = "scenario", value_name = "NAME")]
@@ -202,7 +202,7 @@ enum Command {
         #[arg(long, conflicts_with = "dynamic")]
         converge: bool,
         /// Iterations of the reference run that gives E* (with --converge).
-        #[arg(long, default_value_t = 3000, value_name = "N", requires = "converge")]
+        #[arg(long, allow_negative_numbers = true, default_value_t = 3000, value_name = "N", requires = "converge")]
         reference_iterations: usize,
     },
 }
@@ -215,10 +215,10 @@ struct AccelerationArgs {
     #[arg(long, value_name = "KIND", value_parser = parse_acceleration)]
     acceleration: Option<Acceleration>,
     /// Iterations Anderson acceleration mixes, 1 to 50 (overrides `anderson_window`).
-    #[arg(long, value_name = "M", value_parser = clap::value_parser!(u64).range(1..=MAX_ANDERSON_WINDOW as u64))]
+    #[arg(long, allow_negative_numbers = true, value_name = "M", value_parser = clap::value_parser!(u64).range(1..=MAX_ANDERSON_WINDOW as u64))]
     anderson_window: Option<u64>,
     /// Pairs L-BFGS keeps, 1 to 50 (overrides `lbfgs_memory`).
-    #[arg(long, value_name = "M", value_parser = clap::value_parser!(u64).range(1..=MAX_LBFGS_MEMORY as u64))]
+    #[arg(long, allow_negative_numbers = true, value_name = "M", value_parser = clap::value_parser!(u64).range(1..=MAX_LBFGS_MEMORY as u64))]
     lbfgs_memory: Option<u64>,
 }
 
@@ -406,10 +406,9 @@ pub(crate) fn check_parent_dir(path: &Path) -> Result<()> {
     Ok(check_output_folder(path)?)
 }
 
-/// Refuses, before any work, an output that is one of the run's inputs (the scene file, its
-/// mesh, a mesh collider's file, however it is named: a link, `./`, `..`): a result or a
-/// report written there would replace what the run was read from.
-pub(crate) fn refuse_inputs_as_outputs(scene_path: &Path, scene: &Scene, outputs: &[&Path]) -> Result<()> {
+/// The files a run reads, each with what it is: the scene file, its mesh (unless generated),
+/// every mesh collider's file.
+pub(crate) fn run_inputs(scene_path: &Path, scene: &Scene) -> Vec<(PathBuf, String)> {
     let mut inputs: Vec<(PathBuf, String)> = vec![(scene_path.to_path_buf(), "the scene file".into())];
     if scene.mesh.generate.is_none() {
         inputs.push((scene.mesh_path(), "the scene's mesh".into()));
@@ -419,6 +418,14 @@ pub(crate) fn refuse_inputs_as_outputs(scene_path: &Path, scene: &Scene, outputs
             inputs.push((scene.base_dir.join(path), format!("the mesh of colliders[{i}]")));
         }
     }
+    inputs
+}
+
+/// Refuses, before any work, an output that is one of the run's inputs (the scene file, its
+/// mesh, a mesh collider's file, however it is named: a link, `./`, `..`): a result or a
+/// report written there would replace what the run was read from.
+pub(crate) fn refuse_inputs_as_outputs(scene_path: &Path, scene: &Scene, outputs: &[&Path]) -> Result<()> {
+    let inputs = run_inputs(scene_path, scene);
     for output in outputs {
         // An output that does not exist yet is no input.
         if let Some((input, what)) =

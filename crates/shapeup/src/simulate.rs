@@ -3,7 +3,7 @@
 
 use anyhow::{Context, Result, bail};
 use shapeup_core::io::write_atomic;
-use shapeup_core::scene::frames::{FrameFormat, FrameWriter};
+use shapeup_core::scene::frames::{FrameFormat, FrameWriter, PVD_NAME, frame_path};
 use shapeup_core::scene::{RunError, Scene};
 use std::io::Write;
 use std::path::Path;
@@ -25,6 +25,41 @@ pub struct SimulateArgs<'a> {
     pub format: &'a str,
     /// Optional JSON report.
     pub report: Option<&'a Path>,
+}
+
+/// Refuses, before any work, a run whose frames (or a VTU series' `frames.pvd`) would replace
+/// one of its inputs: a scene whose mesh is `DIR/frame_0000.obj` of an earlier run, simulated
+/// into `DIR` again, would have its mesh overwritten by the first frame.
+fn refuse_inputs_as_frames(
+    scene_path: &Path,
+    scene: &Scene,
+    dir: &Path,
+    frames: usize,
+    every: usize,
+    format: FrameFormat,
+) -> Result<()> {
+    for (input, what) in crate::run_inputs(scene_path, scene) {
+        // The file itself, whatever link or relative path names it.
+        let Ok(real) = std::fs::canonicalize(&input) else { continue };
+        let Some(name) = real.file_name().and_then(|n| n.to_str()) else { continue };
+        let output = if format == FrameFormat::Vtu && name == PVD_NAME {
+            Some(dir.join(PVD_NAME))
+        } else {
+            name.strip_prefix("frame_")
+                .and_then(|rest| rest.split_once('.'))
+                .and_then(|(digits, _)| digits.parse::<usize>().ok())
+                .filter(|&k| k <= frames && (k % every.max(1) == 0 || k == frames))
+                .map(|k| frame_path(dir, k, frames, format))
+        };
+        if let Some(output) = output.filter(|o| same_file::is_same_file(o, &real).unwrap_or(false)) {
+            bail!(
+                "{}: is {what} ({}); shapeup never replaces its inputs, simulate into another folder",
+                shapeup_core::io::one_line(output.display()),
+                shapeup_core::io::one_line(input.display())
+            );
+        }
+    }
+    Ok(())
 }
 
 /// Runs the simulation; frames are written one by one (each atomically), so an error part-way
@@ -54,6 +89,7 @@ pub fn run(args: &SimulateArgs<'_>) -> Result<()> {
         crate::check_parent_dir(r)?;
         crate::refuse_inputs_as_outputs(args.scene, &scene, &[r])?;
     }
+    refuse_inputs_as_frames(args.scene, &scene, &output, args.frames, args.every, format)?;
     let spinner = crate::logging::spinner(format!("loading {}", args.scene.display()));
     let mut loaded = scene.load()?;
     let mut run = loaded.start_scene_simulation()?;

@@ -1901,6 +1901,32 @@ fn an_output_or_report_that_is_an_input_is_refused_and_the_input_kept() {
     );
     assert_eq!(std::fs::read_to_string(&json).unwrap(), text, "the scene was changed");
     assert_eq!(std::fs::read(&mesh).unwrap(), kept, "the mesh was changed");
+    // A mesh that is a frame of an earlier run, simulated into that folder again: the first
+    // frame would replace it. A frame number the run does not write is no conflict.
+    let earlier = ws.path("earlier");
+    std::fs::create_dir_all(&earlier).unwrap();
+    std::fs::copy(SPOT, earlier.join("frame_0002.obj")).unwrap();
+    let again = ws.path("again.json");
+    write(&again, &text.replace("in.obj", "earlier/frame_0002.obj"));
+    let frame = std::fs::read(earlier.join("frame_0002.obj")).unwrap();
+    let simulate = |frames: &str, every: &str| {
+        vec![
+            OsStr::new("simulate").to_owned(),
+            again.clone().into_os_string(),
+            "--frames".into(),
+            frames.into(),
+            "--every".into(),
+            every.into(),
+            "-o".into(),
+            earlier.clone().into_os_string(),
+        ]
+    };
+    ws.expect_failure(&simulate("2", "1"), &["frame_0002.obj", "is the scene's mesh", "never replaces its inputs"]);
+    assert_eq!(std::fs::read(earlier.join("frame_0002.obj")).unwrap(), frame, "the earlier frame was changed");
+    assert!(!earlier.join("frame_0000.obj").exists(), "nothing written");
+    let out = shapeup(simulate("3", "3"));
+    assert_eq!(out.code, Some(0), "frame 2 is not written: {}", out.describe());
+    assert_eq!(std::fs::read(earlier.join("frame_0002.obj")).unwrap(), frame, "the earlier frame was changed");
 }
 
 #[test]

@@ -40,9 +40,10 @@ fn assert_one_line_failure(out: &Output, what: &str) {
 }
 
 /// --threads takes a whole number from 1 to 1024: a negative one is named as a bad value (not
-/// taken for an unknown flag), as are 0, words and too many; one line, no output.
+/// taken for an unknown flag), as are 0, words and too many; so is a negative value of every
+/// other count (--frames, --every, --iterations, …). One line, no output.
 #[test]
-fn a_bad_thread_count_is_named() {
+fn a_bad_count_is_named_with_its_flag() {
     let dir = tempfile::tempdir().unwrap();
     let mesh = data("spot.obj");
     for bad in ["-1", "0", "abc", "5000"] {
@@ -50,6 +51,24 @@ fn a_bad_thread_count_is_named() {
             run_in(dir.path(), &[OsStr::new("--threads"), OsStr::new(bad), OsStr::new("info"), mesh.as_os_str()], &[]);
         assert_one_line_failure(&out, "--threads");
         assert!(out.stderr.contains(bad) && out.stderr.contains("between 1 and 1024"), "{}", out.describe());
+    }
+    // Every count a command takes: a negative one names its flag too.
+    let scene = dir.path().join("s.toml");
+    std::fs::write(&scene, "[mesh]\ngenerate = { kind = \"cloth\", vertices = [3, 3], size = [1.0, 1.0] }\n[[constraints]]\ntype = \"edge_spring\"\n[[constraints]]\ntype = \"position\"\nvertices = [0]\n").unwrap();
+    let out_dir = dir.path().join("out");
+    let s = scene.as_os_str();
+    let o = out_dir.as_os_str();
+    for (args, flag) in [
+        (vec![OsStr::new("simulate"), s, "--frames".as_ref(), "-1".as_ref(), "-o".as_ref(), o], "--frames"),
+        (vec![OsStr::new("simulate"), s, "--every".as_ref(), "-1".as_ref(), "-o".as_ref(), o], "--every"),
+        (vec![OsStr::new("deform"), s, "--iterations".as_ref(), "-1".as_ref(), "-o".as_ref(), o], "--iterations"),
+        (vec![OsStr::new("deform"), s, "--lbfgs-memory".as_ref(), "-1".as_ref(), "-o".as_ref(), o], "--lbfgs-memory"),
+        (vec![OsStr::new("bench"), "--iterations".as_ref(), "-1".as_ref()], "--iterations"),
+    ] {
+        let out = run_in(dir.path(), &args, &[]);
+        assert_one_line_failure(&out, flag);
+        assert!(out.stderr.contains("'-1'"), "{}", out.describe());
+        assert!(!out_dir.exists(), "no output\n{}", out.describe());
     }
 }
 
