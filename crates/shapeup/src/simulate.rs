@@ -62,6 +62,26 @@ fn refuse_inputs_as_frames(
     Ok(())
 }
 
+/// The names of the frame files (`frame_…` in any frame format) in `dir` that are not among
+/// `written`, sorted.
+fn frames_of_another_run(dir: &Path, written: &[(f64, String)]) -> Vec<String> {
+    let Ok(entries) = std::fs::read_dir(dir) else { return Vec::new() };
+    let ours: std::collections::HashSet<&str> = written.iter().map(|(_, name)| name.as_str()).collect();
+    let mut stale: Vec<String> = entries
+        .filter_map(|e| e.ok()?.file_name().into_string().ok())
+        .filter(|name| {
+            name.starts_with("frame_")
+                && !ours.contains(name.as_str())
+                && Path::new(name)
+                    .extension()
+                    .and_then(|e| e.to_str())
+                    .is_some_and(|e| FrameFormat::ALL.iter().any(|(n, _)| n.eq_ignore_ascii_case(e)))
+        })
+        .collect();
+    stale.sort();
+    stale
+}
+
 /// Runs the simulation; frames are written one by one (each atomically), so an error part-way
 /// leaves the complete frames before it and no partial file (and, for VTU, a `frames.pvd` that
 /// lists them).
@@ -132,6 +152,15 @@ pub fn run(args: &SimulateArgs<'_>) -> Result<()> {
     let mut found = shapeup_core::warnings::Warnings::new();
     totals.add_warnings(&mut found);
     warnings.extend(found.for_file(args.scene));
+    let mut left = shapeup_core::warnings::Warnings::new();
+    let stale = frames_of_another_run(&output, &frames.written);
+    left.add_many(
+        "frames_of_another_run",
+        "frame files this run did not write are in the output folder (an earlier, longer run's, or another format's): a series read from it mixes runs; simulate into an empty folder",
+        stale.len(),
+        || stale.first().cloned().unwrap_or_default(),
+    );
+    warnings.extend(left.for_file(&output));
     let total = start.elapsed().as_secs_f64();
     let simulation = &run.simulation;
     let system = simulation.system();

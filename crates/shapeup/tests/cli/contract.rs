@@ -1929,6 +1929,28 @@ fn an_output_or_report_that_is_an_input_is_refused_and_the_input_kept() {
     assert_eq!(std::fs::read(earlier.join("frame_0002.obj")).unwrap(), frame, "the earlier frame was changed");
 }
 
+/// A shorter run into a folder that holds a longer run's frames leaves those frames (it never
+/// deletes what it did not write), and says so once with their count and the first.
+#[test]
+fn frames_of_an_earlier_run_left_in_the_folder_are_said_once() {
+    let ws = Workspace::new();
+    let scene = ws.scene(
+        "drop.toml",
+        "[mesh]\ngenerate = { kind = \"cloth\", vertices = [4, 4], size = [1.0, 1.0] }\n\
+         [solver]\nmode = \"dynamic\"\n[[constraints]]\ntype = \"edge_spring\"\n",
+    );
+    let dir = ws.out("frames");
+    let first = simulate_in(None, &scene, &dir, &["--frames", "5"]);
+    assert_eq!(first.code, Some(0), "{}", first.describe());
+    assert!(!first.stderr.contains("did not write"), "{}", first.describe());
+    let out = simulate_in(None, &scene, &dir, &["--frames", "2"]);
+    assert_eq!(out.code, Some(0), "{}", out.describe());
+    let line = "3 frame files this run did not write are in the output folder";
+    assert_eq!(out.stderr.matches(line).count(), 1, "{}", out.describe());
+    assert!(out.stderr.contains("(first: frame_0003.obj)"), "{}", out.describe());
+    assert!(dir.join("frame_0005.obj").exists(), "nothing of the earlier run is deleted");
+}
+
 #[test]
 fn a_report_in_a_missing_folder_fails_before_anything_is_written() {
     let ws = Workspace::new();
