@@ -107,3 +107,35 @@ def test_a_loaded_scene_survives_chdir(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     V, _ = scene.deform(iterations=1)
     assert V.shape[1] == 3
+
+
+def test_simulate_never_replaces_its_inputs_and_says_which_frames_it_did_not_write(tmp_path):
+    # A mesh that is frame 0 of an earlier run, simulated into that folder again: the first
+    # frame would replace it, so nothing runs (as `shapeup simulate`).
+    earlier = tmp_path / "earlier"
+    earlier.mkdir()
+    mesh = earlier / "frame_0000.obj"
+    mesh.write_text("v 0 0 0\nv 1 0 0\nv 0 0 1\nv 1 0 1\nf 1 3 2\nf 2 3 4\n")
+    kept = mesh.read_bytes()
+    scene = tmp_path / "again.toml"
+    scene.write_text(
+        '[mesh]\npath = "earlier/frame_0000.obj"\n[solver]\nmode = "dynamic"\n'
+        '[[constraints]]\ntype = "edge_spring"\n[[constraints]]\ntype = "position"\nvertices = [0]\n'
+    )
+    with pytest.raises(ValueError, match="is the scene's mesh.*never replaces its inputs"):
+        shapeup.Scene.load(scene).simulate(2, output=earlier)
+    assert mesh.read_bytes() == kept
+    assert sorted(p.name for p in earlier.iterdir()) == ["frame_0000.obj"]
+    # A shorter run into a longer one's folder: the old frames stay and are said once.
+    cloth = tmp_path / "cloth.toml"
+    cloth.write_text(
+        '[mesh]\ngenerate = { kind = "cloth", vertices = [4, 4], size = [1.0, 1.0] }\n'
+        '[solver]\nmode = "dynamic"\n[[constraints]]\ntype = "edge_spring"\n'
+    )
+    frames = tmp_path / "frames"
+    _, first = shapeup.Scene.load(cloth).simulate(5, output=frames)
+    assert not [w for w in first["warnings"] if w["kind"] == "frames_of_another_run"]
+    _, report = shapeup.Scene.load(cloth).simulate(2, output=frames)
+    [left] = [w for w in report["warnings"] if w["kind"] == "frames_of_another_run"]
+    assert left["count"] == 3 and left["first"] == "frame_0003.obj"
+    assert (frames / "frame_0005.obj").exists()

@@ -9,7 +9,7 @@ use numpy::PyArray2;
 use pyo3::exceptions::PyOSError;
 use pyo3::prelude::*;
 use shapeup_core::io::MESH_OUTPUT_EXTENSIONS;
-use shapeup_core::scene::frames::{FrameFormat, FrameWriter};
+use shapeup_core::scene::frames::{FrameFormat, FrameWriter, frame_replacing_input, warn_of_frames_not_written};
 use shapeup_core::scene::{RunError, Scene as CoreScene};
 use std::ops::ControlFlow;
 use std::path::PathBuf;
@@ -143,6 +143,17 @@ impl PyScene {
             check_extension(r, &["json"])?;
             check_folder(r)?;
         }
+        if let Some(dir) = &output
+            && let Some((frame, (input, what))) =
+                frame_replacing_input(&self.scene.input_files(), dir, frames, every, format)
+        {
+            // As `shapeup simulate`: a run never replaces its inputs.
+            return Err(value_error(format!(
+                "{}: is {what} ({}); shapeup never replaces its inputs, simulate into another folder",
+                frame.display(),
+                input.display()
+            )));
+        }
         let mut loaded = py.detach(|| self.scene.load()).map_err(scene_error)?;
         if let Some(dir) = &output {
             std::fs::create_dir_all(dir).map_err(|e| {
@@ -188,6 +199,9 @@ impl PyScene {
         let mut warnings = loaded.warnings.clone();
         if let Some(w) = &mut writer {
             warnings.extend(w.warnings.take().unwrap_or_default());
+        }
+        if let (Some(dir), Some(w)) = (&output, &writer) {
+            warnings.extend(warn_of_frames_not_written(dir, &w.written));
         }
         let written = writer.as_ref().map_or(0, |w| w.written.len());
         let json = loaded.simulate_report(

@@ -406,26 +406,13 @@ pub(crate) fn check_parent_dir(path: &Path) -> Result<()> {
     Ok(check_output_folder(path)?)
 }
 
-/// The files a run reads, each with what it is: the scene file, its mesh (unless generated),
-/// every mesh collider's file.
-pub(crate) fn run_inputs(scene_path: &Path, scene: &Scene) -> Vec<(PathBuf, String)> {
-    let mut inputs: Vec<(PathBuf, String)> = vec![(scene_path.to_path_buf(), "the scene file".into())];
-    if scene.mesh.generate.is_none() {
-        inputs.push((scene.mesh_path(), "the scene's mesh".into()));
-    }
-    for (i, c) in scene.colliders.iter().enumerate() {
-        if let shapeup_core::contact::ShapeSpec::Mesh { path, .. } = &c.shape {
-            inputs.push((scene.base_dir.join(path), format!("the mesh of colliders[{i}]")));
-        }
-    }
-    inputs
-}
-
 /// Refuses, before any work, an output that is one of the run's inputs (the scene file, its
 /// mesh, a mesh collider's file, however it is named: a link, `./`, `..`): a result or a
 /// report written there would replace what the run was read from.
 pub(crate) fn refuse_inputs_as_outputs(scene_path: &Path, scene: &Scene, outputs: &[&Path]) -> Result<()> {
-    let inputs = run_inputs(scene_path, scene);
+    let mut inputs = scene.input_files();
+    // The scene as named on the command line (the same file as `scene.file`, said as given).
+    inputs[0].0 = scene_path.to_path_buf();
     for output in outputs {
         // An output that does not exist yet is no input.
         if let Some((input, what)) =

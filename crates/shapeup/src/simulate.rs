@@ -3,7 +3,7 @@
 
 use anyhow::{Context, Result, bail};
 use shapeup_core::io::write_atomic;
-use shapeup_core::scene::frames::{FrameFormat, FrameWriter, PVD_NAME, frame_path};
+use shapeup_core::scene::frames::{FrameFormat, FrameWriter, frame_replacing_input, warn_of_frames_not_written};
 use shapeup_core::scene::{RunError, Scene};
 use std::io::Write;
 use std::path::Path;
@@ -25,61 +25,6 @@ pub struct SimulateArgs<'a> {
     pub format: &'a str,
     /// Optional JSON report.
     pub report: Option<&'a Path>,
-}
-
-/// Refuses, before any work, a run whose frames (or a VTU series' `frames.pvd`) would replace
-/// one of its inputs: a scene whose mesh is `DIR/frame_0000.obj` of an earlier run, simulated
-/// into `DIR` again, would have its mesh overwritten by the first frame.
-fn refuse_inputs_as_frames(
-    scene_path: &Path,
-    scene: &Scene,
-    dir: &Path,
-    frames: usize,
-    every: usize,
-    format: FrameFormat,
-) -> Result<()> {
-    for (input, what) in crate::run_inputs(scene_path, scene) {
-        // The file itself, whatever link or relative path names it.
-        let Ok(real) = std::fs::canonicalize(&input) else { continue };
-        let Some(name) = real.file_name().and_then(|n| n.to_str()) else { continue };
-        let output = if format == FrameFormat::Vtu && name == PVD_NAME {
-            Some(dir.join(PVD_NAME))
-        } else {
-            name.strip_prefix("frame_")
-                .and_then(|rest| rest.split_once('.'))
-                .and_then(|(digits, _)| digits.parse::<usize>().ok())
-                .filter(|&k| k <= frames && (k % every.max(1) == 0 || k == frames))
-                .map(|k| frame_path(dir, k, frames, format))
-        };
-        if let Some(output) = output.filter(|o| same_file::is_same_file(o, &real).unwrap_or(false)) {
-            bail!(
-                "{}: is {what} ({}); shapeup never replaces its inputs, simulate into another folder",
-                shapeup_core::io::one_line(output.display()),
-                shapeup_core::io::one_line(input.display())
-            );
-        }
-    }
-    Ok(())
-}
-
-/// The names of the frame files (`frame_…` in any frame format) in `dir` that are not among
-/// `written`, sorted.
-fn frames_of_another_run(dir: &Path, written: &[(f64, String)]) -> Vec<String> {
-    let Ok(entries) = std::fs::read_dir(dir) else { return Vec::new() };
-    let ours: std::collections::HashSet<&str> = written.iter().map(|(_, name)| name.as_str()).collect();
-    let mut stale: Vec<String> = entries
-        .filter_map(|e| e.ok()?.file_name().into_string().ok())
-        .filter(|name| {
-            name.starts_with("frame_")
-                && !ours.contains(name.as_str())
-                && Path::new(name)
-                    .extension()
-                    .and_then(|e| e.to_str())
-                    .is_some_and(|e| FrameFormat::ALL.iter().any(|(n, _)| n.eq_ignore_ascii_case(e)))
-        })
-        .collect();
-    stale.sort();
-    stale
 }
 
 /// Runs the simulation; frames are written one by one (each atomically), so an error part-way
@@ -109,7 +54,16 @@ pub fn run(args: &SimulateArgs<'_>) -> Result<()> {
         crate::check_parent_dir(r)?;
         crate::refuse_inputs_as_outputs(args.scene, &scene, &[r])?;
     }
-    refuse_inputs_as_frames(args.scene, &scene, &output, args.frames, args.every, format)?;
+    // A run never replaces its inputs: not with a frame either.
+    if let Some((frame, (input, what))) =
+        frame_replacing_input(&scene.input_files(), &output, args.frames, args.every, format)
+    {
+        bail!(
+            "{}: is {what} ({}); shapeup never replaces its inputs, simulate into another folder",
+            shapeup_core::io::one_line(frame.display()),
+            shapeup_core::io::one_line(input.display())
+        );
+    }
     let spinner = crate::logging::spinner(format!("loading {}", args.scene.display()));
     let mut loaded = scene.load()?;
     let mut run = loaded.start_scene_simulation()?;
@@ -152,15 +106,7 @@ pub fn run(args: &SimulateArgs<'_>) -> Result<()> {
     let mut found = shapeup_core::warnings::Warnings::new();
     totals.add_warnings(&mut found);
     warnings.extend(found.for_file(args.scene));
-    let mut left = shapeup_core::warnings::Warnings::new();
-    let stale = frames_of_another_run(&output, &frames.written);
-    left.add_many(
-        "frames_of_another_run",
-        "frame files this run did not write are in the output folder (an earlier, longer run's, or another format's): a series read from it mixes runs; simulate into an empty folder",
-        stale.len(),
-        || stale.first().cloned().unwrap_or_default(),
-    );
-    warnings.extend(left.for_file(&output));
+    warnings.extend(warn_of_frames_not_written(&output, &frames.written));
     let total = start.elapsed().as_secs_f64();
     let simulation = &run.simulation;
     let system = simulation.system();

@@ -79,6 +79,66 @@ pub fn frame_path(dir: &Path, k: usize, last: usize, format: FrameFormat) -> Pat
 /// The ParaView time series of a VTU sequence, next to its frames.
 pub const PVD_NAME: &str = "frames.pvd";
 
+/// The file a run into `dir` would write over one of `inputs` (as [`crate::scene::Scene::input_files`]
+/// lists them): `frames` steps, frame k kept when k is a multiple of `every` or the last, in
+/// `format`. Returns that frame's path and the input; `None` when the run replaces none (a scene
+/// whose mesh is `DIR/frame_0000.obj` of an earlier run, simulated into `DIR` again, would have
+/// its mesh overwritten by the first frame).
+pub fn frame_replacing_input<'a>(
+    inputs: &'a [(PathBuf, String)],
+    dir: &Path,
+    frames: usize,
+    every: usize,
+    format: FrameFormat,
+) -> Option<(PathBuf, &'a (PathBuf, String))> {
+    inputs.iter().find_map(|input| {
+        // The file itself, whatever link or relative path names it.
+        let real = std::fs::canonicalize(&input.0).ok()?;
+        let name = real.file_name()?.to_str()?;
+        let output = if format == FrameFormat::Vtu && name == PVD_NAME {
+            dir.join(PVD_NAME)
+        } else {
+            let (digits, _) = name.strip_prefix("frame_")?.split_once('.')?;
+            let k = digits.parse::<usize>().ok().filter(|&k| k <= frames && (k % every.max(1) == 0 || k == frames))?;
+            frame_path(dir, k, frames, format)
+        };
+        same_file::is_same_file(&output, &real).unwrap_or(false).then_some((output, input))
+    })
+}
+
+/// The frame files (`frame_…` in any frame format) in `dir` whose names are not in `written`,
+/// sorted: an earlier, longer run's, which a run never deletes.
+pub fn frames_not_written(dir: &Path, written: &[(f64, String)]) -> Vec<String> {
+    let Ok(entries) = std::fs::read_dir(dir) else { return Vec::new() };
+    let ours: std::collections::HashSet<&str> = written.iter().map(|(_, name)| name.as_str()).collect();
+    let mut stale: Vec<String> = entries
+        .filter_map(|e| e.ok()?.file_name().into_string().ok())
+        .filter(|name| {
+            name.starts_with("frame_")
+                && !ours.contains(name.as_str())
+                && Path::new(name)
+                    .extension()
+                    .and_then(|e| e.to_str())
+                    .is_some_and(|e| FrameFormat::ALL.iter().any(|(n, _)| n.eq_ignore_ascii_case(e)))
+        })
+        .collect();
+    stale.sort();
+    stale
+}
+
+/// [`frames_not_written`] as the one warning a run gives (`frames_of_another_run`), for `dir`.
+pub fn warn_of_frames_not_written(dir: &Path, written: &[(f64, String)]) -> Warnings {
+    let stale = frames_not_written(dir, written);
+    let mut found = Warnings::new();
+    found.add_many(
+        "frames_of_another_run",
+        "frame files this run did not write are in the output folder (an earlier, longer run's, or another format's): a series read from it mixes runs; simulate into an empty folder",
+        stale.len(),
+        || stale.first().cloned().unwrap_or_default(),
+    );
+    found.for_file(dir)
+}
+
 /// Writes the frames of a simulation, collecting what the first one reports.
 pub struct FrameWriter<'a> {
     loaded: &'a LoadedScene,

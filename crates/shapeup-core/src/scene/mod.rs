@@ -53,6 +53,21 @@ impl Scene {
         self.base_dir.join(&self.mesh.path)
     }
 
+    /// The files a run of this scene reads, each with what it is: the scene file, its mesh
+    /// (unless generated), every mesh collider's file. What no output may replace.
+    pub fn input_files(&self) -> Vec<(PathBuf, String)> {
+        let mut inputs: Vec<(PathBuf, String)> = vec![(self.file.clone(), "the scene file".into())];
+        if self.mesh.generate.is_none() {
+            inputs.push((self.mesh_path(), "the scene's mesh".into()));
+        }
+        for (i, c) in self.colliders.iter().enumerate() {
+            if let crate::contact::ShapeSpec::Mesh { path, .. } = &c.shape {
+                inputs.push((self.base_dir.join(path), format!("the mesh of colliders[{i}]")));
+            }
+        }
+        inputs
+    }
+
     /// `[output] path`, resolved against the scene's directory.
     pub fn output_path(&self) -> Option<PathBuf> {
         self.output.path.as_ref().map(|p| self.base_dir.join(p))
