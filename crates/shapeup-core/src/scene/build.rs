@@ -509,7 +509,6 @@ impl LoadedScene {
     /// detects contact with the colliders where they are at time 0): a scene that sets them
     /// must not look as if they had moved.
     fn warn_of_collider_motion(&mut self) {
-        const KIND: &str = "collider_motion_ignored";
         let moving: Vec<usize> = self
             .scene
             .colliders
@@ -518,23 +517,17 @@ impl LoadedScene {
             .filter(|(_, c)| c.velocity != [0.0; 3] || c.spin.is_some_and(|s| s.deg_per_s != 0.0))
             .map(|(i, _)| i)
             .collect();
-        if moving.is_empty() || self.warnings.count(KIND) > 0 {
-            return;
-        }
-        let mut found = Warnings::new();
-        found.add_many(
-            KIND,
+        self.warn_once_of_ignored(
+            "collider_motion_ignored",
             "colliders' motion (velocity, spin) ignored in static mode: a static solve keeps each collider where it is at time 0 (`shapeup simulate` moves them)",
-            moving.len(),
-            || moving.first().map(|i| format!("colliders[{i}]")).unwrap_or_default(),
+            "colliders",
+            &moving,
         );
-        self.warnings.extend(found.for_file(&self.scene.file));
     }
 
     /// Warns, once, of the groups whose `spin` a static solve ignores (it holds a handle at its
     /// targets at time 0), as [`LoadedScene::warn_of_collider_motion`] does for colliders.
     fn warn_of_handle_spin(&mut self) {
-        const KIND: &str = "handle_spin_ignored";
         let spinning: Vec<usize> = self
             .scene
             .groups
@@ -543,16 +536,24 @@ impl LoadedScene {
             .filter(|(_, g)| g.targets.spin.is_some_and(|s| s.deg_per_s != 0.0))
             .map(|(i, _)| i)
             .collect();
-        if spinning.is_empty() || self.warnings.count(KIND) > 0 {
+        self.warn_once_of_ignored(
+            "handle_spin_ignored",
+            "groups' spin ignored in static mode: a static solve holds each handle at its targets at time 0 (`shapeup simulate` turns them)",
+            "constraints",
+            &spinning,
+        );
+    }
+
+    /// One warning of `kind` for the scene file, unless one was already given: the entries
+    /// `list[i]` for i in `ignored` (counted, the first named), when there are any.
+    fn warn_once_of_ignored(&mut self, kind: &str, message: &str, list: &str, ignored: &[usize]) {
+        if ignored.is_empty() || self.warnings.count(kind) > 0 {
             return;
         }
         let mut found = Warnings::new();
-        found.add_many(
-            KIND,
-            "groups' spin ignored in static mode: a static solve holds each handle at its targets at time 0 (`shapeup simulate` turns them)",
-            spinning.len(),
-            || spinning.first().map(|i| format!("constraints[{i}]")).unwrap_or_default(),
-        );
+        found.add_many(kind, message, ignored.len(), || {
+            ignored.first().map(|i| format!("{list}[{i}]")).unwrap_or_default()
+        });
         self.warnings.extend(found.for_file(&self.scene.file));
     }
 
