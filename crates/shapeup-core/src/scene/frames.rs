@@ -79,6 +79,12 @@ pub fn frame_path(dir: &Path, k: usize, last: usize, format: FrameFormat) -> Pat
 /// The ParaView time series of a VTU sequence, next to its frames.
 pub const PVD_NAME: &str = "frames.pvd";
 
+/// Whether a run of `frames` steps keeps frame k (0 ≤ k ≤ `frames`): every `every`-th, and
+/// always the last.
+pub fn is_kept(k: usize, frames: usize, every: usize) -> bool {
+    k <= frames && (k.is_multiple_of(every.max(1)) || k == frames)
+}
+
 /// The file a run into `dir` would write over one of `inputs` (as [`crate::scene::Scene::input_files`]
 /// lists them): `frames` steps, frame k kept when k is a multiple of `every` or the last, in
 /// `format`. Returns that frame's path and the input; `None` when the run replaces none (a scene
@@ -99,7 +105,7 @@ pub fn frame_replacing_input<'a>(
             dir.join(PVD_NAME)
         } else {
             let (digits, _) = name.strip_prefix("frame_")?.split_once('.')?;
-            let k = digits.parse::<usize>().ok().filter(|&k| k <= frames && (k % every.max(1) == 0 || k == frames))?;
+            let k = digits.parse::<usize>().ok().filter(|&k| is_kept(k, frames, every))?;
             frame_path(dir, k, frames, format)
         };
         same_file::is_same_file(&output, &real).unwrap_or(false).then_some((output, input))

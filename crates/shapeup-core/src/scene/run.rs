@@ -356,7 +356,7 @@ impl SceneSimulation {
                     totals.first_inside = Some((k, step.contact.inside));
                 }
             }
-            on_step(k, &self.simulation, k % every.max(1) == 0 || k == frames).map_err(RunError::Stopped)?;
+            on_step(k, &self.simulation, super::frames::is_kept(k, frames, every)).map_err(RunError::Stopped)?;
         }
         Ok(totals)
     }
