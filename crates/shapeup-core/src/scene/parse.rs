@@ -97,7 +97,7 @@ impl Scene {
     ) -> Result<Scene, SceneError> {
         let parse_error = |message: String| SceneError::Parse { path: path.into(), message };
         let mut tree: Value = match format {
-            SceneFormat::Toml => toml::from_str(text).map_err(|e| parse_error(toml_message(text, &e)))?,
+            SceneFormat::Toml => StrictValue::read_toml(text).map_err(|e| parse_error(toml_message(text, &e)))?,
             SceneFormat::Json => StrictValue::read_json(text).map_err(|e| parse_error(json_message(text, &e)))?,
         };
         for (key, value) in overrides {
@@ -433,6 +433,37 @@ mod tests {
         assert_eq!(s.groups[0].name, "edge_spring");
         assert_eq!(s.groups[1].targets.translate, [0.1, 0.0, 0.0]);
         assert!(matches!(s.groups[1].selection, SelectionSpec::Box { .. }));
+    }
+
+    /// TOML spells inf and nan; an entry's number that is either is refused at its line, as
+    /// the file spells it (it used to reach the builders as null: "invalid type: null").
+    #[test]
+    fn an_entrys_infinite_or_nan_number_is_refused_at_its_line() {
+        for (value, spelled) in [("nan", "nan"), ("-inf", "-inf"), ("+inf", "inf")] {
+            for (entry, line) in [
+                (format!("[[constraints]]\ntype = \"edge_spring\"\nweight = {value}\n"), 5),
+                (
+                    format!(
+                        "[[constraints]]\ntype = \"position\"\nvertices = [0]\nspin = {{ axis = [0, 1, 0], deg_per_s = {value} }}\n"
+                    ),
+                    6,
+                ),
+                (format!("[[colliders]]\ntype = \"sphere\"\ncenter = [0, {value}, 0]\nradius = 1\n"), 5),
+            ] {
+                let text = format!("[mesh]\npath = \"m.obj\"\n{entry}");
+                let message = parse(&text).map(|_| ()).unwrap_err().to_string();
+                assert!(message.contains(&format!("line {line}")), "{value}: {message}");
+                // The same through the overrides' path (a parameter sweep's).
+                let swept =
+                    Scene::parse_with_overrides(&text, SceneFormat::Toml, Path::new("s.toml"), PathBuf::new(), &[])
+                        .map(|_| ())
+                        .unwrap_err()
+                        .to_string();
+                assert_eq!(swept, message, "{value}");
+                assert!(message.contains(&format!("numbers must be finite, found {spelled}")), "{value}: {message}");
+                assert!(!message.contains("null"), "{value}: {message}");
+            }
+        }
     }
 
     #[test]

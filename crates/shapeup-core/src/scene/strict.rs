@@ -137,6 +137,13 @@ impl StrictValue {
         Ok(value)
     }
 
+    /// A whole TOML text as a tree, read strictly: its inf and nan refused at their line
+    /// (`toml::from_str` into a `Value` makes them null).
+    pub(super) fn read_toml(text: &str) -> Result<Value, toml::de::Error> {
+        use serde::de::DeserializeSeed;
+        StrictValue { depth: 0 }.deserialize(toml::de::Deserializer::parse(text)?)
+    }
+
     fn deeper<E: serde::de::Error>(self) -> Result<StrictValue, E> {
         if self.depth >= MAX_ENTRY_DEPTH {
             return Err(E::custom(format!("nested deeper than {MAX_ENTRY_DEPTH} levels")));
@@ -166,9 +173,15 @@ impl<'de> serde::de::Visitor<'de> for StrictValue {
     fn visit_u64<E>(self, v: u64) -> Result<Value, E> {
         Ok(Value::from(v))
     }
-    fn visit_f64<E>(self, v: f64) -> Result<Value, E> {
-        // inf and nan become null, as serde_json has them (the builders name the key).
-        Ok(serde_json::Number::from_f64(v).map_or(Value::Null, Value::Number))
+    fn visit_f64<E: serde::de::Error>(self, v: f64) -> Result<Value, E> {
+        // TOML's inf and nan: JSON has no such numbers (serde_json would make them null, and a
+        // builder would then say "found null" of a value the file spells nan).
+        serde_json::Number::from_f64(v).map(Value::Number).ok_or_else(|| {
+            E::custom(format!(
+                "numbers must be finite, found {}",
+                if v.is_nan() { "nan".into() } else { v.to_string() }
+            ))
+        })
     }
     fn visit_str<E>(self, v: &str) -> Result<Value, E> {
         Ok(Value::String(v.to_owned()))
