@@ -519,9 +519,9 @@ impl LoadedScene {
             .collect();
         self.warn_once_of_ignored(
             "collider_motion_ignored",
-            "colliders' motion (velocity, spin) ignored in static mode: a static solve keeps each collider where it is at time 0 (`shapeup simulate` moves them)",
-            "colliders",
-            &moving,
+            "collider(s) whose motion (velocity, spin) is ignored in static mode: a static solve keeps each collider where it is at time 0 (`shapeup simulate` moves them)",
+            moving.len(),
+            moving.first().map(|i| format!("colliders[{i}]")),
         );
     }
 
@@ -538,22 +538,20 @@ impl LoadedScene {
             .collect();
         self.warn_once_of_ignored(
             "handle_spin_ignored",
-            "groups' spin ignored in static mode: a static solve holds each handle at its targets at time 0 (`shapeup simulate` turns them)",
-            "constraints",
-            &spinning,
+            "group(s) whose spin is ignored in static mode: a static solve holds each handle at its targets at time 0 (`shapeup simulate` turns them)",
+            spinning.len(),
+            spinning.first().map(|&i| format!("constraints[{i}] (\"{}\")", self.scene.groups[i].name)),
         );
     }
 
     /// One warning of `kind` for the scene file, unless one was already given: the entries
-    /// `list[i]` for i in `ignored` (counted, the first named), when there are any.
-    fn warn_once_of_ignored(&mut self, kind: &str, message: &str, list: &str, ignored: &[usize]) {
-        if ignored.is_empty() || self.warnings.count(kind) > 0 {
+    /// ignored (`count`, the first named), when there are any.
+    fn warn_once_of_ignored(&mut self, kind: &str, message: &str, count: usize, first: Option<String>) {
+        if count == 0 || self.warnings.count(kind) > 0 {
             return;
         }
         let mut found = Warnings::new();
-        found.add_many(kind, message, ignored.len(), || {
-            ignored.first().map(|i| format!("{list}[{i}]")).unwrap_or_default()
-        });
+        found.add_many(kind, message, count, || first.unwrap_or_default());
         self.warnings.extend(found.for_file(&self.scene.file));
     }
 
