@@ -114,6 +114,19 @@ def test_file_errors(tmp_path):
     with pytest.raises(OSError):
         shapeup.write_mesh(tmp_path / "no-such-folder" / "x.obj", V, F)
     assert not (tmp_path / "no-such-folder").exists()
+    # A folder given where a mesh file is wanted is said to be one.
+    folder = tmp_path / "results"
+    folder.mkdir()
+    cloth = tmp_path / "cloth.toml"
+    cloth.write_text('[mesh]\ngenerate = { kind = "cloth", vertices = [3, 3], size = [1.0, 1.0] }\n'
+                     '[[constraints]]\ntype = "edge_spring"\n')
+    with pytest.raises(IsADirectoryError, match="is a folder"):
+        shapeup.Scene.load(cloth).deform(output=folder)
+    assert list(folder.iterdir()) == []
+    # A TOML nan in an entry is refused at its line, not read as null.
+    cloth.write_text(cloth.read_text() + "weight = nan\n")
+    with pytest.raises(ValueError, match="line 5.*numbers must be finite, found nan"):
+        shapeup.Scene.load(cloth)
 
 
 def test_spin_and_keyword_vertices_are_checked():

@@ -57,12 +57,14 @@ pub(crate) fn scene_error(e: SceneError) -> PyErr {
 
 /// The library's before-any-work output checks as Python exceptions: a missing folder is a
 /// `FileNotFoundError`, a file where a folder should be a `NotADirectoryError`, an unwritable
-/// folder an `OSError`, an extension a `ValueError`.
+/// folder an `OSError`, a folder where a file is wanted an `IsADirectoryError`, an extension a
+/// `ValueError`.
 pub(crate) fn output_error(e: OutputError) -> PyErr {
     match e {
         OutputError::MissingFolder { .. } => pyo3::exceptions::PyFileNotFoundError::new_err(e.to_string()),
         OutputError::NotAFolder { .. } => pyo3::exceptions::PyNotADirectoryError::new_err(e.to_string()),
         OutputError::Unwritable { .. } => PyOSError::new_err(e.to_string()),
+        OutputError::IsAFolder { .. } => pyo3::exceptions::PyIsADirectoryError::new_err(e.to_string()),
         OutputError::Extension { .. } => value_error(e),
     }
 }

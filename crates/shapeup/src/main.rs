@@ -76,7 +76,7 @@ enum Command {
         #[arg(short, long, value_name = "OUT")]
         output: Option<PathBuf>,
         /// Total local-global iterations (default: the scene's steps × iterations).
-        #[arg(long, allow_negative_numbers = true, value_name = "N")]
+        #[arg(long, allow_negative_numbers = true, value_name = "N", value_parser = parse_count)]
         iterations: Option<usize>,
         /// Write a JSON report (energies per iteration, timings, warnings). Default: the scene's
         /// `[output] report`, if any.
@@ -97,14 +97,14 @@ enum Command {
         /// Scene file (.toml or .json).
         scene: PathBuf,
         /// Time steps to run (overrides the scene's steps).
-        #[arg(long, allow_negative_numbers = true, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
-        frames: u64,
+        #[arg(long, allow_negative_numbers = true, value_name = "N", value_parser = parse_positive)]
+        frames: usize,
         /// Output directory for the frames (created if missing). Default: the scene's
         /// `[output] path`.
         #[arg(short, long, value_name = "DIR")]
         output: Option<PathBuf>,
         /// Write only frames that are multiples of K (and always the last).
-        #[arg(long, allow_negative_numbers = true, default_value_t = 1, value_name = "K")]
+        #[arg(long, allow_negative_numbers = true, default_value_t = 1, value_name = "K", value_parser = parse_positive)]
         every: usize,
         /// Frame format: obj, ply, off, stl, vtu or msh.
         // A string checked by `simulate::run`, so that a bad name is one line of error.
@@ -178,7 +178,7 @@ enum Command {
         #[arg(long, value_name = "MESH")]
         mesh: Option<PathBuf>,
         /// Timed iterations per scenario.
-        #[arg(long, allow_negative_numbers = true, default_value_t = 20, value_name = "N")]
+        #[arg(long, allow_negative_numbers = true, default_value_t = 20, value_name = "N", value_parser = parse_count)]
         iterations: usize,
         /// Only these scenarios (springs, strain+bending, iso).
         #[arg(long = "scenario", value_name = "NAME")]
@@ -202,7 +202,7 @@ enum Command {
         #[arg(long, conflicts_with = "dynamic")]
         converge: bool,
         /// Iterations of the reference run that gives E* (with --converge).
-        #[arg(long, allow_negative_numbers = true, default_value_t = 3000, value_name = "N", requires = "converge")]
+        #[arg(long, allow_negative_numbers = true, default_value_t = 3000, value_name = "N", requires = "converge", value_parser = parse_count)]
         reference_iterations: usize,
     },
 }
@@ -215,11 +215,11 @@ struct AccelerationArgs {
     #[arg(long, value_name = "KIND", value_parser = parse_acceleration)]
     acceleration: Option<Acceleration>,
     /// Iterations Anderson acceleration mixes, 1 to 50 (overrides `anderson_window`).
-    #[arg(long, allow_negative_numbers = true, value_name = "M", value_parser = clap::value_parser!(u64).range(1..=MAX_ANDERSON_WINDOW as u64))]
-    anderson_window: Option<u64>,
+    #[arg(long, allow_negative_numbers = true, value_name = "M", value_parser = parse_anderson_window)]
+    anderson_window: Option<usize>,
     /// Pairs L-BFGS keeps, 1 to 50 (overrides `lbfgs_memory`).
-    #[arg(long, allow_negative_numbers = true, value_name = "M", value_parser = clap::value_parser!(u64).range(1..=MAX_LBFGS_MEMORY as u64))]
-    lbfgs_memory: Option<u64>,
+    #[arg(long, allow_negative_numbers = true, value_name = "M", value_parser = parse_lbfgs_memory)]
+    lbfgs_memory: Option<usize>,
 }
 
 impl AccelerationArgs {
@@ -228,10 +228,10 @@ impl AccelerationArgs {
             solver.acceleration = a;
         }
         if let Some(m) = self.anderson_window {
-            solver.anderson_window = usize::try_from(m).unwrap_or(MAX_ANDERSON_WINDOW);
+            solver.anderson_window = m;
         }
         if let Some(m) = self.lbfgs_memory {
-            solver.lbfgs_memory = usize::try_from(m).unwrap_or(MAX_LBFGS_MEMORY);
+            solver.lbfgs_memory = m;
         }
     }
 }
@@ -301,6 +301,36 @@ const MAX_THREADS: usize = 1024;
 
 /// `--threads`: a whole number from 1 to [`MAX_THREADS`] (a negative one is named as such, not
 /// taken for an unknown flag).
+/// A whole number in `min..=max` given on the command line, or one line saying what was found
+/// (clap's own parsers said "invalid digit found in string" of a negative count, and printed
+/// an unbounded range's end as 18446744073709551615).
+fn whole_number(s: &str, min: usize, max: usize) -> Result<usize, String> {
+    match s.trim().parse::<i128>() {
+        Ok(n) if (min as i128..=max as i128).contains(&n) => Ok(n as usize),
+        Ok(n) if max == usize::MAX => Err(format!("must be a whole number ≥ {min}, found {n}")),
+        Ok(n) => Err(format!("must be a whole number from {min} to {max}, found {n}")),
+        Err(_) => Err(format!("must be a whole number, found \"{s}\"")),
+    }
+}
+
+/// A count that may be 0 (iterations).
+fn parse_count(s: &str) -> Result<usize, String> {
+    whole_number(s, 0, usize::MAX)
+}
+
+/// A count of at least 1 (frames, every K-th frame).
+fn parse_positive(s: &str) -> Result<usize, String> {
+    whole_number(s, 1, usize::MAX)
+}
+
+fn parse_anderson_window(s: &str) -> Result<usize, String> {
+    whole_number(s, 1, MAX_ANDERSON_WINDOW)
+}
+
+fn parse_lbfgs_memory(s: &str) -> Result<usize, String> {
+    whole_number(s, 1, MAX_LBFGS_MEMORY)
+}
+
 fn parse_threads(s: &str) -> Result<usize, String> {
     match s.trim().parse::<i64>() {
         Ok(n) if (1..=MAX_THREADS as i64).contains(&n) => Ok(n as usize),
@@ -310,6 +340,14 @@ fn parse_threads(s: &str) -> Result<usize, String> {
 }
 
 fn run(cli: Cli) -> Result<()> {
+    // Listing types or samples and printing a manual compute nothing: a thread setting, good
+    // or bad, does not concern them.
+    if matches!(
+        cli.command,
+        Command::Types | Command::Samples { .. } | Command::Completions { .. } | Command::Man { .. }
+    ) {
+        return run_command(cli);
+    }
     // rayon reads RAYON_NUM_THREADS when --threads is not given: the same bounds (0 is rayon's
     // "all cores"), said rather than ignored.
     let from_env = match (cli.threads, std::env::var_os("RAYON_NUM_THREADS").filter(|v| !v.is_empty())) {
@@ -327,7 +365,8 @@ fn run(cli: Cli) -> Result<()> {
     if threads > cores {
         log::warn!(
             target: logging::TARGET,
-            "{threads} threads on {cores} cores: they take turns on the cores, which slows every parallel loop (give --threads {cores} or fewer)"
+            "{threads} threads on {cores} cores: they take turns on the cores, which slows every parallel loop ({} {cores} or fewer)",
+            if cli.threads.is_some() { "give --threads" } else { "set RAYON_NUM_THREADS to" }
         );
     }
     rayon::ThreadPoolBuilder::new()
@@ -377,7 +416,7 @@ fn run_command(cli: Cli) -> Result<()> {
             simulate::run(&simulate::SimulateArgs {
                 scene: &scene,
                 overrides: &|solver| acceleration.apply(solver),
-                frames: usize::try_from(frames).unwrap_or(usize::MAX),
+                frames,
                 output: output.as_deref(),
                 every,
                 format: &format,

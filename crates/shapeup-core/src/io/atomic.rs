@@ -99,6 +99,14 @@ pub enum OutputError {
         /// What may be written there.
         allowed: &'static [&'static str],
     },
+    /// A folder where a file is wanted (`-o out` for an existing folder `out`).
+    #[error("{}: is a folder; give a file name in it, such as {}", one_line(path.display()), one_line(path.join(format!("result.{}", allowed.first().copied().unwrap_or("obj"))).display()))]
+    IsAFolder {
+        /// The output.
+        path: PathBuf,
+        /// What may be written there.
+        allowed: &'static [&'static str],
+    },
     /// The folder it goes in does not exist.
     #[error("{}: the folder {} does not exist", one_line(path.display()), one_line(dir.display()))]
     MissingFolder {
@@ -127,11 +135,15 @@ pub enum OutputError {
     },
 }
 
-/// Fails unless `path`'s extension (case-insensitive) is one of `allowed`.
+/// Fails unless `path`'s extension (case-insensitive) is one of `allowed` and it is not a
+/// folder.
 ///
 /// # Errors
-/// [`OutputError::Extension`].
+/// [`OutputError::IsAFolder`], [`OutputError::Extension`].
 pub fn check_output_extension(path: &Path, allowed: &'static [&'static str]) -> Result<(), OutputError> {
+    if path.is_dir() {
+        return Err(OutputError::IsAFolder { path: path.to_path_buf(), allowed });
+    }
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).unwrap_or_default();
     if allowed.contains(&ext.as_str()) {
         Ok(())

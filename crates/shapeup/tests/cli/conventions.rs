@@ -67,9 +67,33 @@ fn a_bad_count_is_named_with_its_flag() {
     ] {
         let out = run_in(dir.path(), &args, &[]);
         assert_one_line_failure(&out, flag);
-        assert!(out.stderr.contains("'-1'"), "{}", out.describe());
+        assert!(out.stderr.contains("'-1'") && out.stderr.contains("found -1"), "{}", out.describe());
+        assert!(!out.stderr.contains("invalid digit"), "{}", out.describe());
         assert!(!out_dir.exists(), "no output\n{}", out.describe());
     }
+    // Out of range or not a number: the range in words (not clap's 1..18446744073709551615).
+    for (args, said) in [
+        (vec![OsStr::new("simulate"), s, "--frames".as_ref(), "0".as_ref(), "-o".as_ref(), o], "≥ 1, found 0"),
+        (vec![OsStr::new("simulate"), s, "--every".as_ref(), "0".as_ref(), "-o".as_ref(), o], "≥ 1, found 0"),
+        (
+            vec![OsStr::new("deform"), s, "--anderson-window".as_ref(), "51".as_ref(), "-o".as_ref(), o],
+            "from 1 to 50, found 51",
+        ),
+        (
+            vec![OsStr::new("deform"), s, "--iterations".as_ref(), "ten".as_ref(), "-o".as_ref(), o],
+            "whole number, found \"ten\"",
+        ),
+    ] {
+        let out = run_in(dir.path(), &args, &[]);
+        assert_one_line_failure(&out, said);
+        assert!(!out.stderr.contains("18446744073709551615"), "{}", out.describe());
+        assert!(!out_dir.exists(), "no output\n{}", out.describe());
+    }
+    // A folder where a mesh file is wanted is named as one (it used to be an unsupported
+    // format "").
+    std::fs::create_dir(dir.path().join("folder")).unwrap();
+    let out = run_in(dir.path(), &[OsStr::new("deform"), s, "-o".as_ref(), "folder".as_ref()], &[]);
+    assert_one_line_failure(&out, "folder: is a folder; give a file name in it, such as folder/result.obj");
 }
 
 /// RAYON_NUM_THREADS, which sizes the pool when --threads is not given, is checked as --threads
@@ -93,6 +117,16 @@ fn the_thread_count_from_the_environment_is_checked_and_oversubscription_said() 
     assert_eq!(out.code, Some(0), "{}", out.describe());
     let line = format!("{many} threads on {cores} cores");
     assert_eq!(out.stderr.matches(&line).count(), 1, "{}", out.describe());
+    assert!(out.stderr.contains(&format!("give --threads {cores} or fewer")), "{}", out.describe());
+    // From the variable, the advice names the variable.
+    let out = run_in(dir.path(), &[OsStr::new("info"), mesh.as_os_str()], &[("RAYON_NUM_THREADS", &many)]);
+    assert!(out.stderr.contains(&format!("set RAYON_NUM_THREADS to {cores} or fewer")), "{}", out.describe());
+    // Commands that compute nothing do not read it.
+    for args in [vec!["types"], vec!["samples"], vec!["man"], vec!["completions", "bash"]] {
+        let out = run_in(dir.path(), &args, &[("RAYON_NUM_THREADS", "abc")]);
+        assert_eq!(out.code, Some(0), "{args:?}: {}", out.describe());
+        assert!(out.stderr.is_empty(), "{args:?}: {}", out.describe());
+    }
 }
 
 /// The subcommand names `shapeup --help` lists (so that new ones are covered without a list
