@@ -77,7 +77,9 @@ class Scene:
         the scene's steps × iterations). Returns ``(V, report)``: the result in the input's
         frame float64 (n, 3), bit for bit what the command line writes, and the report the
         command line writes with ``--report``. Writes ``output`` (a mesh file, with the
-        input's faces and attributes) and ``report`` (JSON) when given."""
+        input's faces and attributes) and ``report`` (JSON) when given. ValueError, before any
+        work, when either is one of the run's inputs (the scene file, its mesh, a mesh
+        collider's file) under any name; IsADirectoryError when ``output`` is a folder."""
         if iterations is not None:
             iterations = _count(iterations, "iterations")
         mesh, text = self._native.deform(

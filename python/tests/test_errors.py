@@ -123,6 +123,23 @@ def test_file_errors(tmp_path):
     with pytest.raises(IsADirectoryError, match="is a folder"):
         shapeup.Scene.load(cloth).deform(output=folder)
     assert list(folder.iterdir()) == []
+    # A result never replaces the run's inputs: the scene's mesh, the scene file.
+    mesh = tmp_path / "tri.obj"
+    mesh.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    on_mesh = tmp_path / "on_mesh.toml"
+    on_mesh.write_text('[mesh]\npath = "tri.obj"\n[[constraints]]\ntype = "edge_spring"\n'
+                       '[[constraints]]\ntype = "position"\nvertices = [0]\n')
+    before = mesh.read_bytes()
+    with pytest.raises(ValueError, match="the scene's mesh.*never replaces its inputs"):
+        shapeup.Scene.load(on_mesh).deform(output=tmp_path / "." / "tri.obj")
+    as_json = tmp_path / "scene.json"
+    as_json.write_text('{"mesh": {"path": "tri.obj"}, "constraints": [{"type": "edge_spring"}, '
+                       '{"type": "position", "vertices": [0]}]}')
+    scene_text = as_json.read_bytes()
+    with pytest.raises(ValueError, match="the scene file"):
+        shapeup.Scene.load(as_json).deform(output=tmp_path / "out.obj", report=as_json)
+    assert mesh.read_bytes() == before and as_json.read_bytes() == scene_text
+    assert not (tmp_path / "out.obj").exists()
     # A TOML nan in an entry is refused at its line, not read as null.
     cloth.write_text(cloth.read_text() + "weight = nan\n")
     with pytest.raises(ValueError, match="line 5.*numbers must be finite, found nan"):

@@ -95,6 +95,15 @@ impl PyScene {
         for path in output.iter().chain(&report) {
             check_folder(path)?;
         }
+        let outputs: Vec<&std::path::Path> = output.iter().chain(&report).map(PathBuf::as_path).collect();
+        if let Some((path, input, what)) = self.scene.input_replaced_by(&outputs) {
+            // As `shapeup deform`: a run never replaces its inputs.
+            return Err(value_error(format!(
+                "{}: is {what} ({}); shapeup never replaces its inputs, write the result elsewhere",
+                path.display(),
+                input.display()
+            )));
+        }
         let mut loaded = py.detach(|| self.scene.load()).map_err(scene_error)?;
         // The command line's static solve, stopping for Ctrl+C (the `KeyboardInterrupt` is
         // returned after the solve stops).

@@ -445,24 +445,16 @@ pub(crate) fn check_parent_dir(path: &Path) -> Result<()> {
     Ok(check_output_folder(path)?)
 }
 
-/// Refuses, before any work, an output that is one of the run's inputs (the scene file, its
-/// mesh, a mesh collider's file, however it is named: a link, `./`, `..`): a result or a
-/// report written there would replace what the run was read from.
-pub(crate) fn refuse_inputs_as_outputs(scene_path: &Path, scene: &Scene, outputs: &[&Path]) -> Result<()> {
-    let mut inputs = scene.input_files();
-    // The scene as named on the command line (the same file as `scene.file`, said as given).
-    inputs[0].0 = scene_path.to_path_buf();
-    for output in outputs {
-        // An output that does not exist yet is no input.
-        if let Some((input, what)) =
-            inputs.iter().find(|(input, _)| same_file::is_same_file(output, input).unwrap_or(false))
-        {
-            bail!(
-                "{}: is {what} ({}); shapeup never replaces its inputs, write the result elsewhere",
-                shapeup_core::io::one_line(output.display()),
-                shapeup_core::io::one_line(input.display())
-            );
-        }
+/// Refuses, before any work, an output that is one of the run's inputs
+/// ([`Scene::input_replaced_by`]): a result or a report written there would replace what the
+/// run was read from.
+pub(crate) fn refuse_inputs_as_outputs(scene: &Scene, outputs: &[&Path]) -> Result<()> {
+    if let Some((output, input, what)) = scene.input_replaced_by(outputs) {
+        bail!(
+            "{}: is {what} ({}); shapeup never replaces its inputs, write the result elsewhere",
+            shapeup_core::io::one_line(output.display()),
+            shapeup_core::io::one_line(input.display())
+        );
     }
     Ok(())
 }
@@ -488,11 +480,7 @@ fn deform(
     let report_path = report_path.as_deref();
     check_output_extension(output, MESH_OUTPUT_EXTENSIONS)?;
     check_parent_dir(output)?;
-    refuse_inputs_as_outputs(
-        scene_path,
-        &scene,
-        &[Some(output), report_path].into_iter().flatten().collect::<Vec<_>>(),
-    )?;
+    refuse_inputs_as_outputs(&scene, &[Some(output), report_path].into_iter().flatten().collect::<Vec<_>>())?;
     if let Some(r) = report_path {
         check_output_extension(r, &["json"])?;
         check_parent_dir(r)?;

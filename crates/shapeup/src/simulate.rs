@@ -52,7 +52,7 @@ pub fn run(args: &SimulateArgs<'_>) -> Result<()> {
     }
     if let Some(r) = report.as_deref() {
         crate::check_parent_dir(r)?;
-        crate::refuse_inputs_as_outputs(args.scene, &scene, &[r])?;
+        crate::refuse_inputs_as_outputs(&scene, &[r])?;
     }
     // A run never replaces its inputs: not with a frame either.
     if let Some((frame, (input, what))) =
