@@ -112,6 +112,14 @@ pub trait Constraint: Any + Send + Sync + Debug {
     fn violation(&self, cq: &[DVec3]) -> f64 {
         self.set_residual(cq)
     }
+    /// The unit of the rows (and of [`Constraint::violation`]) as a power of length: 1, a
+    /// length, by default (edges, positions, fits to planes and spheres); 0 for rows that are a
+    /// deformation gradient (strain, area, volume: a ratio); −1 for a mean-curvature normal
+    /// (bending, smoothing). Reports divide the violation by the mean edge length to this power,
+    /// so that it is scale-free for every type.
+    fn length_power(&self) -> i32 {
+        1
+    }
 
     /// `C_i q`, computed from [`Constraint::rows`] (for tests and diagnostics, not the solver's
     /// hot path, which uses the assembled matrix).

@@ -56,6 +56,18 @@ impl ConstraintGroup {
     pub fn max_violation(&self, q: &[DVec3]) -> f64 {
         self.constraints.iter().filter(|c| c.num_rows() > 0).map(|c| c.violation(&c.apply(q))).fold(0.0, f64::max)
     }
+
+    /// [`ConstraintGroup::max_violation`] made scale-free: each constraint's violation over
+    /// `length` (the mean edge length) to the power of its rows' unit
+    /// ([`Constraint::length_power`]): a length over `length`, a ratio as it is, a curvature
+    /// times `length`.
+    pub fn relative_violation(&self, q: &[DVec3], length: f64) -> f64 {
+        self.constraints
+            .iter()
+            .filter(|c| c.num_rows() > 0)
+            .map(|c| c.violation(&c.apply(q)) / length.powi(c.length_power()))
+            .fold(0.0, f64::max)
+    }
 }
 
 /// A handle to a group of a solver's `System`; stays valid until that group is removed.

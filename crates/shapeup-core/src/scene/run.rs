@@ -48,7 +48,7 @@ impl LoadedScene {
                 json!({
                     "name": g.name, "type": g.kind, "weight": g.multiplier, "constraints": g.constraints.len(),
                     "hard": g.hard,
-                    "max_violation": {"rest": g.max_violation(rest) / mean_edge, "result": g.max_violation(q) / mean_edge},
+                    "max_violation": {"rest": g.relative_violation(rest, mean_edge), "result": g.relative_violation(q, mean_edge)},
                 })
             })
             .collect();

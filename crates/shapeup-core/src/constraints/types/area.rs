@@ -103,6 +103,10 @@ pub(crate) fn nearest_with_product2(a: f64, b: f64, c: f64) -> (f64, f64) {
 }
 
 impl Constraint for Area {
+    fn length_power(&self) -> i32 {
+        // Rows: the deformation gradient.
+        0
+    }
     fn kind(&self) -> &'static str {
         KIND
     }

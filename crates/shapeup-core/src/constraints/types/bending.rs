@@ -81,6 +81,10 @@ fn mean_normal(triangles: &[[u32; 3]], q: &[DVec3]) -> DVec3 {
 }
 
 impl Constraint for Bending {
+    fn length_power(&self) -> i32 {
+        // Rows: a mean-curvature normal.
+        -1
+    }
     fn kind(&self) -> &'static str {
         "bending"
     }

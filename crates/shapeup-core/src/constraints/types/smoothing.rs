@@ -26,6 +26,10 @@ impl Smoothing {
 }
 
 impl Constraint for Smoothing {
+    fn length_power(&self) -> i32 {
+        // Rows: a mean-curvature normal.
+        -1
+    }
     fn kind(&self) -> &'static str {
         "smoothing"
     }

@@ -83,6 +83,10 @@ fn positive_definite(m: DMat3) -> bool {
 }
 
 impl Constraint for TetStrain {
+    fn length_power(&self) -> i32 {
+        // Rows: the deformation gradient.
+        0
+    }
     fn kind(&self) -> &'static str {
         KIND
     }

@@ -47,6 +47,10 @@ impl TriangleStrain {
 }
 
 impl Constraint for TriangleStrain {
+    fn length_power(&self) -> i32 {
+        // Rows: the deformation gradient.
+        0
+    }
     fn kind(&self) -> &'static str {
         KIND
     }

@@ -152,6 +152,10 @@ pub(crate) fn nearest_with_product3(s: [f64; 3], c: f64) -> [f64; 3] {
 }
 
 impl Constraint for Volume {
+    fn length_power(&self) -> i32 {
+        // Rows: the deformation gradient.
+        0
+    }
     fn kind(&self) -> &'static str {
         KIND
     }
