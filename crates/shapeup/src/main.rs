@@ -178,7 +178,7 @@ enum Command {
         #[arg(long, value_name = "MESH")]
         mesh: Option<PathBuf>,
         /// Timed iterations per scenario.
-        #[arg(long, allow_negative_numbers = true, default_value_t = 20, value_name = "N", value_parser = parse_count)]
+        #[arg(long, allow_negative_numbers = true, default_value_t = 20, value_name = "N", value_parser = parse_positive)]
         iterations: usize,
         /// Only these scenarios (springs, strain+bending, iso).
         #[arg(long = "scenario", value_name = "NAME")]
@@ -305,11 +305,21 @@ const MAX_THREADS: usize = 1024;
 /// (clap's own parsers said "invalid digit found in string" of a negative count, and printed
 /// an unbounded range's end as 18446744073709551615).
 fn whole_number(s: &str, min: usize, max: usize) -> Result<usize, String> {
+    let digits = s.trim().trim_start_matches(['+', '-']);
     match s.trim().parse::<i128>() {
         Ok(n) if (min as i128..=max as i128).contains(&n) => Ok(n as usize),
+        Ok(n) if n > max as i128 && max == usize::MAX => {
+            Err(format!("must be a whole number at most {max}, found {n}"))
+        }
         Ok(n) if max == usize::MAX => Err(format!("must be a whole number ≥ {min}, found {n}")),
         Ok(n) => Err(format!("must be a whole number from {min} to {max}, found {n}")),
-        Err(_) => Err(format!("must be a whole number, found \"{s}\"")),
+        Err(_) if !digits.is_empty() && digits.bytes().all(|b| b.is_ascii_digit()) => Err(if max == usize::MAX {
+            format!("must be a whole number at most {max}, found {}", s.trim())
+        } else {
+            format!("must be a whole number from {min} to {max}, found {}", s.trim())
+        }),
+        Err(_) if max == usize::MAX => Err(format!("must be a whole number, found \"{s}\"")),
+        Err(_) => Err(format!("must be a whole number from {min} to {max}, found \"{s}\"")),
     }
 }
 
@@ -332,11 +342,7 @@ fn parse_lbfgs_memory(s: &str) -> Result<usize, String> {
 }
 
 fn parse_threads(s: &str) -> Result<usize, String> {
-    match s.trim().parse::<i64>() {
-        Ok(n) if (1..=MAX_THREADS as i64).contains(&n) => Ok(n as usize),
-        Ok(n) => Err(format!("must be between 1 and {MAX_THREADS}, found {n}")),
-        Err(_) => Err(format!("must be a whole number between 1 and {MAX_THREADS}, found \"{s}\"")),
-    }
+    whole_number(s, 1, MAX_THREADS)
 }
 
 fn run(cli: Cli) -> Result<()> {
@@ -425,9 +431,6 @@ fn run_command(cli: Cli) -> Result<()> {
         }
         #[cfg(feature = "gui")]
         Command::View { input, screenshot, size, stats } => view::run(input, screenshot, size, stats),
-        Command::Bench { iterations: 0, .. } => {
-            bail!("--iterations must be at least 1 (a benchmark of no iterations measures nothing)")
-        }
         Command::Bench { dynamic: true, iterations, scenarios, .. } => bench_dynamic(iterations, &scenarios),
         Command::Bench { contact: true, iterations, scenarios, .. } => bench_contact(iterations, &scenarios),
         Command::Bench { mesh, iterations, scenarios, converge: true, reference_iterations, .. } => {

@@ -45,13 +45,15 @@ pub fn run(args: &SimulateArgs<'_>) -> Result<()> {
         })?,
     };
     let report = args.report.map(Path::to_path_buf).or_else(|| scene.report_path());
-    if let Some(r) = report.as_deref()
-        && !r.extension().and_then(|e| e.to_str()).is_some_and(|e| e.eq_ignore_ascii_case("json"))
-    {
-        bail!("{}: the report must be a .json file", r.display());
-    }
     if let Some(r) = report.as_deref() {
-        crate::check_parent_dir(r)?;
+        // As `deform` checks its report: a folder or another extension is refused before any
+        // step (a folder named r.json used to fail after the last frame).
+        shapeup_core::io::check_output_extension(r, &["json"])?;
+        // A report in the frames' folder, which the run creates, needs no folder yet.
+        let in_new_output = r.parent().is_some_and(|p| p.components().eq(output.components())) && !output.exists();
+        if !in_new_output {
+            crate::check_parent_dir(r)?;
+        }
         crate::refuse_inputs_as_outputs(&scene, &[r])?;
     }
     // A run never replaces its inputs: not with a frame either.

@@ -309,7 +309,10 @@ pub fn solve_static_with_contact(
     iterations: usize,
     mut after_iteration: impl FnMut(usize, f64) -> std::ops::ControlFlow<()>,
 ) -> Result<SolveReport, SolveError> {
-    let mut report = SolveReport { initial_energy: system.energy(q)?.total, ..SolveReport::default() };
+    // E must be finite, as the solve without contact requires (an overflowing target would
+    // otherwise be written with null energies and exit 0).
+    let finite = |energy: f64| if energy.is_finite() { Ok(energy) } else { Err(SolveError::NonFiniteEnergy) };
+    let mut report = SolveReport { initial_energy: finite(system.energy(q)?.total)?, ..SolveReport::default() };
     if system.contact_weights().is_none() {
         // W relative to each vertex's diagonal entry of the static matrix, in its first
         // factorization.
@@ -341,7 +344,7 @@ pub fn solve_static_with_contact(
                 contact.finish_step(q, &inverse_mass);
             }
             done += 1;
-            let energy = system.energy(q)?.total;
+            let energy = finite(system.energy(q)?.total)?;
             report.energies.push(energy);
             if after_iteration(done, energy).is_break() {
                 contact.finish_step(q, &inverse_mass);

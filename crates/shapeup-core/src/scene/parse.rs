@@ -239,9 +239,46 @@ fn apply_override(tree: &mut Value, key: &str, value: Value) -> Result<(), Scene
     Ok(())
 }
 
+/// serde's words for Rust types in a message, in the scene's words: `expected usize` is
+/// "expected a whole number ≥ 0", `expected f64` "expected a number", `expected struct
+/// MeshSettings` "expected a [mesh] table".
+fn plain_words(message: &str) -> String {
+    const WORDS: [(&str, &str); 15] = [
+        ("expected usize", "expected a whole number ≥ 0"),
+        ("expected u64", "expected a whole number ≥ 0"),
+        ("expected u32", "expected a whole number ≥ 0"),
+        ("expected u8", "expected a whole number ≥ 0"),
+        ("expected i64", "expected a whole number"),
+        ("expected i32", "expected a whole number"),
+        ("expected f64", "expected a number"),
+        ("expected f32", "expected a number"),
+        ("expected struct MeshSettings", "expected a [mesh] table"),
+        ("expected struct SolverSettings", "expected a [solver] table"),
+        ("expected struct OutputSettings", "expected an [output] table"),
+        ("expected struct ContactSettings", "expected a [contact] table"),
+        ("expected struct RawScene", "expected a scene (tables [mesh], [solver], …)"),
+        ("expected a sequence", "expected a list"),
+        ("expected a map", "expected a table"),
+    ];
+    let mut out = message.to_owned();
+    for (rust, words) in WORDS {
+        out = out.replace(rust, words);
+    }
+    // Any other struct's name: a table.
+    while let Some(at) = out.find("expected struct ") {
+        let end = out[at + 16..].find(|c: char| !c.is_alphanumeric()).map_or(out.len(), |e| at + 16 + e);
+        out.replace_range(at..end, "expected a table");
+    }
+    out
+}
+
 /// One line from a TOML error: its message with the line and column of its span.
 fn toml_message(text: &str, e: &toml::de::Error) -> String {
-    let message = e.message().trim().replace('\n', " ");
+    let message = plain_words(&e.message().trim().replace('\n', " "));
+    // A JSON text in a file named .toml.
+    if serde_json::from_str::<serde_json::Value>(text).is_ok_and(|v| v.is_object()) {
+        return "the file is JSON but its name ends in .toml: rename it to .json".into();
+    }
     match e.span() {
         Some(span) => {
             let mut start = span.start.min(text.len());
@@ -275,7 +312,7 @@ fn toml_message(text: &str, e: &toml::de::Error) -> String {
 /// One line from a JSON error: its message with its line and column, and the key of the value
 /// it stopped in (serde_json names no key: `"thickness": 1e400` is "number out of range").
 fn json_message(text: &str, e: &serde_json::Error) -> String {
-    let full = e.to_string();
+    let full = plain_words(&e.to_string());
     if e.line() == 0 {
         return full;
     }
@@ -283,6 +320,18 @@ fn json_message(text: &str, e: &serde_json::Error) -> String {
     let message = full.strip_suffix(&format!(" at line {line} column {column}")).unwrap_or(&full);
     // serde_json's column counts the bytes of its line before the error.
     let start: usize = text.split_inclusive('\n').take(line - 1).map(str::len).sum();
+    // What a syntax error most often is: a TOML text in a file named .json, or a comment.
+    if e.is_syntax() {
+        if toml::from_str::<toml::Table>(text).is_ok() {
+            return "the file is TOML but its name ends in .json: rename it to .toml".into();
+        }
+        let at = text.get(start + column.saturating_sub(1)..).unwrap_or_default();
+        if at.starts_with("//") || at.starts_with("/*") || (at.starts_with('/') && column > 0) {
+            return format!(
+                "line {line}, column {column}: JSON has no comments; remove them, or write the scene in TOML (comments start with #)"
+            );
+        }
+    }
     // A message that names the key or the entry it is in already (`colliders` must be a
     // list…) needs no more.
     let named = |key: &str| {
@@ -435,6 +484,43 @@ mod tests {
         assert!(matches!(s.groups[1].selection, SelectionSpec::Box { .. }));
     }
 
+    /// Messages say what the user wrote, in the scene's words: no Rust type names, the
+    /// syntax a misnamed file has, JSON's lack of comments, an empty list or a box turned
+    /// inside out as what they are.
+    #[test]
+    fn messages_use_the_scenes_words() {
+        let toml =
+            |body: &str| parse(&format!("[mesh]\npath = \"m.obj\"\n{body}")).map(|_| ()).unwrap_err().to_string();
+        let json = |text: &str| {
+            Scene::parse(text, SceneFormat::Json, Path::new("s.json"), PathBuf::new())
+                .map(|_| ())
+                .unwrap_err()
+                .to_string()
+        };
+        for (message, words) in [
+            (toml("[solver]\niterations = -3\n"), "expected a whole number ≥ 0"),
+            (toml("[solver]\niterations = 1.5\n"), "expected a whole number ≥ 0"),
+            (toml("[solver]\ntolerance = \"x\"\n"), "expected a number"),
+            (parse("mesh = 3\n").map(|_| ()).unwrap_err().to_string(), "expected a [mesh] table"),
+            (json("[mesh]\npath = \"m.obj\"\n"), "the file is TOML but its name ends in .json"),
+            (json("{\"mesh\": {\"path\": \"m.obj\"} // the mesh\n}"), "line 1, column 28: JSON has no comments"),
+            (toml("[[constraints]]\ntype = \"edge_spring\"\nvertices = []\n"), "\"vertices\" = [] selects nothing"),
+            (toml("[[constraints]]\ntype = \"plane\"\nfaces = []\n"), "\"faces\" = [] selects nothing"),
+            (
+                toml("[[constraints]]\ntype = \"position\"\nbox = { min = [0, 2, 0], max = [1, 1, 1] }\n"),
+                "min y (2) is greater than max y (1)",
+            ),
+        ] {
+            assert!(message.contains(words), "{message}");
+            for rust in ["usize", "f64", "struct", "i128"] {
+                assert!(!message.contains(rust), "{message}");
+            }
+        }
+        let misnamed =
+            Scene::parse("{\"mesh\": {\"path\": \"m.obj\"}}", SceneFormat::Toml, Path::new("s.toml"), PathBuf::new());
+        assert!(misnamed.unwrap_err().to_string().contains("the file is JSON but its name ends in .toml"));
+    }
+
     /// TOML spells inf and nan; an entry's number that is either is refused at its line, as
     /// the file spells it (it used to reach the builders as null: "invalid type: null").
     #[test]
@@ -564,7 +650,7 @@ mod tests {
             ),
             (
                 r#"{"mesh": {"path": "m.obj"}, "contact": {"thickness": null}}"#,
-                "invalid type: null, expected f64 (in `contact.thickness`)",
+                "invalid type: null, expected a number (in `contact.thickness`)",
             ),
             (r#"{"mesh": {"path": "m.obj"}, "solver": {"tolerance": "x"}}"#, "(in `solver.tolerance`)"),
             (

@@ -300,6 +300,10 @@ pub fn resolve_selection(spec: &SelectionSpec, mesh: &Mesh, rest: &RestGeometry)
 /// Keys every group takes; the rest go to the type's builder (which rejects unknown ones).
 const SELECTION_KEYS: [&str; 4] = ["vertices", "faces", "box", "sphere"];
 
+/// An empty selection list (every type refuses a group with nothing selected): said as what
+/// the file has, not as a group of no elements.
+const EMPTY_LIST: &str = "\"KEY\" = [] selects nothing: list some indices, or leave KEY out to select the whole mesh";
+
 fn parse_group(mut entry: Map<String, Value>) -> Result<GroupSpec, SpecError> {
     let kind = match entry.remove("type") {
         Some(Value::String(s)) => s,
@@ -333,9 +337,15 @@ fn parse_group(mut entry: Map<String, Value>) -> Result<GroupSpec, SpecError> {
     let selection = if let Some(v) = entry.remove("vertices") {
         let list: Vec<usize> =
             serde_json::from_value(v).map_err(|_| "\"vertices\" must be a list of vertex indices ≥ 0")?;
+        if list.is_empty() {
+            return Err(SpecError::Invalid(EMPTY_LIST.replace("KEY", "vertices")));
+        }
         SelectionSpec::Vertices(list)
     } else if let Some(v) = entry.remove("faces") {
         let list: Vec<usize> = serde_json::from_value(v).map_err(|_| "\"faces\" must be a list of face indices ≥ 0")?;
+        if list.is_empty() {
+            return Err(SpecError::Invalid(EMPTY_LIST.replace("KEY", "faces")));
+        }
         SelectionSpec::Faces(list)
     } else if let Some(v) = entry.remove("box") {
         #[derive(Deserialize)]
@@ -346,6 +356,14 @@ fn parse_group(mut entry: Map<String, Value>) -> Result<GroupSpec, SpecError> {
         }
         let b: B = serde_json::from_value(v)
             .map_err(|e| format!("\"box\": {e} (expected {{ min = [x,y,z], max = [x,y,z] }})"))?;
+        // A box with min > max selects nothing: said as what it is, not as an empty group.
+        if let Some(axis) = (0..3).find(|&k| b.min[k] > b.max[k]) {
+            let name = ["x", "y", "z"][axis];
+            return Err(SpecError::Invalid(format!(
+                "\"box\": min {name} ({}) is greater than max {name} ({}): min must be ≤ max on every axis",
+                b.min[axis], b.max[axis]
+            )));
+        }
         SelectionSpec::Box { min: b.min, max: b.max }
     } else if let Some(v) = entry.remove("sphere") {
         #[derive(Deserialize)]

@@ -1262,6 +1262,39 @@ fn simulate_free_fall_is_the_discrete_formula_in_input_units() {
     }
 }
 
+/// A report inside the frames' folder, which the run creates, is written there; the folder
+/// need not exist before.
+#[test]
+fn simulate_writes_its_report_into_the_folder_it_creates() {
+    let ws = Workspace::new();
+    let scene = ws.scene(
+        "s.toml",
+        "[mesh]\ngenerate = { kind = \"cloth\", vertices = [4, 4], size = [1.0, 1.0] }\n[solver]\nmode = \"dynamic\"\n",
+    );
+    let dir = ws.out("new-run");
+    let report = dir.join("report.json");
+    let out = simulate_in(None, &scene, &dir, &["--frames", "2", "--report", report.to_str().unwrap()]);
+    assert_eq!(out.code, Some(0), "{}", out.describe());
+    assert!(report.is_file() && dir.join("frame_0002.obj").is_file(), "{}", out.describe());
+}
+
+/// A static solve with contact whose energy overflows (a handle moved 1e200 away) is refused
+/// as the solve without contact is, writing nothing (it used to exit 0 with null energies).
+#[test]
+fn a_static_solve_with_contact_refuses_an_overflowing_energy() {
+    let ws = Workspace::new();
+    let scene = ws.scene(
+        "far.toml",
+        "[mesh]\ngenerate = { kind = \"cloth\", vertices = [4, 4], size = [1.0, 1.0] }\n\
+         [[constraints]]\ntype = \"edge_spring\"\n[[constraints]]\ntype = \"position\"\nvertices = [0, 1]\n\
+         translate = [1e200, 0.0, 0.0]\n[[colliders]]\ntype = \"sphere\"\ncenter = [0.0, -2.0, 0.0]\nradius = 0.5\n",
+    );
+    let out = shapeup(ws.deform_args(&scene));
+    assert_eq!(out.code, Some(1), "{}", out.describe());
+    assert!(out.stderr.contains("the energy is not a finite number"), "{}", out.describe());
+    assert!(!ws.out("result.obj").exists() && !ws.out("report.json").exists(), "{}", out.describe());
+}
+
 #[test]
 fn simulate_rejects_bad_requests_and_writes_nothing() {
     let ws = Workspace::new();
@@ -1278,6 +1311,12 @@ fn simulate_rejects_bad_requests_and_writes_nothing() {
     // A report that is not JSON.
     let out = simulate_in(None, &scene, &dir, &["--frames", "3", "--report", "r.txt"]);
     assert_eq!(out.code, Some(1), "{}", out.describe());
+    // A report named .json that is a folder: refused before any step (it used to fail after
+    // the last frame was written).
+    std::fs::create_dir(ws.out("folder.json")).unwrap();
+    let out = simulate_in(None, &scene, &dir, &["--frames", "3", "--report", ws.out("folder.json").to_str().unwrap()]);
+    assert_eq!(out.code, Some(1), "{}", out.describe());
+    assert!(out.stderr.contains("is a folder") && !dir.exists(), "{}", out.describe());
     // Bad dynamic settings name the key.
     for (bad, key) in [("damping = 1.5", "damping"), ("time_step = -1.0", "time_step"), ("density = 0.0", "density")] {
         let scene = ws.scene("bad.toml", &format!("{good}{bad}\n"));

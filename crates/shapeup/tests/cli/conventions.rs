@@ -50,7 +50,7 @@ fn a_bad_count_is_named_with_its_flag() {
         let out =
             run_in(dir.path(), &[OsStr::new("--threads"), OsStr::new(bad), OsStr::new("info"), mesh.as_os_str()], &[]);
         assert_one_line_failure(&out, "--threads");
-        assert!(out.stderr.contains(bad) && out.stderr.contains("between 1 and 1024"), "{}", out.describe());
+        assert!(out.stderr.contains(bad) && out.stderr.contains("1 to 1024"), "{}", out.describe());
     }
     // Every count a command takes: a negative one names its flag too.
     let scene = dir.path().join("s.toml");
