@@ -288,6 +288,8 @@ impl Assembly {
             .collect();
         let (piece, count) = connected_pieces(ns, links.iter().map(|l| l.as_slice()));
         let mut anchored = vec![false; count];
+        // Pieces that would be anchored but for a weight of 0.
+        let mut weightless = vec![false; count];
         for (r, link) in links.iter().enumerate() {
             let vals = &self.c_val[self.c_ptr[r]..self.c_ptr[r + 1]];
             let sum: f64 = vals.iter().sum();
@@ -296,10 +298,14 @@ impl Assembly {
             // A row through a fixed vertex ties its free vertices to a known point.
             let touches_fixed = self.c_col[self.c_ptr[r]..self.c_ptr[r + 1]].iter().any(|&v| self.is_fixed(v as usize));
             if let Some(&v) = link.first()
-                && weight > 0.0
                 && (touches_fixed || sum.abs() > 1e-9 * scale)
             {
-                anchored[piece[v as usize] as usize] = true;
+                let p = piece[v as usize] as usize;
+                if weight > 0.0 {
+                    anchored[p] = true;
+                } else {
+                    weightless[p] = true;
+                }
             }
         }
         if let Some(p) = anchored.iter().position(|a| !a) {
@@ -308,6 +314,7 @@ impl Assembly {
                 piece_size: members.len(),
                 vertex: members.first().map(|&v| self.solved[v] as usize).unwrap_or(0),
                 num_pieces: count,
+                only_zero_weight: weightless[p],
             });
         }
         Ok(())

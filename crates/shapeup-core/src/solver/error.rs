@@ -11,7 +11,9 @@ pub enum SolveError {
     /// A connected piece of constrained vertices has no position-like constraint (static mode).
     #[error(
         "singular system: a connected piece of {piece_size} vertices (e.g. vertex {vertex}) has no position \
-         constraint, so it can move freely ({num_pieces} piece(s) in all); add a position group that touches it"
+         constraint{}, so it can move freely ({num_pieces} piece(s) in all); {}",
+        if *only_zero_weight { " of weight > 0 (those it has weigh 0)" } else { "" },
+        if *only_zero_weight { "give its position group a weight > 0" } else { "add a position group that touches it" }
     )]
     Unanchored {
         /// Number of vertices of the piece.
@@ -20,6 +22,8 @@ pub enum SolveError {
         vertex: usize,
         /// Number of connected pieces.
         num_pieces: usize,
+        /// Whether the piece has position-like rows, all of weight 0 (a handle turned off).
+        only_zero_weight: bool,
     },
     /// The factorization found the matrix singular or indefinite.
     #[error(
