@@ -202,7 +202,7 @@ enum Command {
         #[arg(long, conflicts_with = "dynamic")]
         converge: bool,
         /// Iterations of the reference run that gives E* (with --converge).
-        #[arg(long, allow_negative_numbers = true, default_value_t = 3000, value_name = "N", requires = "converge", value_parser = parse_count)]
+        #[arg(long, allow_negative_numbers = true, default_value_t = 3000, value_name = "N", requires = "converge", value_parser = parse_positive)]
         reference_iterations: usize,
     },
 }

@@ -131,6 +131,26 @@ mod tests {
         assert!((bending_1 - bending_10).abs() < 1e-9 * bending_1, "{bending_1} {bending_10}");
     }
 
+    /// A piece held only by a position group of weight 0 is said to be so (it read as having
+    /// no position constraint at all).
+    #[test]
+    fn a_handle_of_weight_zero_is_named_as_the_reason_a_piece_is_free() {
+        let text = |weight: f64| {
+            format!(
+                "[mesh]\ngenerate = {{ kind = \"cloth\", vertices = [4, 4], size = [1.0, 1.0] }}\n\
+                 [[constraints]]\ntype = \"edge_spring\"\n[[constraints]]\ntype = \"position\"\nvertices = [0]\nweight = {weight:?}\n"
+            )
+        };
+        let solve = |weight: f64| {
+            let scene = Scene::parse(&text(weight), SceneFormat::Toml, Path::new("s.toml"), PathBuf::new()).unwrap();
+            scene.load().and_then(|mut loaded| loaded.solve_static(Some(1)).map(|_| ()))
+        };
+        let message = solve(0.0).unwrap_err().to_string();
+        assert!(message.contains("of weight > 0 (those it has weigh 0)"), "{message}");
+        assert!(message.contains("give its position group a weight > 0"), "{message}");
+        assert!(solve(1.0).is_ok());
+    }
+
     /// An output is refused when it is an input under any name (`./`, `..`, a link), and only
     /// then: a new file, or an existing one that is no input, is fine.
     #[test]

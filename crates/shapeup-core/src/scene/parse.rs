@@ -10,16 +10,17 @@ use std::path::{Path, PathBuf};
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawScene {
+    #[serde(deserialize_with = "mesh_table")]
     mesh: MeshSettings,
-    #[serde(default)]
+    #[serde(default, deserialize_with = "solver_table")]
     solver: SolverSettings,
     #[serde(default, deserialize_with = "constraint_list")]
     constraints: Vec<Entry>,
     #[serde(default, deserialize_with = "collider_list")]
     colliders: Vec<Entry>,
-    #[serde(default, deserialize_with = "one_table")]
+    #[serde(default, deserialize_with = "contact_table")]
     contact: crate::contact::ContactSettings,
-    #[serde(default)]
+    #[serde(default, deserialize_with = "output_table")]
     output: OutputSettings,
 }
 
@@ -31,9 +32,23 @@ fn collider_list<'de, D: serde::Deserializer<'de>>(deserializer: D) -> Result<Ve
     deserializer.deserialize_any(EntryList("colliders"))
 }
 
-/// `[contact]` as one table ([`OneTable`]).
-fn one_table<'de, D: serde::Deserializer<'de>>(deserializer: D) -> Result<crate::contact::ContactSettings, D::Error> {
-    deserializer.deserialize_any(OneTable)
+/// Each top-level table as one table ([`OneTable`]).
+fn mesh_table<'de, D: serde::Deserializer<'de>>(deserializer: D) -> Result<MeshSettings, D::Error> {
+    deserializer.deserialize_any(OneTable("mesh", std::marker::PhantomData))
+}
+
+fn solver_table<'de, D: serde::Deserializer<'de>>(deserializer: D) -> Result<SolverSettings, D::Error> {
+    deserializer.deserialize_any(OneTable("solver", std::marker::PhantomData))
+}
+
+fn contact_table<'de, D: serde::Deserializer<'de>>(
+    deserializer: D,
+) -> Result<crate::contact::ContactSettings, D::Error> {
+    deserializer.deserialize_any(OneTable("contact", std::marker::PhantomData))
+}
+
+fn output_table<'de, D: serde::Deserializer<'de>>(deserializer: D) -> Result<OutputSettings, D::Error> {
+    deserializer.deserialize_any(OneTable("output", std::marker::PhantomData))
 }
 
 /// Scene file syntax.
@@ -146,7 +161,7 @@ impl Scene {
             let group = GroupSpec::from_entry_among(entry, &existing).map_err(|e| SceneError::Invalid {
                 path: path.into(),
                 entry: format!("constraints[{i}]{name}"),
-                message: e.to_string(),
+                message: plain_words(&e.to_string()),
             })?;
             groups.push(group);
         }
@@ -163,7 +178,7 @@ impl Scene {
                 let invalid =
                     |message| SceneError::Invalid { path: path.into(), entry: format!("colliders[{i}]"), message };
                 crate::contact::ColliderSpec::from_entry(entry.table().map_err(invalid)?)
-                    .map_err(|e| invalid(e.to_string()))
+                    .map_err(|e| invalid(plain_words(&e.to_string())))
             })
             .collect::<Result<Vec<_>, _>>()?;
         Ok(Scene {
@@ -243,7 +258,14 @@ fn apply_override(tree: &mut Value, key: &str, value: Value) -> Result<(), Scene
 /// "expected a whole number ≥ 0", `expected f64` "expected a number", `expected struct
 /// MeshSettings` "expected a [mesh] table".
 fn plain_words(message: &str) -> String {
-    const WORDS: [(&str, &str); 15] = [
+    const WORDS: [(&str, &str); 19] = [
+        ("` as i128", "` (too large)"),
+        (
+            "expected internally tagged enum GeneratedMesh",
+            "expected a table such as { kind = \"cloth\", vertices = [41, 41], size = [1.0, 1.0] }",
+        ),
+        ("expected variant identifier", "expected a name (a string)"),
+        ("wanted string or table", "expected a name (a string)"),
         ("expected usize", "expected a whole number ≥ 0"),
         ("expected u64", "expected a whole number ≥ 0"),
         ("expected u32", "expected a whole number ≥ 0"),
@@ -428,19 +450,24 @@ impl From<&str> for BadSetting {
 
 fn validate_solver(s: &SolverSettings) -> Result<(), BadSetting> {
     let positive = |name: &str, v: f64| -> Result<(), BadSetting> {
-        if v.is_finite() && v > 0.0 { Ok(()) } else { Err(format!("{name} must be a number > 0, found {v}").into()) }
+        if v.is_finite() && v > 0.0 {
+            Ok(())
+        } else {
+            Err(format!("{name} must be a finite number > 0, found {}", spelled(v)).into())
+        }
     };
     if !(s.tolerance.is_finite() && s.tolerance >= 0.0) {
-        return Err(format!("tolerance must be ≥ 0, found {}", s.tolerance).into());
+        return Err(format!("tolerance must be a finite number ≥ 0, found {}", spelled(s.tolerance)).into());
     }
     positive("time_step", s.time_step)?;
     positive("stiffness", s.stiffness)?;
     positive("density", s.density)?;
     if !(0.0..1.0).contains(&s.damping) {
-        return Err(format!("damping must be in [0, 1), found {}", s.damping).into());
+        return Err(format!("damping must be in [0, 1), found {}", spelled(s.damping)).into());
     }
     if !s.gravity.iter().all(|g| g.is_finite()) {
-        return Err("gravity must be three finite numbers".into());
+        let found: Vec<String> = s.gravity.iter().map(|&g| spelled(g)).collect();
+        return Err(format!("gravity must be three finite numbers, found [{}]", found.join(", ")).into());
     }
     if !(1..=MAX_ANDERSON_WINDOW).contains(&s.anderson_window) {
         return Err(format!("anderson_window must be in 1..={MAX_ANDERSON_WINDOW}, found {}", s.anderson_window).into());
@@ -449,6 +476,11 @@ fn validate_solver(s: &SolverSettings) -> Result<(), BadSetting> {
         return Err(format!("lbfgs_memory must be in 1..={MAX_LBFGS_MEMORY}, found {}", s.lbfgs_memory).into());
     }
     Ok(())
+}
+
+/// A number as TOML spells it (`nan`, `inf`, `-inf`; Rust prints `NaN`).
+fn spelled(v: f64) -> String {
+    if v.is_nan() { "nan".into() } else { v.to_string() }
 }
 
 #[cfg(test)]
@@ -488,6 +520,20 @@ mod tests {
     /// syntax a misnamed file has, JSON's lack of comments, an empty list or a box turned
     /// inside out as what they are.
     #[test]
+    fn solver_settings_say_finite_and_spell_nan_as_toml_does() {
+        for (body, words) in [
+            ("tolerance = nan", "tolerance must be a finite number ≥ 0, found nan"),
+            ("tolerance = inf", "tolerance must be a finite number ≥ 0, found inf"),
+            ("stiffness = inf", "stiffness must be a finite number > 0, found inf"),
+            ("gravity = [0, nan, 0]", "gravity must be three finite numbers, found [0, nan, 0]"),
+        ] {
+            let message =
+                parse(&format!("[mesh]\npath = \"m.obj\"\n[solver]\n{body}\n")).map(|_| ()).unwrap_err().to_string();
+            assert!(message.contains(words), "{body}: {message}");
+        }
+    }
+
+    #[test]
     fn messages_use_the_scenes_words() {
         let toml =
             |body: &str| parse(&format!("[mesh]\npath = \"m.obj\"\n{body}")).map(|_| ()).unwrap_err().to_string();
@@ -501,7 +547,10 @@ mod tests {
             (toml("[solver]\niterations = -3\n"), "expected a whole number ≥ 0"),
             (toml("[solver]\niterations = 1.5\n"), "expected a whole number ≥ 0"),
             (toml("[solver]\ntolerance = \"x\"\n"), "expected a number"),
-            (parse("mesh = 3\n").map(|_| ()).unwrap_err().to_string(), "expected a [mesh] table"),
+            (
+                parse("mesh = 3\n").map(|_| ()).unwrap_err().to_string(),
+                "`mesh` must be one [mesh] table, found a number",
+            ),
             (json("[mesh]\npath = \"m.obj\"\n"), "the file is TOML but its name ends in .json"),
             (json("{\"mesh\": {\"path\": \"m.obj\"} // the mesh\n}"), "line 1, column 28: JSON has no comments"),
             (toml("[[constraints]]\ntype = \"edge_spring\"\nvertices = []\n"), "\"vertices\" = [] selects nothing"),
@@ -510,9 +559,22 @@ mod tests {
                 toml("[[constraints]]\ntype = \"position\"\nbox = { min = [0, 2, 0], max = [1, 1, 1] }\n"),
                 "min y (2) is greater than max y (1)",
             ),
+            (toml("[[constraints]]\ntype = \"position\"\nbox = 1\n"), "expected a table"),
+            (toml("[[colliders]]\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = \"1\"\n"), "expected a number"),
+            (toml("[solver]\nsteps = 99999999999999999999999\n"), "(too large)"),
+            (
+                parse("output = [\"out\", \"r.json\"]\n[mesh]\npath = \"m.obj\"\n")
+                    .map(|_| ())
+                    .unwrap_err()
+                    .to_string(),
+                "`output` must be one [output] table (not a list",
+            ),
+            (toml("[solver]\nmode = 1\n"), "expected a name (a string)"),
+            (parse("mesh = [\"m.obj\"]\n").map(|_| ()).unwrap_err().to_string(), "`mesh` must be one [mesh] table"),
+            (parse("[mesh]\ngenerate = \"cloth\"\n").map(|_| ()).unwrap_err().to_string(), "kind = \"cloth\""),
         ] {
             assert!(message.contains(words), "{message}");
-            for rust in ["usize", "f64", "struct", "i128"] {
+            for rust in ["usize", "f64", "struct", "i128", "enum", "variant identifier", "wanted"] {
                 assert!(!message.contains(rust), "{message}");
             }
         }
@@ -641,7 +703,7 @@ mod tests {
             (r#"{"mesh": {"path": "m.obj"}, "contact": null}"#, "`contact` must be one [contact] table, found null"),
             (
                 r#"{"mesh": {"path": "m.obj"}, "contact": [{}]}"#,
-                "`contact` must be one [contact] table (not a list: [[contact]])",
+                "`contact` must be one [contact] table (not a list: [[contact]] or [...])",
             ),
             (
                 r#"{"mesh": {"path": "m.obj"},

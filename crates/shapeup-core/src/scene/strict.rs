@@ -90,27 +90,30 @@ impl<'de> serde::de::Visitor<'de> for EntryList {
     refuse_plain_values!();
 }
 
-/// `[contact]` as one table. A derived struct also reads a list positionally, so `[[contact]]`
-/// would be refused as "expected a boolean" (its first field) instead of by what is wrong; a
-/// JSON `"contact": null` is refused naming the key.
-pub(super) struct OneTable;
+/// A top-level table (`[mesh]`, `[solver]`, `[contact]`, `[output]`) as one table. A derived
+/// struct also reads a list positionally, so `output = ["out", "r.json"]` was taken for a path
+/// and a report, and `[[contact]]` refused as "expected a boolean" (its first field), instead
+/// of by what is wrong; a JSON `"contact": null` is refused naming the key.
+pub(super) struct OneTable<T>(pub(super) &'static str, pub(super) std::marker::PhantomData<T>);
 
-impl OneTable {
+impl<T> OneTable<T> {
     fn refuse<E: serde::de::Error>(&self, found: &str) -> E {
-        E::custom(format!("`contact` must be one [contact] table, found {found}"))
+        let key = self.0;
+        E::custom(format!("`{key}` must be one [{key}] table, found {found}"))
     }
 }
 
-impl<'de> serde::de::Visitor<'de> for OneTable {
-    type Value = crate::contact::ContactSettings;
+impl<'de, T: Deserialize<'de>> serde::de::Visitor<'de> for OneTable<T> {
+    type Value = T;
     fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-        f.write_str("one [contact] table")
+        write!(f, "one [{}] table", self.0)
     }
     fn visit_map<A: serde::de::MapAccess<'de>>(self, map: A) -> Result<Self::Value, A::Error> {
-        crate::contact::ContactSettings::deserialize(serde::de::value::MapAccessDeserializer::new(map))
+        T::deserialize(serde::de::value::MapAccessDeserializer::new(map))
     }
     fn visit_seq<A: serde::de::SeqAccess<'de>>(self, _: A) -> Result<Self::Value, A::Error> {
-        Err(serde::de::Error::custom("`contact` must be one [contact] table (not a list: [[contact]])"))
+        let key = self.0;
+        Err(serde::de::Error::custom(format!("`{key}` must be one [{key}] table (not a list: [[{key}]] or [...])")))
     }
     refuse_plain_values!();
 }
