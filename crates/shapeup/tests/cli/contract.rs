@@ -1387,7 +1387,7 @@ fn bad_colliders_name_the_entry_and_write_nothing() {
             "[contact]\nthickness = 5.0\n[[colliders]]\ntype = \"plane\"\npoint = [0, -1, 0]\nnormal = [0, 1, 0]\n",
             "[contact]: thickness 5 is over 0.25 of the mesh's size (its bounding-box diagonal 1.414",
         ),
-        ("[[contact]]\nthickness = 0.1\n", "one [contact] table (not a list: [[contact]])"),
+        ("[[contact]]\nthickness = 0.1\n", "one [contact] table (not a list: [[contact]]"),
         ("[[colliders]]\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1e300\n", "found 1e300"),
     ] {
         let scene = ws.scene("bad.toml", &format!("{good}{bad}"));
