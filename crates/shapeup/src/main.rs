@@ -299,8 +299,6 @@ fn is_broken_pipe(e: &anyhow::Error) -> bool {
 /// thread costs a stack; tens of thousands exhaust the machine before the first iteration).
 const MAX_THREADS: usize = 1024;
 
-/// `--threads`: a whole number from 1 to [`MAX_THREADS`] (a negative one is named as such, not
-/// taken for an unknown flag).
 /// A whole number in `min..=max` given on the command line, or one line saying what was found
 /// (clap's own parsers said "invalid digit found in string" of a negative count, and printed
 /// an unbounded range's end as 18446744073709551615).
@@ -341,6 +339,8 @@ fn parse_lbfgs_memory(s: &str) -> Result<usize, String> {
     whole_number(s, 1, MAX_LBFGS_MEMORY)
 }
 
+/// `--threads`: a whole number from 1 to [`MAX_THREADS`] (a negative one is named as such, not
+/// taken for an unknown flag).
 fn parse_threads(s: &str) -> Result<usize, String> {
     whole_number(s, 1, MAX_THREADS)
 }
