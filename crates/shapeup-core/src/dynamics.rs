@@ -380,8 +380,7 @@ impl Simulation {
     /// [`SolveError`] from the solver; [`SolveError::NonFiniteEnergy`] when E overflows (plain
     /// steps evaluate no E, so an absurd gravity or time step shows first here).
     pub fn energy(&mut self) -> Result<f64, SolveError> {
-        let energy = self.system.energy(&self.positions)?.total;
-        if energy.is_finite() { Ok(energy) } else { Err(SolveError::NonFiniteEnergy) }
+        self.system.finite_energy(&self.positions)
     }
 
     /// Positions x_n (working frame).

@@ -54,7 +54,8 @@ impl ConstraintGroup {
     /// length for the point-set types: plane, circle, sphere, line, rigid, …). 0 for a group
     /// with no rows (a load).
     pub fn max_violation(&self, q: &[DVec3]) -> f64 {
-        self.constraints.iter().filter(|c| c.num_rows() > 0).map(|c| c.violation(&c.apply(q))).fold(0.0, f64::max)
+        // Any power of 1 is 1: each violation in its rows' units.
+        self.relative_violation(q, 1.0)
     }
 
     /// [`ConstraintGroup::max_violation`] made scale-free: each constraint's violation over

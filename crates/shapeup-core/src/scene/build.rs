@@ -311,8 +311,7 @@ pub fn solve_static_with_contact(
 ) -> Result<SolveReport, SolveError> {
     // E must be finite, as the solve without contact requires (an overflowing target would
     // otherwise be written with null energies and exit 0).
-    let finite = |energy: f64| if energy.is_finite() { Ok(energy) } else { Err(SolveError::NonFiniteEnergy) };
-    let mut report = SolveReport { initial_energy: finite(system.energy(q)?.total)?, ..SolveReport::default() };
+    let mut report = SolveReport { initial_energy: system.finite_energy(q)?, ..SolveReport::default() };
     if system.contact_weights().is_none() {
         // W relative to each vertex's diagonal entry of the static matrix, in its first
         // factorization.
@@ -344,7 +343,7 @@ pub fn solve_static_with_contact(
                 contact.finish_step(q, &inverse_mass);
             }
             done += 1;
-            let energy = finite(system.energy(q)?.total)?;
+            let energy = system.finite_energy(q)?;
             report.energies.push(energy);
             if after_iteration(done, energy).is_break() {
                 contact.finish_step(q, &inverse_mass);

@@ -1,6 +1,6 @@
 //! From scene text (TOML or JSON) to a validated [`Scene`].
 
-use super::strict::{Entry, EntryList, OneTable, StrictValue};
+use super::strict::{Entry, EntryList, OneTable, StrictValue, spelled};
 use super::{GroupSpec, MeshSettings, OutputSettings, Scene, SceneError, SolverSettings};
 use crate::solver::{MAX_ANDERSON_WINDOW, MAX_LBFGS_MEMORY};
 use serde::Deserialize;
@@ -476,11 +476,6 @@ fn validate_solver(s: &SolverSettings) -> Result<(), BadSetting> {
         return Err(format!("lbfgs_memory must be in 1..={MAX_LBFGS_MEMORY}, found {}", s.lbfgs_memory).into());
     }
     Ok(())
-}
-
-/// A number as TOML spells it (`nan`, `inf`, `-inf`; Rust prints `NaN`).
-fn spelled(v: f64) -> String {
-    if v.is_nan() { "nan".into() } else { v.to_string() }
 }
 
 #[cfg(test)]

@@ -300,9 +300,13 @@ pub fn resolve_selection(spec: &SelectionSpec, mesh: &Mesh, rest: &RestGeometry)
 /// Keys every group takes; the rest go to the type's builder (which rejects unknown ones).
 const SELECTION_KEYS: [&str; 4] = ["vertices", "faces", "box", "sphere"];
 
-/// An empty selection list (every type refuses a group with nothing selected): said as what
-/// the file has, not as a group of no elements.
-const EMPTY_LIST: &str = "\"KEY\" = [] selects nothing: list some indices, or leave KEY out to select the whole mesh";
+/// An empty selection list `key = []` (every type refuses a group with nothing selected): said
+/// as what the file has, not as a group of no elements.
+fn empty_list(key: &str) -> SpecError {
+    SpecError::Invalid(format!(
+        "\"{key}\" = [] selects nothing: list some indices, or leave {key} out to select the whole mesh"
+    ))
+}
 
 fn parse_group(mut entry: Map<String, Value>) -> Result<GroupSpec, SpecError> {
     let kind = match entry.remove("type") {
@@ -338,13 +342,13 @@ fn parse_group(mut entry: Map<String, Value>) -> Result<GroupSpec, SpecError> {
         let list: Vec<usize> =
             serde_json::from_value(v).map_err(|_| "\"vertices\" must be a list of vertex indices ≥ 0")?;
         if list.is_empty() {
-            return Err(SpecError::Invalid(EMPTY_LIST.replace("KEY", "vertices")));
+            return Err(empty_list("vertices"));
         }
         SelectionSpec::Vertices(list)
     } else if let Some(v) = entry.remove("faces") {
         let list: Vec<usize> = serde_json::from_value(v).map_err(|_| "\"faces\" must be a list of face indices ≥ 0")?;
         if list.is_empty() {
-            return Err(SpecError::Invalid(EMPTY_LIST.replace("KEY", "faces")));
+            return Err(empty_list("faces"));
         }
         SelectionSpec::Faces(list)
     } else if let Some(v) = entry.remove("box") {

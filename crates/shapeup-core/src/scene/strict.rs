@@ -179,12 +179,9 @@ impl<'de> serde::de::Visitor<'de> for StrictValue {
     fn visit_f64<E: serde::de::Error>(self, v: f64) -> Result<Value, E> {
         // TOML's inf and nan: JSON has no such numbers (serde_json would make them null, and a
         // builder would then say "found null" of a value the file spells nan).
-        serde_json::Number::from_f64(v).map(Value::Number).ok_or_else(|| {
-            E::custom(format!(
-                "numbers must be finite, found {}",
-                if v.is_nan() { "nan".into() } else { v.to_string() }
-            ))
-        })
+        serde_json::Number::from_f64(v)
+            .map(Value::Number)
+            .ok_or_else(|| E::custom(format!("numbers must be finite, found {}", spelled(v))))
     }
     fn visit_str<E>(self, v: &str) -> Result<Value, E> {
         Ok(Value::String(v.to_owned()))
@@ -222,4 +219,9 @@ impl<'de> serde::de::Visitor<'de> for StrictValue {
         }
         Ok(Value::Object(out))
     }
+}
+
+/// A number as TOML spells it (`nan`, `inf`, `-inf`; Rust prints `NaN`), for messages.
+pub(super) fn spelled(v: f64) -> String {
+    if v.is_nan() { "nan".into() } else { v.to_string() }
 }

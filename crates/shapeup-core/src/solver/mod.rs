@@ -561,6 +561,16 @@ impl System {
         mu.iter().zip(q).zip(&self.inertial_target).map(|((m, p), s)| m * (*p - *s).length_squared()).sum()
     }
 
+    /// E(q), the total of [`System::energy`], refused when it is not a finite number
+    /// (targets, forces or coordinates too large for f64).
+    ///
+    /// # Errors
+    /// As [`System::energy`]; [`SolveError::NonFiniteEnergy`].
+    pub fn finite_energy(&mut self, q: &[DVec3]) -> Result<f64, SolveError> {
+        let energy = self.energy(q)?.total;
+        if energy.is_finite() { Ok(energy) } else { Err(SolveError::NonFiniteEnergy) }
+    }
+
     /// E(q) and its share per group, without solving (the matrix need not be invertible).
     ///
     /// # Errors
