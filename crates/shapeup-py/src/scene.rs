@@ -96,13 +96,9 @@ impl PyScene {
             check_folder(path)?;
         }
         let outputs: Vec<&std::path::Path> = output.iter().chain(&report).map(PathBuf::as_path).collect();
-        if let Some((path, input, what)) = self.scene.input_replaced_by(&outputs) {
+        if let Some(replaced) = self.scene.input_replaced_by(&outputs) {
             // As `shapeup deform`: a run never replaces its inputs.
-            return Err(value_error(format!(
-                "{}: is {what} ({}); shapeup never replaces its inputs, write the result elsewhere",
-                path.display(),
-                input.display()
-            )));
+            return Err(value_error(replaced));
         }
         let mut loaded = py.detach(|| self.scene.load()).map_err(scene_error)?;
         // The command line's static solve, stopping for Ctrl+C (the `KeyboardInterrupt` is
@@ -153,15 +149,10 @@ impl PyScene {
             check_folder(r)?;
         }
         if let Some(dir) = &output
-            && let Some((frame, (input, what))) =
-                frame_replacing_input(&self.scene.input_files(), dir, frames, every, format)
+            && let Some(replaced) = frame_replacing_input(&self.scene.input_files(), dir, frames, every, format)
         {
             // As `shapeup simulate`: a run never replaces its inputs.
-            return Err(value_error(format!(
-                "{}: is {what} ({}); shapeup never replaces its inputs, simulate into another folder",
-                frame.display(),
-                input.display()
-            )));
+            return Err(value_error(replaced));
         }
         let mut loaded = py.detach(|| self.scene.load()).map_err(scene_error)?;
         if let Some(dir) = &output {

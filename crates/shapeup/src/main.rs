@@ -452,14 +452,10 @@ pub(crate) fn check_parent_dir(path: &Path) -> Result<()> {
 /// ([`Scene::input_replaced_by`]): a result or a report written there would replace what the
 /// run was read from.
 pub(crate) fn refuse_inputs_as_outputs(scene: &Scene, outputs: &[&Path]) -> Result<()> {
-    if let Some((output, input, what)) = scene.input_replaced_by(outputs) {
-        bail!(
-            "{}: is {what} ({}); shapeup never replaces its inputs, write the result elsewhere",
-            shapeup_core::io::one_line(output.display()),
-            shapeup_core::io::one_line(input.display())
-        );
+    match scene.input_replaced_by(outputs) {
+        Some(replaced) => Err(replaced.into()),
+        None => Ok(()),
     }
-    Ok(())
 }
 
 fn deform(

@@ -57,14 +57,8 @@ pub fn run(args: &SimulateArgs<'_>) -> Result<()> {
         crate::refuse_inputs_as_outputs(&scene, &[r])?;
     }
     // A run never replaces its inputs: not with a frame either.
-    if let Some((frame, (input, what))) =
-        frame_replacing_input(&scene.input_files(), &output, args.frames, args.every, format)
-    {
-        bail!(
-            "{}: is {what} ({}); shapeup never replaces its inputs, simulate into another folder",
-            shapeup_core::io::one_line(frame.display()),
-            shapeup_core::io::one_line(input.display())
-        );
+    if let Some(replaced) = frame_replacing_input(&scene.input_files(), &output, args.frames, args.every, format) {
+        return Err(replaced.into());
     }
     let spinner = crate::logging::spinner(format!("loading {}", args.scene.display()));
     let mut loaded = scene.load()?;

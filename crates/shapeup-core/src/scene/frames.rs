@@ -87,16 +87,16 @@ pub fn is_kept(k: usize, frames: usize, every: usize) -> bool {
 
 /// The file a run into `dir` would write over one of `inputs` (as [`crate::scene::Scene::input_files`]
 /// lists them): `frames` steps, frame k kept when k is a multiple of `every` or the last, in
-/// `format`. Returns that frame's path and the input; `None` when the run replaces none (a scene
+/// `format`. Returns that frame and the input; `None` when the run replaces none (a scene
 /// whose mesh is `DIR/frame_0000.obj` of an earlier run, simulated into `DIR` again, would have
 /// its mesh overwritten by the first frame).
-pub fn frame_replacing_input<'a>(
-    inputs: &'a [(PathBuf, String)],
+pub fn frame_replacing_input(
+    inputs: &[(PathBuf, String)],
     dir: &Path,
     frames: usize,
     every: usize,
     format: FrameFormat,
-) -> Option<(PathBuf, &'a (PathBuf, String))> {
+) -> Option<super::ReplacedInput> {
     inputs.iter().find_map(|input| {
         // The file itself, whatever link or relative path names it.
         let real = std::fs::canonicalize(&input.0).ok()?;
@@ -108,7 +108,13 @@ pub fn frame_replacing_input<'a>(
             let k = digits.parse::<usize>().ok().filter(|&k| is_kept(k, frames, every))?;
             frame_path(dir, k, frames, format)
         };
-        same_file::is_same_file(&output, &real).unwrap_or(false).then_some((output, input))
+        let (input, what) = input;
+        same_file::is_same_file(&output, &real).unwrap_or(false).then(|| super::ReplacedInput {
+            output,
+            input: input.clone(),
+            what: what.clone(),
+            frame: true,
+        })
     })
 }
 

@@ -69,19 +69,19 @@ impl Scene {
     }
 
     /// The first of `outputs` that is one of the run's [`input_files`](Scene::input_files),
-    /// however it is named (a link, `./`, `..`), with that input and what it is: a result
-    /// written there would replace what the run reads. An output that does not exist yet is no
-    /// input.
-    pub fn input_replaced_by<'a>(
-        &self,
-        outputs: &[&'a std::path::Path],
-    ) -> Option<(&'a std::path::Path, PathBuf, String)> {
+    /// however it is named (a link, `./`, `..`): a result written there would replace what the
+    /// run reads. An output that does not exist yet is no input.
+    pub fn input_replaced_by(&self, outputs: &[&std::path::Path]) -> Option<ReplacedInput> {
         let inputs = self.input_files();
         outputs.iter().find_map(|&output| {
-            inputs
-                .iter()
-                .find(|(input, _)| same_file::is_same_file(output, input).unwrap_or(false))
-                .map(|(input, what)| (output, input.clone(), what.clone()))
+            inputs.iter().find(|(input, _)| same_file::is_same_file(output, input).unwrap_or(false)).map(
+                |(input, what)| ReplacedInput {
+                    output: output.to_path_buf(),
+                    input: input.clone(),
+                    what: what.clone(),
+                    frame: false,
+                },
+            )
         })
     }
 
@@ -94,6 +94,27 @@ impl Scene {
     pub fn report_path(&self) -> Option<PathBuf> {
         self.output.report.as_ref().map(|p| self.base_dir.join(p))
     }
+}
+
+/// An output of a run that is one of its inputs ([`Scene::input_replaced_by`], a frame:
+/// [`frames::frame_replacing_input`]), refused before any work: the one message every door
+/// (command line, Python) gives.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error(
+    "{}: is {what} ({}); shapeup never replaces its inputs, {}",
+    crate::io::one_line(output.display()),
+    crate::io::one_line(input.display()),
+    if *frame { "simulate into another folder" } else { "write the result elsewhere" }
+)]
+pub struct ReplacedInput {
+    /// The output (a frame's path for a frame).
+    pub output: PathBuf,
+    /// The input it is, as the scene names it.
+    pub input: PathBuf,
+    /// What that input is ("the scene's mesh", …).
+    pub what: String,
+    /// Whether the output is a frame of `simulate`.
+    pub frame: bool,
 }
 
 #[cfg(test)]
@@ -166,12 +187,12 @@ mod tests {
         let scene = Scene::parse(text, SceneFormat::Toml, &file, d.to_path_buf()).unwrap();
         let dotted = d.join("sub").join("..").join("tri.obj");
         let new = d.join("new.obj");
-        let (output, input, what) = scene.input_replaced_by(&[&new, &dotted]).unwrap();
+        let ReplacedInput { output, input, what, .. } = scene.input_replaced_by(&[&new, &dotted]).unwrap();
         assert_eq!(
-            (output, input.as_path(), what.as_str()),
+            (output.as_path(), input.as_path(), what.as_str()),
             (dotted.as_path(), d.join("tri.obj").as_path(), "the scene's mesh")
         );
-        let (_, _, what) = scene.input_replaced_by(&[&d.join(".").join("s.toml")]).unwrap();
+        let what = scene.input_replaced_by(&[&d.join(".").join("s.toml")]).unwrap().what;
         assert_eq!(what, "the scene file");
         #[cfg(unix)]
         {
