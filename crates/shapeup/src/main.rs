@@ -576,7 +576,7 @@ fn energy(scene_path: &Path, positions_path: &Path) -> Result<()> {
 /// the file's name under `"path"`); the reader's warnings go to stderr as usual.
 fn info(mesh: &Path, json: bool) -> Result<()> {
     let (loaded, path) = samples::read_mesh_arg(mesh)?;
-    let info = shapeup_core::inspect::MeshInfo::of(&loaded.mesh);
+    let info = shapeup_core::inspect::MeshInfo::of_loaded(&loaded);
     let mut out = std::io::stdout().lock();
     if json {
         let mut value = serde_json::to_value(&info)?;

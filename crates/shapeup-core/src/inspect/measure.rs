@@ -12,6 +12,18 @@ use crate::mesh::{Mesh, Polygons};
 use crate::topology::{connected_pieces, polygon_edges, tetrahedron_boundary, tetrahedron_edges, unique_edges};
 
 impl MeshInfo {
+    /// [`MeshInfo::of`] a mesh read from a file, with what only the file says: its left-handed
+    /// tetrahedra ([`Volume::left_handed_tetrahedra`]).
+    pub fn of_loaded(loaded: &crate::io::LoadedMesh) -> MeshInfo {
+        let mut info = MeshInfo::of(&loaded.mesh);
+        if let (Some(volume), crate::io::Attributes::Tetrahedra(order)) = (&mut info.volume, &loaded.attributes) {
+            for &t in &order.left_handed {
+                volume.left_handed_tetrahedra.add(t);
+            }
+        }
+        info
+    }
+
     /// Inspects `mesh`. Never panics on a mesh that passes [`Mesh::validate`] (faces may repeat
     /// corners or have 1–2 corners). [O(c log c) for c corners; see the [module docs](super)]
     pub fn of(mesh: &Mesh) -> MeshInfo {
@@ -362,5 +374,6 @@ fn volume(mesh: &Mesh) -> Volume {
         boundary_non_manifold_edges: edge_faces.iter().filter(|&&c| c > 2).count(),
         boundary_closed: !boundary.is_empty() && open == 0,
         faces_in_more_than_two_tetrahedra: faces.chunk_by(|a, b| a == b).filter(|g| g.len() > 2).count(),
+        left_handed_tetrahedra: Found::default(),
     }
 }

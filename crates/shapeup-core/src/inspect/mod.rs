@@ -161,6 +161,11 @@ pub struct Volume {
     pub boundary_closed: bool,
     /// Triangles shared by more than two tetrahedra (each triangle once).
     pub faces_in_more_than_two_tetrahedra: usize,
+    /// Tetrahedra the file lists left-handed (negative volume in its node order), by index: the
+    /// readers turn them right-handed for the solver and the writers back
+    /// ([`crate::io::TetrahedronOrder`]). Filled by [`MeshInfo::of_loaded`]; 0 from
+    /// [`MeshInfo::of`], which sees the mesh as the solver does.
+    pub left_handed_tetrahedra: Found<u32>,
 }
 
 /// Degenerate elements, with the tolerances used (absolute, from the mesh's scale L; see the

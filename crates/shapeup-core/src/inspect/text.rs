@@ -140,6 +140,13 @@ impl fmt::Display for MeshInfo {
                 number(d.volume_tolerance)
             )?;
             writeln!(f, "                 inverted tetrahedra {}", Shown(&d.inverted_tetrahedra, index))?;
+            if let Some(v) = self.volume.as_ref().filter(|v| v.left_handed_tetrahedra.count > 0) {
+                writeln!(
+                    f,
+                    "                 left-handed tetrahedra in the file {} (solved right-handed, written back as the file lists them)",
+                    Shown(&v.left_handed_tetrahedra, index)
+                )?;
+            }
         }
         let b = &self.bounding_box;
         writeln!(f, "bounding box:    min {} max {}", triple(&b.min), triple(&b.max))?;

@@ -222,6 +222,36 @@ pub enum Attributes {
     Ply(Box<PlyAttributes>),
     /// Everything an OFF file held: its header keyword and the values after each vertex and face.
     Off(Box<OffAttributes>),
+    /// The node order of a `.msh` or TetGen file's tetrahedra, where some are left-handed.
+    Tetrahedra(Box<TetrahedronOrder>),
+}
+
+/// Which tetrahedra a `.msh` or TetGen file lists left-handed: negative volume
+/// (b − a) · ((c − a) × (d − a)) < 0 in the file's node order a, b, c, d. The readers swap
+/// such a tetrahedron's last two nodes (the solver, the boundary and every volume take
+/// tetrahedra right-handed); the writers of tetrahedra (`.msh`, TetGen, VTU) swap them back, so
+/// an output lists every tetrahedron's nodes as its input did.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct TetrahedronOrder {
+    /// How many tetrahedra the mesh read has (the order applies to a mesh with as many).
+    pub tetrahedra: usize,
+    /// The left-handed ones, by index, ascending.
+    pub left_handed: Vec<u32>,
+}
+
+impl TetrahedronOrder {
+    /// `tetrahedra` with the left-handed ones in the file's order again; `None` when the mesh
+    /// does not have as many tetrahedra as the file (another mesh), or none was left-handed.
+    pub fn file_order(&self, tetrahedra: &[[u32; 4]]) -> Option<Vec<[u32; 4]>> {
+        if self.left_handed.is_empty() || tetrahedra.len() != self.tetrahedra {
+            return None;
+        }
+        let mut out = tetrahedra.to_vec();
+        for &t in &self.left_handed {
+            out.get_mut(t as usize)?.swap(2, 3);
+        }
+        Some(out)
+    }
 }
 
 impl Attributes {
@@ -240,6 +270,7 @@ impl Attributes {
             Attributes::Obj(a) => a.texcoords(polygons),
             Attributes::Ply(a) => a.texcoords(polygons),
             Attributes::Off(a) => a.texcoords(polygons),
+            Attributes::Tetrahedra(_) => None,
         }
     }
 
@@ -250,6 +281,7 @@ impl Attributes {
             Attributes::Obj(a) => a.vertex_colors(),
             Attributes::Ply(a) => a.vertex_colors(),
             Attributes::Off(a) => a.vertex_colors(),
+            Attributes::Tetrahedra(_) => None,
         }
     }
 
@@ -260,6 +292,7 @@ impl Attributes {
             Attributes::Obj(a) => a.has_normals(),
             Attributes::Ply(a) => a.has_normals(),
             Attributes::Off(a) => a.has_normals(),
+            Attributes::Tetrahedra(_) => false,
         }
     }
 
@@ -271,6 +304,15 @@ impl Attributes {
         }
     }
 
+    /// The mesh's tetrahedra as the file the attributes come from ordered their nodes, when
+    /// that differs (see [`TetrahedronOrder`]).
+    pub fn file_tetrahedra(&self, mesh: &Mesh) -> Option<Vec<[u32; 4]>> {
+        match self {
+            Attributes::Tetrahedra(order) => order.file_order(&mesh.tetrahedra),
+            _ => None,
+        }
+    }
+
     /// Every kind of attribute the file carries, for writers of another format to say what
     /// they drop.
     pub fn kinds(&self) -> Vec<AttributeKind> {
@@ -279,6 +321,8 @@ impl Attributes {
             Attributes::Obj(a) => a.kinds(),
             Attributes::Ply(a) => a.kinds(),
             Attributes::Off(a) => a.kinds(),
+            // Kept by every writer of tetrahedra; the others write no tetrahedra (and say so).
+            Attributes::Tetrahedra(_) => Vec::new(),
         }
     }
 }
@@ -394,15 +438,28 @@ pub fn write_mesh_with(
         WriteFormat::Off => write_atomic(path, |w| off::write_off(w, mesh, attributes, warn))?,
         WriteFormat::Msh => {
             report_dropped(attributes, &[], "MSH", warn);
-            write_atomic(path, |w| msh::write_msh(w, mesh))?;
+            write_atomic(path, |w| msh::write_msh(w, &in_file_order(mesh, attributes)))?;
         }
         WriteFormat::TetGen => {
             report_dropped(attributes, &[], "TetGen files", warn);
-            tetgen::write_tetgen_files(path, mesh)?;
+            tetgen::write_tetgen_files(path, &in_file_order(mesh, attributes))?;
         }
         WriteFormat::Vtu => write_atomic(path, |w| vtu::write_vtu(w, mesh, attributes, &[], warn))?,
     }
     Ok(warnings.for_file(path))
+}
+
+/// `mesh` with its tetrahedra as the file of `attributes` ordered their nodes (see
+/// [`TetrahedronOrder`]): what the writers of tetrahedra write.
+pub(crate) fn in_file_order<'a>(mesh: &'a Mesh, attributes: &Attributes) -> std::borrow::Cow<'a, Mesh> {
+    match attributes.file_tetrahedra(mesh) {
+        Some(tetrahedra) => {
+            let mut copy = mesh.clone();
+            copy.tetrahedra = tetrahedra;
+            std::borrow::Cow::Owned(copy)
+        }
+        None => std::borrow::Cow::Borrowed(mesh),
+    }
 }
 
 /// Names, in one warning, every kind of `attributes` that a writer of `format` does not keep

@@ -85,7 +85,7 @@ pub fn write_vtu_with_scalars(
     if let Some(v) = point_vectors.iter().find(|v| v.values.len() != n) {
         return Err(invalid(format!("point data '{}' has {} values for {n} points", v.name, v.values.len())));
     }
-    let cells = cells(mesh);
+    let cells = cells(&super::in_file_order(mesh, attributes));
     // vtkio stores both counts as u32 (and panics past it).
     if u32::try_from(n).is_err() || u32::try_from(cells.types.len()).is_err() {
         return Err(invalid(format!("{n} points and {} cells: VTU counts are 32-bit", cells.types.len())));

@@ -190,6 +190,38 @@ fn tetgen_round_trip_is_exact_from_either_file() {
 }
 
 #[test]
+fn left_handed_tetrahedra_are_written_back_as_the_file_lists_them() {
+    // Each file lists its second tetrahedron (1, 3, 2, 4) left-handed; the solver's mesh has it
+    // right-handed, every writer of tetrahedra as the file had it.
+    let file_order: Vec<u64> = [0, 1, 2, 3, 1, 3, 2, 4].into();
+    for files in [vec![("m.msh", MSH22)], vec![("m.msh", MSH41)], vec![("m.node", NODE_1), ("m.ele", ELE_1)]] {
+        let loaded = read_files(&files, files[0].0).unwrap();
+        assert_two_tets(&loaded);
+        let info = shapeup_core::inspect::MeshInfo::of_loaded(&loaded);
+        let left_handed = &info.volume.as_ref().unwrap().left_handed_tetrahedra;
+        assert_eq!((left_handed.count, left_handed.first.clone()), (1, vec![1]), "{}", files[0].0);
+        assert!(info.to_string().contains("left-handed tetrahedra in the file 1 (first: 1)"), "{info}");
+        assert_eq!(shapeup_core::inspect::MeshInfo::of(&loaded.mesh).volume.unwrap().left_handed_tetrahedra.count, 0);
+        let connectivity = super::vtu::connectivity_of(&loaded.mesh, &loaded.attributes);
+        assert_eq!(connectivity, file_order, "VTU");
+        // Without the file's attributes (another mesh) the solver's order is written.
+        assert_ne!(super::vtu::connectivity_of(&loaded.mesh, &Attributes::None), file_order);
+        for written in ["out.msh", "out.ele"] {
+            let dir = tempfile::tempdir().unwrap();
+            let path = dir.path().join(written);
+            let warnings = write_mesh(&path, &loaded.mesh, &loaded.attributes).unwrap();
+            assert!(warnings.is_empty(), "{written}: {warnings:?}");
+            let text = fs::read_to_string(&path).unwrap();
+            let again = read_mesh(&path).unwrap();
+            assert_eq!(again.mesh.tetrahedra, two_tets_expected(), "{written}");
+            assert_eq!(again.attributes, loaded.attributes, "{written} lists the same tetrahedron left-handed");
+            // One-based node tags (MSH) or indices (TetGen): the second tetrahedron as listed.
+            assert!(text.lines().any(|l| l.trim_end().ends_with(" 2 4 3 5")), "{written}:\n{text}");
+        }
+    }
+}
+
+#[test]
 fn triangle_mesh_round_trips_through_msh() {
     let cube = grid(1, 1, 1);
     let surface = Mesh::new(cube.positions.clone(), cube.triangles.clone()).unwrap();

@@ -151,6 +151,11 @@ fn vtu_of(mesh: &Mesh, attributes: &Attributes, vectors: &[PointVectors<'_>]) ->
     (parse_vtu(&String::from_utf8(out).unwrap()), warnings)
 }
 
+/// The cells' connectivity of the VTU file written from `mesh` with `attributes`.
+pub(crate) fn connectivity_of(mesh: &Mesh, attributes: &Attributes) -> Vec<u64> {
+    vtu_of(mesh, attributes, &[]).0.array("Cells", "connectivity").integers()
+}
+
 fn assert_same_bits(a: &[DVec3], b: &[DVec3]) {
     assert_eq!(a.len(), b.len());
     for (i, (p, q)) in a.iter().zip(b).enumerate() {

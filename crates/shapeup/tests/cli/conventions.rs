@@ -469,11 +469,11 @@ fn info_describes_a_mesh_as_the_library_does() {
         let path = json.as_object_mut().unwrap().remove("path").unwrap();
         assert!(path.as_str().unwrap().contains(file.file_stem().unwrap().to_str().unwrap()), "{path}");
         let expected =
-            serde_json::to_value(shapeup_core::inspect::MeshInfo::of(&read_mesh(&file).unwrap().mesh)).unwrap();
+            serde_json::to_value(shapeup_core::inspect::MeshInfo::of_loaded(&read_mesh(&file).unwrap())).unwrap();
         assert!(same(&json, &expected), "{arg}:\n{json}\n{expected}");
         let text = run_in(dir.path(), &["info", arg], &[]).success().stdout;
         assert!(text.lines().next().unwrap().contains(file.file_stem().unwrap().to_str().unwrap()), "{text}");
-        let expected = shapeup_core::inspect::MeshInfo::of(&read_mesh(&file).unwrap().mesh).to_string();
+        let expected = shapeup_core::inspect::MeshInfo::of_loaded(&read_mesh(&file).unwrap()).to_string();
         assert!(text.contains(expected.trim_end()), "{text}");
     }
 }

@@ -9,9 +9,11 @@
 //! second-order elements, …) is skipped (in binary files by its number of nodes, from Gmsh's table
 //! of element types: an unknown type is an error there). With tetrahedra, the mesh's triangles
 //! are their boundary ([`tetrahedron_boundary`](crate::topology::tetrahedron_boundary)) and the file's triangles are ignored; without,
-//! the file's triangles are the mesh. Tetrahedra of negative volume are reoriented silently by
-//! swapping their last two vertices (so scene vertex indices stay valid, only the corner order
-//! changes); flat ones (|volume| ≤ 1e-12 × the product of the edge lengths from the first
+//! the file's triangles are the mesh. Tetrahedra of negative volume (left-handed) are reoriented
+//! for the solver by swapping their last two vertices (so scene vertex indices stay valid, only
+//! the corner order changes) and listed in the attributes
+//! ([`TetrahedronOrder`](crate::io::TetrahedronOrder)), so that every writer of tetrahedra puts
+//! them back in the file's order; flat ones (|volume| ≤ 1e-12 × the product of the edge lengths from the first
 //! corner) and ones that repeat a vertex are an error naming the element and its line (ASCII) or
 //! byte offset (binary).
 //!

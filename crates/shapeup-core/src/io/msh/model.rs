@@ -186,7 +186,8 @@ impl Elements {
 
 /// Builds a tetrahedral mesh whose triangles are the boundary of `tets` (shared with the TetGen
 /// reader). Each tetrahedron of negative volume gets its last two vertices swapped, so that all
-/// are positively oriented and the boundary faces outward; `origins` gives the line and file
+/// are positively oriented and the boundary faces outward, and is listed in the attributes
+/// ([`crate::io::TetrahedronOrder`]) so that outputs swap it back; `origins` gives the line and file
 /// number of each tetrahedron, `element` what the file calls it, for errors.
 ///
 /// # Errors
@@ -216,7 +217,8 @@ fn tetrahedra_to_mesh(
     let mesh_error = |source: MeshError| IoError::Mesh { path: path.to_path_buf(), source };
     // Validates indices and coordinates, so the positions can be indexed below.
     let mut mesh = Mesh::with_tetrahedra(positions, Vec::new(), tets).map_err(mesh_error)?;
-    for (tet, &(origin, id)) in mesh.tetrahedra.iter_mut().zip(origins) {
+    let mut left_handed = Vec::new();
+    for (i, (tet, &(origin, id))) in mesh.tetrahedra.iter_mut().zip(origins).enumerate() {
         let error = |message: String| match place {
             Place::Line => IoError::Parse { path: path.to_path_buf(), line: origin as usize, message },
             Place::Offset => IoError::Binary { path: path.to_path_buf(), offset: origin, message },
@@ -232,9 +234,16 @@ fn tetrahedra_to_mesh(
         }
         if volume6 < 0.0 {
             tet.swap(2, 3);
+            left_handed.push(i as u32);
         }
     }
     let boundary = tetrahedron_boundary(&mesh.tetrahedra);
     mesh.set_triangles(boundary);
-    Ok(LoadedMesh { mesh, attributes: crate::io::Attributes::None, warnings: crate::warnings::Warnings::new() })
+    let attributes = if left_handed.is_empty() {
+        crate::io::Attributes::None
+    } else {
+        let tetrahedra = mesh.tetrahedra.len();
+        crate::io::Attributes::Tetrahedra(Box::new(crate::io::TetrahedronOrder { tetrahedra, left_handed }))
+    };
+    Ok(LoadedMesh { mesh, attributes, warnings: crate::warnings::Warnings::new() })
 }
