@@ -15,6 +15,7 @@ and Simulation share), ``solver`` (Solver), ``simulation`` (Simulation),
 """
 
 from ._shapeup import SolveFailed, __version__, catalogue_markdown, set_threads
+from ._checks import UnconvergedWarning
 from .groups import Group
 from .mesh import Mesh, read_mesh, write_mesh
 from .scene import Scene
@@ -32,6 +33,7 @@ __all__ = [
     "Simulation",
     "SolveFailed",
     "Solver",
+    "UnconvergedWarning",
     "constraint_types",
     "read_mesh",
     "write_mesh",

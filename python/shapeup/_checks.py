@@ -18,6 +18,24 @@ import numpy as np
 PathLike = Union[str, "os.PathLike[str]"]
 
 
+class UnconvergedWarning(UserWarning):
+    """A static solve stopped at its iteration cap short of its minimum (its relative residual,
+    the report's ``residual``, above ``STATIC_RESIDUAL_LIMIT``): raise ``iterations``, with a
+    ``tolerance`` to stop once converged."""
+
+
+def _warn_unconverged(report: Mapping[str, Any]) -> None:
+    """One :class:`UnconvergedWarning` per ``unconverged`` entry of a scene solve's
+    ``report["warnings"]`` (the command line's line, once)."""
+    import warnings
+
+    for w in report.get("warnings", []):
+        if w.get("kind") == "unconverged":
+            file = f"{w['file']}: " if w.get("file") else ""
+            first = f" (first: {w['first']})" if w.get("first") else ""
+            warnings.warn(f"{file}{w['count']} {w['message']}{first}", UnconvergedWarning, stacklevel=3)
+
+
 def _vertices(V: Any, name: str = "V") -> np.ndarray:
     """``V`` as a C-contiguous float64 (n, 3) array: the same object when it already is one
     (no copy), else converted. TypeError for a non-numeric dtype, ValueError for a wrong shape

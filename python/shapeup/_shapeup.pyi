@@ -6,6 +6,7 @@ import numpy as np
 import numpy.typing as npt
 
 __version__: str
+STATIC_RESIDUAL_LIMIT: float
 
 class SolveFailed(Exception): ...
 

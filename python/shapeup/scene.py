@@ -10,7 +10,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from . import _shapeup
-from ._checks import PathLike, _count, _json
+from ._checks import PathLike, _count, _json, _warn_unconverged
 
 
 class Scene:
@@ -77,8 +77,9 @@ class Scene:
         the scene's steps × iterations). Returns ``(V, report)``: the result in the input's
         frame float64 (n, 3), bit for bit what the command line writes, and the report the
         command line writes with ``--report``. Writes ``output`` (a mesh file, with the
-        input's faces and attributes) and ``report`` (JSON) when given. ValueError, before any
-        work, when either is one of the run's inputs (the scene file, its mesh, a mesh
+        input's faces and attributes) and ``report`` (JSON) when given. A solve that stops at its
+        iteration cap short of its minimum warns (:class:`UnconvergedWarning`, as the command
+        line's warning; ``report["residual"]``). ValueError, before any work, when either is one of the run's inputs (the scene file, its mesh, a mesh
         collider's file) under any name; IsADirectoryError when ``output`` is a folder."""
         if iterations is not None:
             iterations = _count(iterations, "iterations")
@@ -87,7 +88,9 @@ class Scene:
             None if output is None else os.fspath(output),
             None if report is None else os.fspath(report),
         )
-        return mesh.vertices, json.loads(text)
+        rep = json.loads(text)
+        _warn_unconverged(rep)
+        return mesh.vertices, rep
 
     def simulate(
         self,

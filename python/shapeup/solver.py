@@ -4,12 +4,13 @@ from __future__ import annotations
 
 import json
 import math
+import warnings
 from typing import Any
 
 import numpy as np
 
 from . import _shapeup
-from ._checks import _count, _vertices
+from ._checks import UnconvergedWarning, _count, _vertices
 from .contact import _Contact
 from .groups import _Groups
 from .mesh import Mesh, _mesh_of
@@ -60,7 +61,10 @@ class Solver(_Groups, _Contact):
 
         Returns ``(q, report)``: the new positions float64 (n, 3) and a dict with
         ``iterations``, ``initial_energy``, ``energy`` (E after each iteration),
-        ``relative_change``, ``rejected`` and ``timings`` (seconds).
+        ``relative_change``, ``rejected``, ``timings`` (seconds), ``residual`` (when all the
+        iterations ran: ‖∇E(q)‖ over ‖∇E‖ where the solve began, else None) and
+        ``unconverged`` (the residual above ``STATIC_RESIDUAL_LIMIT``, 0.01: the solve stopped short of its minimum,
+        which also warns, :class:`UnconvergedWarning`).
 
         The GIL is released while it runs; Ctrl+C stops it (KeyboardInterrupt).
         :class:`SolveFailed` when the system cannot be solved (e.g. nothing anchors it)."""
@@ -69,8 +73,18 @@ class Solver(_Groups, _Contact):
         if not (math.isfinite(tolerance) and tolerance >= 0):
             raise ValueError(f"tolerance must be a finite number >= 0, found {tolerance}")
         x = None if q is None else self._positions(q)
-        out, report = self._native.solve(x, iterations, tolerance, acceleration)
-        return out, json.loads(report)
+        out, text = self._native.solve(x, iterations, tolerance, acceleration)
+        report = json.loads(text)
+        if report.get("unconverged"):
+            warnings.warn(
+                f"the solve stopped at its {report['iterations']}-iteration cap short of its minimum: its gradient is "
+                f"{report['residual']:.3g} times the one it started from (the limit is "
+                f"{_shapeup.STATIC_RESIDUAL_LIMIT}); raise iterations, "
+                "with a tolerance to stop once converged",
+                UnconvergedWarning,
+                stacklevel=2,
+            )
+        return out, report
 
     def energy(self, q: Any) -> dict[str, Any]:
         """E(q) = Σ w_i ‖C_i q − p_i(q)‖²: ``{"total": E, "groups": {name: E_group}}``."""

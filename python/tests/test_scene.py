@@ -13,6 +13,7 @@ from conftest import EXAMPLES
 
 
 @pytest.mark.parametrize("name", ["bunny-springs", "roof-planarize", "spot-rigid-head"])
+@pytest.mark.filterwarnings("ignore::shapeup.UnconvergedWarning")
 def test_deform_equals_cli(tmp_path, cli, name):
     scene = EXAMPLES / f"{name}.toml"
     out, rep = tmp_path / "cli.obj", tmp_path / "cli.json"
@@ -25,6 +26,9 @@ def test_deform_equals_cli(tmp_path, cli, name):
     np.testing.assert_allclose(shapeup.read_mesh(tmp_path / "py.obj").V, expected, rtol=0, atol=1e-12)
     assert report["iterations"] == cli_report["iterations"]
     np.testing.assert_allclose(report["energy"], cli_report["energy"], rtol=1e-12)
+    # The roof and Spot stop at their caps short of their minima: both doors say so alike.
+    assert report["unconverged"] == cli_report["unconverged"] == (name != "bunny-springs")
+    np.testing.assert_allclose(report["residual"], cli_report["residual"], rtol=1e-9)
     assert [g["name"] for g in report["groups"]] == [g["name"] for g in cli_report["groups"]]
     assert json.loads((tmp_path / "py.json").read_text())["energy"] == report["energy"]
 
@@ -139,3 +143,58 @@ def test_simulate_never_replaces_its_inputs_and_says_which_frames_it_did_not_wri
     [left] = [w for w in report["warnings"] if w["kind"] == "frames_of_another_run"]
     assert left["count"] == 3 and left["first"] == "frame_0003.obj"
     assert (frames / "frame_0005.obj").exists()
+
+
+STIFF_SPRINGS = """
+[mesh]
+generate = {{ kind = "cloth", vertices = [11, 11], size = [1.0, 1.0] }}
+normalize = false
+[solver]
+iterations = 200
+[[constraints]]
+type = "edge_spring"
+weight = {weight}
+[[constraints]]
+type = "position"
+vertices = [0]
+[[constraints]]
+type = "position"
+vertices = [120]
+translate = [0.5, 0.3, 0.0]
+"""
+
+
+def test_a_solve_stopped_short_of_its_minimum_warns_once(tmp_path):
+    # Springs 1e8 times stiffer than the handles: 200 iterations end far from the minimum.
+    scene = tmp_path / "stiff.toml"
+    scene.write_text(STIFF_SPRINGS.format(weight="1e8"))
+    with pytest.warns(shapeup.UnconvergedWarning, match="stiff.toml: 1 static solve .* short of its minimum") as caught:
+        _, report = shapeup.Scene.load(scene).deform()
+    assert len(caught) == 1
+    assert report["unconverged"] and report["residual"] > shapeup._shapeup.STATIC_RESIDUAL_LIMIT
+    assert [w["kind"] for w in report["warnings"]] == ["unconverged"]
+
+    # Nothing said where the solve converges within the same cap.
+    soft = tmp_path / "soft.toml"
+    soft.write_text(STIFF_SPRINGS.format(weight="1.0"))
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", shapeup.UnconvergedWarning)
+        _, report = shapeup.Scene.load(soft).deform()
+    assert not report["unconverged"] and report["residual"] < shapeup._shapeup.STATIC_RESIDUAL_LIMIT
+
+
+def test_solver_solve_reports_and_warns_when_short(tmp_path):
+    V = np.array([[x / 10, 0.0, z / 10] for z in range(11) for x in range(11)])
+    F = [[r * 11 + c, r * 11 + c + 1, (r + 1) * 11 + c] for r in range(10) for c in range(10)]
+    F += [[r * 11 + c + 1, (r + 1) * 11 + c + 1, (r + 1) * 11 + c] for r in range(10) for c in range(10)]
+    s = shapeup.Solver(V, np.array(F))
+    s.add("edge_spring", weight=1e8)
+    s.add("position", [0])
+    s.add("position", [120], translate=[0.5, 0.3, 0.0])
+    with pytest.warns(shapeup.UnconvergedWarning, match="200-iteration cap"):
+        _, report = s.solve(iterations=200)
+    assert report["unconverged"] and report["residual"] > 0.01
+    _, report = s.solve(iterations=5000, tolerance=1e-6)
+    assert report["residual"] is None and not report["unconverged"]

@@ -26,7 +26,7 @@ use crate::document::Document;
 use crate::edit_state::{EditSolver, EditState, Rest};
 use crate::error::EditorError;
 use glam::DVec3;
-use shapeup_core::solver::{ENERGY_FLOOR, SolveError, SolveReport, is_converged};
+use shapeup_core::solver::{ENERGY_FLOOR, STATIC_RESIDUAL_LIMIT, SolveError, SolveReport, is_converged};
 use std::fmt;
 use std::sync::{Arc, Condvar, Mutex, MutexGuard, PoisonError};
 use std::thread::JoinHandle;
@@ -103,6 +103,10 @@ pub struct SolveResult {
     /// Per vertex, whether it touches a collider or the surface itself after the last chunk
     /// (empty without colliders and self-collision).
     pub touching: Vec<bool>,
+    /// ‖∇E‖ after the last chunk over ‖∇E‖ where the request began, while every chunk ran all
+    /// its iterations ([`shapeup_core::solver::SolveReport::residual`]; each chunk starts where
+    /// the last ended, so the request's is the product of its chunks'); `None` otherwise.
+    pub residual: Option<f64>,
 }
 
 impl SolveResult {
@@ -141,6 +145,7 @@ impl SolveResult {
         self.energy.extend(next.energy);
         self.error = next.error;
         self.touching = next.touching;
+        self.residual = next.residual;
     }
 }
 
@@ -155,6 +160,10 @@ impl fmt::Display for SolveResult {
             write!(f, "converged: {n} {noun}")?;
         } else if self.finished {
             write!(f, "stopped at the {n}-iteration cap")?;
+            if let Some(r) = self.residual.filter(|&r| r > STATIC_RESIDUAL_LIMIT) {
+                // As the command line's `unconverged` warning says it.
+                write!(f, " short of the minimum (its gradient {r:.3} times the start's; raise the cap)")?;
+            }
         } else {
             write!(f, "solving… {n} {noun}")?;
         }
@@ -437,11 +446,13 @@ struct Job {
     /// Iterations of the last chunk (a chunk at most doubles the previous one, in case the
     /// time estimate was off).
     last_chunk: usize,
+    /// The request's relative residual so far ([`SolveResult::residual`]).
+    residual: Option<f64>,
 }
 
 impl Job {
     fn new(seq: u64, request: SolveRequest) -> Self {
-        Job { seq, request, started: false, done: 0, last_energy: None, last_chunk: 0 }
+        Job { seq, request, started: false, done: 0, last_energy: None, last_chunk: 0, residual: Some(1.0) }
     }
 }
 
@@ -517,6 +528,7 @@ impl Converger {
             energy: Vec::new(),
             error: None,
             touching: Vec::new(),
+            residual: None,
         };
         let outcome = self.chunk(job, interrupted);
         match outcome {
@@ -542,6 +554,8 @@ impl Converger {
                     _ => false,
                 };
                 result.finished = result.converged || job.done >= job.request.iterations;
+                job.residual = job.residual.zip(report.residual).map(|(so_far, chunk)| so_far * chunk);
+                result.residual = job.residual;
                 result.iterations = job.done;
                 result.local_ms = 1e3 * report.local_seconds;
                 result.global_ms = 1e3 * report.global_seconds;

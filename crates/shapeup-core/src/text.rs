@@ -25,6 +25,19 @@ pub(crate) fn number(v: f64) -> String {
     if v == 0.0 || !v.is_finite() || (1e-4..1e7).contains(&v.abs()) { format!("{v}") } else { format!("{v:e}") }
 }
 
+/// A measured ratio to three significant digits, as a message shows it: 0.00123, 0.76, 859,
+/// 1.23e7.
+pub(crate) fn three_digits(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    if !(1e-3..1e6).contains(&v.abs()) {
+        return format!("{v:.2e}");
+    }
+    let decimals = (2 - v.abs().log10().floor() as i32).max(0) as usize;
+    format!("{v:.decimals$}")
+}
+
 /// Characters of a file's text that [`shown`] quotes.
 const SHOWN_CHARS: usize = 40;
 
@@ -48,6 +61,19 @@ fn push_escaped(out: &mut String, text: &str) {
             out.extend(c.escape_default());
         } else {
             out.push(c);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn three_digits_keeps_three_significant_digits() {
+        for (v, shown) in [(0.76, "0.760"), (859.23, "859"), (0.001234, "0.00123"), (12.345, "12.3"), (1.5e7, "1.50e7")]
+        {
+            assert_eq!(three_digits(v), shown);
         }
     }
 }

@@ -200,6 +200,10 @@ impl PyScene {
         if let Some(w) = &mut writer {
             warnings.extend(w.warnings.take().unwrap_or_default());
         }
+        // What the run says once, as the command line's report has it.
+        let mut found = shapeup_core::warnings::Warnings::new();
+        totals.add_warnings(&mut found);
+        warnings.extend(found.for_file(&self.scene.file));
         if let (Some(dir), Some(w)) = (&output, &writer) {
             warnings.extend(warn_of_frames_not_written(dir, &w.written));
         }

@@ -23,6 +23,8 @@ fn solve_report_json(report: &SolveReport, iterations: usize, acceleration: Acce
         "relative_change": shapeup_core::scene::relative_changes(report.initial_energy, &report.energies),
         "acceleration": acceleration.name(),
         "rejected": report.rejected,
+        "residual": report.residual,
+        "unconverged": report.unconverged,
         "timings": {
             "setup_s": report.setup_seconds,
             "local_s": report.local_seconds,

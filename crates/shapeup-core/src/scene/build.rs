@@ -311,7 +311,8 @@ pub fn solve_static_with_contact(
 ) -> Result<SolveReport, SolveError> {
     // E must be finite, as the solve without contact requires (an overflowing target would
     // otherwise be written with null energies and exit 0).
-    let mut report = SolveReport { initial_energy: system.finite_energy(q)?, ..SolveReport::default() };
+    let mut report = SolveReport::default();
+    report.initial_energy = system.finite_energy(q)?;
     if system.contact_weights().is_none() {
         // W relative to each vertex's diagonal entry of the static matrix, in its first
         // factorization.
@@ -504,6 +505,16 @@ impl LoadedScene {
             .system
             .solve_with(&mut q, iterations, self.scene.solver.tolerance, after_iteration)
             .map_err(|source| SceneError::Solve { path: self.scene.file.clone(), source })?;
+        if let (true, Some(residual)) = (report.unconverged, report.residual) {
+            let message = format!(
+                "static solve stopped at its iteration cap short of its minimum: its gradient is {} times the one it started from (the limit is {}); raise `iterations`, with a `tolerance` to stop once converged",
+                crate::text::three_digits(residual),
+                crate::solver::STATIC_RESIDUAL_LIMIT
+            );
+            let mut found = Warnings::new();
+            found.add("unconverged", &message, String::new);
+            self.warnings.extend(found.for_file(&self.scene.file));
+        }
         Ok((q, report))
     }
 

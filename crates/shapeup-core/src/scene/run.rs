@@ -79,6 +79,10 @@ impl LoadedScene {
                 self.system.params().acceleration
             },
             "rejected": solve.rejected,
+            // The relative residual at the end when the solve ran all its iterations
+            // (crate::solver::SolveReport::residual), and whether it is above the limit.
+            "residual": solve.residual,
+            "unconverged": solve.unconverged,
             "factor": {"nnz_lower": nnz_a, "nnz_l": nnz_l},
             "factorizations": self.system.factorizations(),
             "contacts": touch.touching,

@@ -42,6 +42,14 @@ fn meets_tolerance(previous: f64, energy: f64, tolerance: f64, floor: f64) -> bo
     (0.0..=floor).contains(&energy) || (previous - energy).abs() <= tolerance * previous.abs()
 }
 
+/// A static solve that ran all its iterations ended short of its minimum when its relative
+/// residual ‖∇E(q)‖ / ‖∇E(q₀)‖ (the gradient left, over the gradient it started from) is above
+/// this. Measured on the examples: 2e-6 to 3e-3 for solves that end within 1e-3 of the
+/// bounding-box diagonal of their converged shape, 0.3 to 17 for ones 5 % to 10 % away
+/// (bunny strain + bending, Spot's rigid head and the roof's planarization at their caps;
+/// springs of weight 1e8 against handles of weight 1).
+pub const STATIC_RESIDUAL_LIMIT: f64 = 1e-2;
+
 /// What a [`System::solve`] did.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct SolveReport {
@@ -64,6 +72,18 @@ pub struct SolveReport {
     /// start of the solve (m_r = Σ_v |c_rv| ‖q_v‖; hard groups left out): relative to the
     /// terms' size, so that a solve stops alike at every scale of coordinates and weights.
     pub energy_floor: f64,
+    /// A static solve's relative residual when it ran all its iterations (neither met its
+    /// tolerance nor was stopped): [`STATIC_RESIDUAL_LIMIT`]'s ratio, 0 when E is at its
+    /// round-off floor. `None` for a solve that ended early, ran no iteration, computed no
+    /// energies ([`System::iterate`]) or is a time step's (not measured yet: see the math
+    /// reference, "When a solve stops short").
+    pub residual: Option<f64>,
+    /// The residual is above [`STATIC_RESIDUAL_LIMIT`]: the solve stopped at its iteration cap
+    /// short of its minimum (raise the iterations, with a tolerance to stop once converged).
+    pub unconverged: bool,
+    /// ‖A q − b(q)‖ where the solve began, when an iteration computed it (L-BFGS's first):
+    /// the static residual's denominator without a gradient pass of its own.
+    pub(super) start_gradient: Option<f64>,
 }
 
 /// What a solve asks of its iterations.

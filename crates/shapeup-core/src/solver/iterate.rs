@@ -16,20 +16,22 @@ pub(super) struct Scratch {
     plain: Vec<DVec3>,
     mixed: Vec<DVec3>,
     x: Vec<[f64; 4]>,
-    g: Vec<[f64; 4]>,
+    pub(super) g: Vec<[f64; 4]>,
     d: Vec<[f64; 4]>,
 }
 
 impl System {
     /// The plain iteration: global step from the last projections, then the local step at the
-    /// new q, whose projections give E(q) and feed the next global step.
+    /// new q, whose projections give E(q) and feed the next global step. Each scheme returns
+    /// whether it ended before its last iteration (the tolerance met, or `after_iteration`
+    /// stopped it).
     pub(super) fn iterate_plain(
         &mut self,
         q: &mut [DVec3],
         mut run: Run,
         after_iteration: &mut impl FnMut(usize, f64) -> ControlFlow<()>,
         report: &mut SolveReport,
-    ) -> Result<(), SolveError> {
+    ) -> Result<bool, SolveError> {
         for _ in 0..run.iterations {
             timed(&mut report.global_seconds, || self.global_step(q))?;
             timed(&mut report.local_seconds, || self.project(q));
@@ -37,10 +39,10 @@ impl System {
             let objective = energy + self.inertial_energy(q);
             let (converged, stop) = run.record(report, energy, objective, after_iteration)?;
             if converged || stop {
-                break;
+                return Ok(true);
             }
         }
-        Ok(())
+        Ok(false)
     }
 
     /// Anderson-accelerated iteration (see [`super::anderson`]): x_{k+1} is the mixed iterate when its
@@ -53,7 +55,7 @@ impl System {
         mut run: Run,
         after_iteration: &mut impl FnMut(usize, f64) -> ControlFlow<()>,
         report: &mut SolveReport,
-    ) -> Result<(), SolveError> {
+    ) -> Result<bool, SolveError> {
         let n = q.len();
         self.anderson.resize(n, self.params.anderson_window);
         let (plain, mixed) = (&mut scratch.plain, &mut scratch.mixed);
@@ -84,10 +86,10 @@ impl System {
                 converged = false;
             }
             if converged || stop {
-                break;
+                return Ok(true);
             }
         }
-        Ok(())
+        Ok(false)
     }
 
     /// L-BFGS iteration (see [`lbfgs`]): x_{k+1} = x_k + d_k, d_k = −H_k g_k, when it meets the
@@ -101,7 +103,7 @@ impl System {
         mut run: Run,
         after_iteration: &mut impl FnMut(usize, f64) -> ControlFlow<()>,
         report: &mut SolveReport,
-    ) -> Result<(), SolveError> {
+    ) -> Result<bool, SolveError> {
         let solved = self.assembly.num_solved();
         self.lbfgs.resize(solved, self.params.lbfgs_memory);
         let Scratch { plain: trial, x, g, d, .. } = scratch;
@@ -117,7 +119,8 @@ impl System {
             let t = Instant::now();
             // g at q: the projections and C q of the energy just evaluated there.
             self.half_gradient(q, g);
-            let Some(factor) = self.factor.as_mut() else { break };
+            report.start_gradient.get_or_insert_with(|| lbfgs::dot(g, g).sqrt());
+            let Some(factor) = self.factor.as_mut() else { return Ok(true) };
             global::gather(&self.assembly, factor.permutation(), q, x);
             let quasi_newton = self.lbfgs.first_loop(x, g, d, confirm);
             factor.solve_permuted_in_place(d);
@@ -158,10 +161,10 @@ impl System {
                 converged = false;
             }
             if converged || stop {
-                break;
+                return Ok(true);
             }
         }
-        Ok(())
+        Ok(false)
     }
 
     /// Half the objective's gradient over the solved vertices, in the factor's order (see
@@ -190,6 +193,39 @@ impl System {
                 gi[1] -= f.y;
                 gi[2] -= f.z;
             }
+        }
+    }
+
+    /// ‖A q − b(q)‖, the norm of [`System::half_gradient`] at q, from the projections at q and
+    /// C q that the last energy evaluation at q left (C q is recomputed after, as it was).
+    /// `g` is scratch.
+    pub(super) fn half_gradient_norm(&mut self, q: &[DVec3], g: &mut Vec<[f64; 4]>) -> f64 {
+        g.resize(self.assembly.num_solved(), [0.0; 4]);
+        self.half_gradient(q, g);
+        global::apply_c(&self.assembly, q, &mut self.cq);
+        lbfgs::dot(g, g).sqrt()
+    }
+
+    /// A static solve's relative residual at q, its end, whose energy evaluation at q is the
+    /// last (see [`SolveReport::residual`]): ‖A q − b(q)‖ (half the gradient of E) over
+    /// `start`, the same norm where the solve began. 0 when the residual is 0 or E is at most
+    /// `floor` (the constraints met to round-off); unbounded when it started at a minimum
+    /// (`start` 0) and left it.
+    pub(super) fn relative_residual(
+        &mut self,
+        q: &[DVec3],
+        start: f64,
+        energy: f64,
+        floor: f64,
+        g: &mut Vec<[f64; 4]>,
+    ) -> f64 {
+        let residual = self.half_gradient_norm(q, g);
+        if residual == 0.0 || (0.0..=floor).contains(&energy) {
+            0.0
+        } else if start > 0.0 {
+            residual / start
+        } else {
+            f64::INFINITY
         }
     }
 

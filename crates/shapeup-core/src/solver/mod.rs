@@ -34,7 +34,9 @@ mod triangular;
 
 pub use crate::constraints::{ConstraintGroup, GroupId};
 pub use cholesky::{FactorError, Factorization};
-pub use convergence::{ENERGY_FLOOR, ROUND_OFF_FLOOR, ROW_ROUND_OFF_FLOOR, SolveReport, is_converged};
+pub use convergence::{
+    ENERGY_FLOOR, ROUND_OFF_FLOOR, ROW_ROUND_OFF_FLOOR, STATIC_RESIDUAL_LIMIT, SolveReport, is_converged,
+};
 pub use error::SolveError;
 pub use params::{
     Acceleration, DEFAULT_ANDERSON_WINDOW, DEFAULT_LBFGS_MEMORY, MAX_ANDERSON_WINDOW, MAX_LBFGS_MEMORY, SolverParams,
@@ -536,6 +538,13 @@ impl System {
         let run = Run { iterations, tolerance, objective: energy + self.inertial_energy(q) };
         // Taken out while a loop borrows the system, and put back whatever the outcome.
         let mut scratch = std::mem::take(&mut self.scratch);
+        // A static solve's residual is relative to the gradient it starts from (a time step's
+        // is not measured: see SolveReport::residual).
+        let measured = !self.has_inertial_term() && iterations > 0;
+        let lbfgs =
+            self.params.acceleration == Acceleration::Lbfgs && self.params.is_accelerated() && self.factor.is_some();
+        // L-BFGS's first iteration computes it (SolveReport::start_gradient); the others do not.
+        let start_gradient = if measured && !lbfgs { self.half_gradient_norm(q, &mut scratch.g) } else { 0.0 };
         let result = match self.params.acceleration {
             Acceleration::Anderson if self.params.is_accelerated() => {
                 if !continuing {
@@ -543,7 +552,7 @@ impl System {
                 }
                 self.iterate_anderson(q, &mut scratch, run, &mut after_iteration, &mut report)
             }
-            Acceleration::Lbfgs if self.params.is_accelerated() && self.factor.is_some() => {
+            Acceleration::Lbfgs if lbfgs => {
                 if !continuing {
                     self.lbfgs.reset();
                 }
@@ -551,8 +560,19 @@ impl System {
             }
             _ => self.iterate_plain(q, run, &mut after_iteration, &mut report),
         };
+        if let (Ok(false), true, Some(&energy)) = (&result, measured, report.energies.last()) {
+            let start_gradient = report.start_gradient.unwrap_or(start_gradient);
+            let residual = self.relative_residual(q, start_gradient, energy, report.energy_floor, &mut scratch.g);
+            report.residual = Some(residual);
+            report.unconverged = residual > STATIC_RESIDUAL_LIMIT;
+        }
         self.scratch = scratch;
-        result.map(|()| report)
+        result.map(|_| report)
+    }
+
+    /// Whether the objective has the inertial term (dynamic mode, with a target set).
+    fn has_inertial_term(&self) -> bool {
+        self.inertia.is_some() && !self.inertial_target.is_empty()
     }
 
     /// Σ_v μ_v ‖q_v − s_v‖²: the inertial part of the objective in dynamic mode (0 in static).

@@ -6,6 +6,7 @@
 mod common;
 
 mod contact;
+mod convergence;
 mod dynamics;
 mod invariants;
 mod properties;

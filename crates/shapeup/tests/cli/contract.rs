@@ -2029,3 +2029,28 @@ fn an_energy_that_overflows_is_an_error_not_infinity() {
                 [[constraints]]\ntype = \"position\"\nvertices = [1]\ntranslate = [1e200, 0, 0]\n";
     ws.spot_scene_fails(body, &["not a finite number"]);
 }
+
+/// A static solve that stops at its iteration cap far from its minimum says so once, on stderr
+/// and in the report, and still writes its result (exit 0).
+#[test]
+fn a_solve_stopped_short_of_its_minimum_says_so_once() {
+    let ws = Workspace::new();
+    let scene = ws.scene(
+        "stiff.toml",
+        "[mesh]\ngenerate = { kind = \"cloth\", vertices = [11, 11], size = [1.0, 1.0] }\nnormalize = false\n\
+         [solver]\niterations = 200\n[[constraints]]\ntype = \"edge_spring\"\nweight = 1e8\n\
+         [[constraints]]\ntype = \"position\"\nvertices = [0]\n\
+         [[constraints]]\ntype = \"position\"\nvertices = [120]\ntranslate = [0.5, 0.3, 0.0]\n",
+    );
+    let out = shapeup(ws.deform_args(&scene));
+    assert_eq!(out.code, Some(0), "{}", out.describe());
+    let lines: Vec<&str> = out.stderr.lines().filter(|l| l.contains("short of its minimum")).collect();
+    assert_eq!(lines.len(), 1, "{}", out.describe());
+    assert!(lines[0].contains("stiff.toml: 1 static solve") && lines[0].contains("raise `iterations`"), "{}", lines[0]);
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(ws.out("report.json")).unwrap()).unwrap();
+    assert_eq!(report["unconverged"], true);
+    assert!(report["residual"].as_f64().unwrap() > 0.01, "{report}");
+    let kinds: Vec<&str> = report["warnings"].as_array().unwrap().iter().filter_map(|w| w["kind"].as_str()).collect();
+    assert_eq!(kinds, ["unconverged"]);
+}

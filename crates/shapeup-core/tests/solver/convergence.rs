@@ -1,0 +1,53 @@
+//! A solve that stops short says so: a static solve that ends at its iteration cap far from its
+//! minimum is warned of once, with its residual; solves that converge, or stop at their
+//! tolerance, are not.
+
+use shapeup_core::scene::{LoadedScene, Scene, SceneFormat};
+use shapeup_core::solver::STATIC_RESIDUAL_LIMIT;
+use std::path::PathBuf;
+
+fn load(text: &str) -> LoadedScene {
+    Scene::parse(text, SceneFormat::Toml, &PathBuf::from("convergence.toml"), PathBuf::new()).unwrap().load().unwrap()
+}
+
+/// An 11 × 11 sheet of edge springs of weight `springs`, one corner held and the opposite one
+/// pulled by handles of weight 1, `solver` the [solver] table's lines.
+fn springs_against_handles(springs: f64, solver: &str) -> String {
+    format!(
+        "[mesh]\ngenerate = {{ kind = \"cloth\", vertices = [11, 11], size = [1.0, 1.0] }}\nnormalize = false\n\
+         [solver]\n{solver}\n\
+         [[constraints]]\ntype = \"edge_spring\"\nweight = {springs:e}\n\
+         [[constraints]]\ntype = \"position\"\nvertices = [0]\n\
+         [[constraints]]\ntype = \"position\"\nvertices = [120]\ntranslate = [0.5, 0.3, 0.0]\n"
+    )
+}
+
+#[test]
+fn a_static_solve_stopped_short_of_its_minimum_says_so_once() {
+    // Springs 1e8 times stiffer than the handles: the local-global iteration turns the sheet
+    // towards the handles very slowly.
+    let mut stiff = load(&springs_against_handles(1e8, "iterations = 200"));
+    let (q, report) = stiff.solve_static(None).unwrap();
+    let residual = report.residual.unwrap();
+    assert!(report.unconverged && residual > STATIC_RESIDUAL_LIMIT, "{residual}");
+    assert_eq!(stiff.warnings.count("unconverged"), 1, "{:?}", stiff.warnings.to_json());
+    let line = stiff.warnings.iter().find(|w| w.kind == "unconverged").unwrap().to_string();
+    assert!(line.contains("convergence.toml") && line.contains("raise `iterations`"), "{line}");
+    // It is short indeed: far more iterations take it well away from there.
+    let mut long = load(&springs_against_handles(1e8, "iterations = 20000\ntolerance = 1e-14"));
+    let (converged, _) = long.solve_static(None).unwrap();
+    let apart = q.iter().zip(&converged).map(|(a, b)| a.distance(*b)).fold(0.0, f64::max);
+    assert!(apart > 0.05, "the capped solve is {apart} from the long one");
+
+    // Springs as soft as the handles converge within the same cap: nothing said.
+    let mut soft = load(&springs_against_handles(1.0, "iterations = 200"));
+    let (_, report) = soft.solve_static(None).unwrap();
+    let residual = report.residual.unwrap();
+    assert!(!report.unconverged && residual < STATIC_RESIDUAL_LIMIT, "{residual}");
+    assert_eq!(soft.warnings.count("unconverged"), 0);
+
+    // A solve that meets its tolerance before the cap has no residual to report.
+    let mut early = load(&springs_against_handles(1.0, "iterations = 5000\ntolerance = 1e-6"));
+    let (_, report) = early.solve_static(None).unwrap();
+    assert!(report.energies.len() < 5000 && report.residual.is_none() && !report.unconverged);
+}
