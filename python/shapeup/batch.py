@@ -22,6 +22,7 @@ files and meshes at the same paths, e.g. a shared file system), then pass
 from __future__ import annotations
 
 import os
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Iterable, Mapping, Sequence, Union
@@ -85,6 +86,20 @@ def _items(paths: Iterable[SceneItem]) -> list[tuple[str, dict[str, Any]]]:
     return items
 
 
+class _PlainProgress:
+    """Progress without tqdm: ``shapeup: k/n scenes`` on stderr, one line redrawn."""
+
+    def __init__(self, total: int) -> None:
+        self.total, self.done = total, 0
+
+    def update(self, n: int) -> None:
+        self.done += n
+        print(f"\rshapeup: {self.done}/{self.total} scenes", end="", file=sys.stderr, flush=True)
+
+    def close(self) -> None:
+        print(file=sys.stderr, flush=True)
+
+
 def run_scenes(
     paths: Iterable[SceneItem],
     client: Any = None,
@@ -101,7 +116,8 @@ def run_scenes(
     (``"tcp://host:8786"``) or a ``dask.distributed.Client`` uses that cluster.
 
     A failing scene is reported in its result (``ok=False``, ``error``) while the others
-    finish. ``progress``: a tqdm bar of completed scenes on stderr."""
+    finish. ``progress``: a tqdm bar of completed scenes on stderr (a plain count when tqdm
+    is not installed)."""
     from dask.distributed import Client, LocalCluster, as_completed
 
     items = _items(paths)
@@ -127,9 +143,13 @@ def run_scenes(
         results: list[SceneResult | None] = [None] * len(items)
         bar = None
         if progress:
-            from tqdm.auto import tqdm
+            try:
+                from tqdm.auto import tqdm
 
-            bar = tqdm(total=len(items), unit="scene", desc="shapeup")
+                bar = tqdm(total=len(items), unit="scene", desc="shapeup")
+            except ImportError:
+                # Dask installed without tqdm (it is in the "batch" extra, not required).
+                bar = _PlainProgress(len(items))
         for future in as_completed(futures):
             i = index[future.key]
             try:

@@ -77,17 +77,18 @@ class Solver(_Groups, _Contact):
         report = json.loads(text)
         if report.get("unconverged"):
             warnings.warn(
-                f"the solve stopped at its {report['iterations']}-iteration cap short of its minimum: its gradient is "
-                f"{report['residual']:.3g} times the one it started from (the limit is "
-                f"{_shapeup.STATIC_RESIDUAL_LIMIT}); raise iterations, "
-                "with a tolerance to stop once converged",
+                f"the solve stopped at its {report['iterations']}-iteration cap short of its minimum: the energy's "
+                f"gradient is still {report['residual']:.3g} of where it started (the limit is "
+                f"{_shapeup.STATIC_RESIDUAL_LIMIT}); raise iterations, with a tolerance to stop once converged",
                 UnconvergedWarning,
                 stacklevel=2,
             )
         return out, report
 
     def energy(self, q: Any) -> dict[str, Any]:
-        """E(q) = Σ w_i ‖C_i q − p_i(q)‖²: ``{"total": E, "groups": {name: E_group}}``."""
+        """E(q) = Σ w_i ‖C_i q − p_i(q)‖²: ``{"total": E, "groups": {name: E_group}}``.
+        :class:`SolveFailed` when E is not a finite number (coordinates or weights too large
+        for float64), rather than inf."""
         x = self._positions(q)
         total, per_group = self._native.energy(x)
         return {"total": total, "groups": {self._groups[g].name: e for g, e in per_group if g in self._groups}}

@@ -4,6 +4,7 @@ broken scene reported while the others finish."""
 from __future__ import annotations
 
 import json
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -51,3 +52,13 @@ def test_batch_equals_sequential_and_survives_a_broken_scene(tmp_path):
         np.testing.assert_allclose(batch_v, seq_v, rtol=0, atol=1e-12)
         batch_report = json.loads((tmp_path / "batch" / f"w{i}.json").read_text())
         np.testing.assert_allclose(batch_report["energy"], r.report["energy"], rtol=1e-12)
+
+
+def test_run_scenes_counts_plainly_without_tqdm(tmp_path, monkeypatch, capsys):
+    # Dask installed alone: no tqdm, and the progress is a plain count, not ModuleNotFoundError.
+    monkeypatch.setitem(sys.modules, "tqdm", None)
+    monkeypatch.setitem(sys.modules, "tqdm.auto", None)
+    items = sweep(tmp_path, "plain")[:2]
+    results = run_scenes(items, workers=1, progress=True)
+    assert [r.ok for r in results] == [True, True], [r.error for r in results]
+    assert "shapeup: 2/2 scenes" in capsys.readouterr().err

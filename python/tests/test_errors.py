@@ -158,3 +158,12 @@ def test_spin_and_keyword_vertices_are_checked():
         s.add("position", np.array([2**64 - 1], dtype=np.uint64))
     with pytest.raises(TypeError, match="shapeup.Mesh"):
         shapeup.Solver(mesh="x.obj")
+
+
+def test_the_energy_of_huge_coordinates_is_an_error_not_inf():
+    V, F = grid(4, 4)
+    s = shapeup.Solver(V, F)
+    s.add("edge_spring")
+    assert np.isfinite(s.energy(V * 2.0)["total"])
+    with pytest.raises(shapeup.SolveFailed, match="not a finite number"):
+        s.energy(V * 1e200)

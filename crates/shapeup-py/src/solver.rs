@@ -12,7 +12,7 @@ use pyo3::prelude::*;
 use shapeup_core::contact::ContactModel;
 use shapeup_core::geometry::RestGeometry;
 use shapeup_core::mesh::Mesh as CoreMesh;
-use shapeup_core::solver::{Acceleration, SolveReport, SolverParams, System};
+use shapeup_core::solver::{Acceleration, SolveError, SolveReport, SolverParams, System};
 
 /// The report of a solve of `iterations` iterations as JSON text.
 fn solve_report_json(report: &SolveReport, iterations: usize, acceleration: Acceleration) -> String {
@@ -24,7 +24,7 @@ fn solve_report_json(report: &SolveReport, iterations: usize, acceleration: Acce
         "acceleration": acceleration.name(),
         "rejected": report.rejected,
         "residual": report.residual,
-        "unconverged": report.unconverged,
+        "unconverged": report.residual.map(|_| report.unconverged),
         "timings": {
             "setup_s": report.setup_seconds,
             "local_s": report.local_seconds,
@@ -209,6 +209,10 @@ impl PySolver {
     fn energy(&mut self, q: PyReadonlyArray2<'_, f64>) -> PyResult<(f64, Vec<(u32, f64)>)> {
         let q = points(&q, "q")?;
         let e = self.system.energy(&q).map_err(solve_error)?;
+        // Coordinates or weights too large for f64: an error, as a solve's, not inf.
+        if !e.total.is_finite() {
+            return Err(solve_error(SolveError::NonFiniteEnergy));
+        }
         Ok((e.total, e.per_group.iter().map(|(id, v)| (id.0, *v)).collect()))
     }
 }

@@ -507,12 +507,13 @@ impl LoadedScene {
             .map_err(|source| SceneError::Solve { path: self.scene.file.clone(), source })?;
         if let (true, Some(residual)) = (report.unconverged, report.residual) {
             let message = format!(
-                "static solve stopped at its iteration cap short of its minimum: its gradient is {} times the one it started from (the limit is {}); raise `iterations`, with a `tolerance` to stop once converged",
+                "static solve stopped at its {}-iteration cap short of its minimum: the energy's gradient is still {} of where it started (the limit is {}); raise `iterations` (or --iterations), with a `tolerance` to stop once converged",
+                report.energies.len(),
                 crate::text::three_digits(residual),
                 crate::solver::STATIC_RESIDUAL_LIMIT
             );
             let mut found = Warnings::new();
-            found.add("unconverged", &message, String::new);
+            found.add("unconverged", &message, || format!("residual {}", crate::text::three_digits(residual)));
             self.warnings.extend(found.for_file(&self.scene.file));
         }
         Ok((q, report))

@@ -118,7 +118,9 @@ impl Scene {
         for (key, value) in overrides {
             apply_override(&mut tree, key, value.clone())?;
         }
-        let raw = RawScene::deserialize(tree).map_err(|e| parse_error(e.to_string()))?;
+        // The tree has no lines: a message names the key it is about, as the overrides do.
+        let raw: RawScene = serde_path_to_error::deserialize(tree)
+            .map_err(|e| parse_error(format!("{}: {}", e.path(), plain_words(&e.inner().to_string()))))?;
         Scene::from_raw(raw, path, base_dir)
     }
 

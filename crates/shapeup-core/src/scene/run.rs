@@ -80,9 +80,10 @@ impl LoadedScene {
             },
             "rejected": solve.rejected,
             // The relative residual at the end when the solve ran all its iterations
-            // (crate::solver::SolveReport::residual), and whether it is above the limit.
+            // (crate::solver::SolveReport::residual), and whether it is above the limit (null
+            // when not measured).
             "residual": solve.residual,
-            "unconverged": solve.unconverged,
+            "unconverged": solve.residual.map(|_| solve.unconverged),
             "factor": {"nnz_lower": nnz_a, "nnz_l": nnz_l},
             "factorizations": self.system.factorizations(),
             "contacts": touch.touching,

@@ -50,6 +50,10 @@ fn meets_tolerance(previous: f64, energy: f64, tolerance: f64, floor: f64) -> bo
 /// springs of weight 1e8 against handles of weight 1).
 pub const STATIC_RESIDUAL_LIMIT: f64 = 1e-2;
 
+/// Relative round-off of the gradient (see `System::gradient_floor`): 100 ε with room for the
+/// sums, ε ≈ 2.2e-16.
+pub const GRADIENT_ROUND_OFF: f64 = 1e-13;
+
 /// What a [`System::solve`] did.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct SolveReport {
@@ -154,5 +158,31 @@ impl System {
             }
         }
         ROUND_OFF_FLOOR * projections + ROW_ROUND_OFF_FLOOR * terms
+    }
+
+    /// The round-off of ‖A q − b(q)‖ at q (static mode): a row's residual (C q)_r − P_r is
+    /// computed to about 100 ε of the terms that cancel in it, m_r = Σ_v |c_rv| ‖q_v‖ (as for
+    /// [`ROW_ROUND_OFF_FLOOR`]), and enters g times w_r c_rv, so
+    /// [`GRADIENT_ROUND_OFF`] × (Σ_r w_r² m_r² Σ_v c_rv²)^½ is what g can be at a minimum.
+    /// Springs of weight 1e12 holding a sheet that two handles of weight 1 shift by 1e-3 end
+    /// exactly at the shifted sheet with ‖g‖ at 4 % of its start: round-off of the springs'
+    /// terms, which more iterations do not lower.
+    pub(super) fn gradient_floor(&self, q: &[DVec3]) -> f64 {
+        let g = self.multipliers();
+        let a = &self.assembly;
+        let mut sum = 0.0;
+        for ((rows, gk), &slot) in a.groups.iter().zip(&g).zip(&self.order) {
+            if self.slots[slot].as_ref().is_none_or(|group| group.hard) {
+                continue;
+            }
+            for r in rows.range() {
+                let w = gk * a.row_weight[r];
+                let entries = a.c_ptr[r]..a.c_ptr[r + 1];
+                let m: f64 = entries.clone().map(|k| a.c_val[k].abs() * q[a.c_col[k] as usize].length()).sum();
+                let c2: f64 = entries.map(|k| a.c_val[k] * a.c_val[k]).sum();
+                sum += (w * m) * (w * m) * c2;
+            }
+        }
+        GRADIENT_ROUND_OFF * sum.sqrt()
     }
 }

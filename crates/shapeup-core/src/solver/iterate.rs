@@ -208,9 +208,9 @@ impl System {
 
     /// A static solve's relative residual at q, its end, whose energy evaluation at q is the
     /// last (see [`SolveReport::residual`]): ‖A q − b(q)‖ (half the gradient of E) over
-    /// `start`, the same norm where the solve began. 0 when the residual is 0 or E is at most
-    /// `floor` (the constraints met to round-off); unbounded when it started at a minimum
-    /// (`start` 0) and left it.
+    /// `start`, the same norm where the solve began. 0 when the residual is within its
+    /// round-off ([`System::gradient_floor`]) or E is at most `floor` (the constraints met to
+    /// round-off); unbounded when it started at a minimum (`start` 0) and left it.
     pub(super) fn relative_residual(
         &mut self,
         q: &[DVec3],
@@ -220,7 +220,7 @@ impl System {
         g: &mut Vec<[f64; 4]>,
     ) -> f64 {
         let residual = self.half_gradient_norm(q, g);
-        if residual == 0.0 || (0.0..=floor).contains(&energy) {
+        if residual <= self.gradient_floor(q) || (0.0..=floor).contains(&energy) {
             0.0
         } else if start > 0.0 {
             residual / start

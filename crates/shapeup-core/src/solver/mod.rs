@@ -35,7 +35,8 @@ mod triangular;
 pub use crate::constraints::{ConstraintGroup, GroupId};
 pub use cholesky::{FactorError, Factorization};
 pub use convergence::{
-    ENERGY_FLOOR, ROUND_OFF_FLOOR, ROW_ROUND_OFF_FLOOR, STATIC_RESIDUAL_LIMIT, SolveReport, is_converged,
+    ENERGY_FLOOR, GRADIENT_ROUND_OFF, ROUND_OFF_FLOOR, ROW_ROUND_OFF_FLOOR, STATIC_RESIDUAL_LIMIT, SolveReport,
+    is_converged,
 };
 pub use error::SolveError;
 pub use params::{

@@ -32,7 +32,11 @@ fn a_static_solve_stopped_short_of_its_minimum_says_so_once() {
     assert!(report.unconverged && residual > STATIC_RESIDUAL_LIMIT, "{residual}");
     assert_eq!(stiff.warnings.count("unconverged"), 1, "{:?}", stiff.warnings.to_json());
     let line = stiff.warnings.iter().find(|w| w.kind == "unconverged").unwrap().to_string();
-    assert!(line.contains("convergence.toml") && line.contains("raise `iterations`"), "{line}");
+    assert!(
+        line.contains("convergence.toml: 1 static solve stopped at its 200-iteration cap")
+            && line.contains("raise `iterations`"),
+        "{line}"
+    );
     // It is short indeed: far more iterations take it well away from there.
     let mut long = load(&springs_against_handles(1e8, "iterations = 20000\ntolerance = 1e-14"));
     let (converged, _) = long.solve_static(None).unwrap();
@@ -45,6 +49,18 @@ fn a_static_solve_stopped_short_of_its_minimum_says_so_once() {
     let residual = report.residual.unwrap();
     assert!(!report.unconverged && residual < STATIC_RESIDUAL_LIMIT, "{residual}");
     assert_eq!(soft.warnings.count("unconverged"), 0);
+
+    // Springs 1e12 times stiffer than handles that shift the sheet by 1e-3: the solve ends at
+    // the exact answer (the sheet shifted by half that), where the gradient left is the
+    // springs' round-off, which more iterations would not lower: nothing said.
+    let shifted = springs_against_handles(1e12, "iterations = 50").replace("[0.5, 0.3, 0.0]", "[1e-3, 0.0, 1e-3]");
+    let mut exact = load(&shifted);
+    let (q, report) = exact.solve_static(None).unwrap();
+    let rest = exact.rest_positions().to_vec();
+    let off =
+        q.iter().zip(&rest).map(|(p, r)| (*p - *r - glam::DVec3::new(5e-4, 0.0, 5e-4)).length()).fold(0.0, f64::max);
+    assert!(off < 1e-12, "the sheet shifts rigidly by half the handle's move ({off})");
+    assert!(!report.unconverged && exact.warnings.count("unconverged") == 0, "{:?}", report.residual);
 
     // A solve that meets its tolerance before the cap has no residual to report.
     let mut early = load(&springs_against_handles(1.0, "iterations = 5000\ntolerance = 1e-6"));
