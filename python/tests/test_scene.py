@@ -198,3 +198,13 @@ def test_solver_solve_reports_and_warns_when_short(tmp_path):
     assert report["unconverged"] and report["residual"] > 0.01
     _, report = s.solve(iterations=5000, tolerance=1e-6)
     assert report["residual"] is None and not report["unconverged"]
+
+
+def test_override_errors_name_their_key_in_the_scenes_words(tmp_path):
+    scene = tmp_path / "s.toml"
+    scene.write_text(STIFF_SPRINGS.format(weight="1.0"))
+    with pytest.raises(ValueError, match=r"s\.toml: solver\.iterations: .*a whole number ≥ 0") as e:
+        shapeup.Scene.load(scene, {"solver.iterations": -3})
+    assert "usize" not in str(e.value)
+    with pytest.raises(ValueError, match=r"mesh\.nope: unknown field `nope`"):
+        shapeup.Scene.load(scene, {"mesh.nope": 1})
