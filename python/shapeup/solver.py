@@ -78,7 +78,7 @@ class Solver(_Groups, _Contact):
         if report.get("unconverged"):
             warnings.warn(
                 f"the solve stopped at its {report['iterations']}-iteration cap short of its minimum: the energy's "
-                f"gradient is still {report['residual']:.3g} of where it started (the limit is "
+                f"gradient is {report['residual']:.3g} times what it was at the start (the limit is "
                 f"{_shapeup.STATIC_RESIDUAL_LIMIT}); raise iterations, with a tolerance to stop once converged",
                 UnconvergedWarning,
                 stacklevel=2,

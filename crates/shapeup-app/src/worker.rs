@@ -162,7 +162,7 @@ impl fmt::Display for SolveResult {
             write!(f, "stopped at the {n}-iteration cap")?;
             if let Some(r) = self.residual.filter(|&r| r > STATIC_RESIDUAL_LIMIT) {
                 // As the command line's `unconverged` warning says it.
-                write!(f, " short of the minimum (the energy's gradient still {r:.3} of the start's; raise the cap)")?;
+                write!(f, " short of the minimum (the energy's gradient {r:.3} times the start's; raise the cap)")?;
             }
         } else {
             write!(f, "solving… {n} {noun}")?;

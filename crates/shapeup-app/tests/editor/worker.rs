@@ -308,7 +308,7 @@ fn stops_at_the_iteration_cap() {
     let residual = last.residual.unwrap();
     assert!(residual > shapeup_core::solver::STATIC_RESIDUAL_LIMIT, "{residual}");
     assert!(
-        last.status().starts_with("stopped at the 5-iteration cap short of the minimum (the energy's gradient still "),
+        last.status().starts_with("stopped at the 5-iteration cap short of the minimum (the energy's gradient "),
         "{}",
         last.status()
     );

@@ -29,6 +29,7 @@ fn a_static_solve_stopped_short_of_its_minimum_says_so_once() {
     let mut stiff = load(&springs_against_handles(1e8, "iterations = 200"));
     let (q, report) = stiff.solve_static(None).unwrap();
     let residual = report.residual.unwrap();
+    let stiff_residual = residual;
     assert!(report.unconverged && residual > STATIC_RESIDUAL_LIMIT, "{residual}");
     assert_eq!(stiff.warnings.count("unconverged"), 1, "{:?}", stiff.warnings.to_json());
     let line = stiff.warnings.iter().find(|w| w.kind == "unconverged").unwrap().to_string();
@@ -61,6 +62,24 @@ fn a_static_solve_stopped_short_of_its_minimum_says_so_once() {
         q.iter().zip(&rest).map(|(p, r)| (*p - *r - glam::DVec3::new(5e-4, 0.0, 5e-4)).length()).fold(0.0, f64::max);
     assert!(off < 1e-12, "the sheet shifts rigidly by half the handle's move ({off})");
     assert!(!report.unconverged && exact.warnings.count("unconverged") == 0, "{:?}", report.residual);
+
+    // The stiff sheet 1e5 from the origin (not normalized): its coordinates keep eleven digits,
+    // its gradient is still real, and it is as short as at the origin.
+    let dir = tempfile::tempdir().unwrap();
+    let mut far = shapeup_core::generate::cloth_grid(11, 11, 1.0, 1.0);
+    let offset = glam::DVec3::new(1e5, -1e5, 1e5);
+    for p in &mut far.positions {
+        *p += offset;
+    }
+    let path = dir.path().join("far.obj");
+    shapeup_core::io::write_mesh(&path, &far, &shapeup_core::io::Attributes::None).unwrap();
+    let text = springs_against_handles(1e8, "iterations = 200").replace(
+        "generate = { kind = \"cloth\", vertices = [11, 11], size = [1.0, 1.0] }",
+        &format!("path = {:?}", path.display().to_string()),
+    );
+    let mut far = load(&text);
+    let (_, report) = far.solve_static(None).unwrap();
+    assert!(report.unconverged, "{:?} at 1e5 from the origin, {stiff_residual} at it", report.residual);
 
     // A solve that meets its tolerance before the cap has no residual to report.
     let mut early = load(&springs_against_handles(1.0, "iterations = 5000\ntolerance = 1e-6"));
