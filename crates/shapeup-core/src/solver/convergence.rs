@@ -143,50 +143,49 @@ impl Run {
 }
 
 impl System {
-    /// [`SolveReport::energy_floor`] at q from the current projections.
-    pub(super) fn energy_floor(&self, q: &[DVec3]) -> f64 {
+    /// Calls `f(r, w_r, m_r)` for each row r of the groups that are not hard: its weight
+    /// w_r (multiplier × row weight) and m_r = Σ_v |c_rv| ‖q_v‖, the size of the terms that
+    /// cancel in (C q)_r. What the round-off floors are made of.
+    fn for_each_soft_row(&self, q: &[DVec3], mut f: impl FnMut(usize, f64, f64)) {
         let g = self.multipliers();
         let a = &self.assembly;
-        let mut projections = 0.0;
-        let mut terms = 0.0;
         for ((rows, gk), &slot) in a.groups.iter().zip(&g).zip(&self.order) {
             if self.slots[slot].as_ref().is_none_or(|group| group.hard) {
                 continue;
             }
             for r in rows.range() {
-                let w = gk * a.row_weight[r];
-                projections += w * self.projections[r].length_squared();
                 let m: f64 =
                     (a.c_ptr[r]..a.c_ptr[r + 1]).map(|k| a.c_val[k].abs() * q[a.c_col[k] as usize].length()).sum();
-                terms += w * m * m;
+                f(r, gk * a.row_weight[r], m);
             }
         }
+    }
+
+    /// [`SolveReport::energy_floor`] at q from the current projections.
+    pub(super) fn energy_floor(&self, q: &[DVec3]) -> f64 {
+        let mut projections = 0.0;
+        let mut terms = 0.0;
+        self.for_each_soft_row(q, |r, w, m| {
+            projections += w * self.projections[r].length_squared();
+            terms += w * m * m;
+        });
         ROUND_OFF_FLOOR * projections + ROW_ROUND_OFF_FLOOR * terms
     }
 
     /// The round-off of ‖A q − b(q)‖ at q (static mode): a row's residual (C q)_r − P_r is
-    /// computed to a few ε of the terms that cancel in it, m_r = Σ_v |c_rv| ‖q_v‖ (as for
+    /// computed to a few ε of the terms that cancel in it, m_r (as for
     /// [`ROW_ROUND_OFF_FLOOR`]), and enters g times w_r c_rv, so
     /// [`GRADIENT_ROUND_OFF`] × (Σ_r w_r² m_r² Σ_v c_rv²)^½ is what g can be at a minimum.
     /// Springs of weight 1e12 holding a sheet that two handles of weight 1 shift by 1e-3 end
     /// exactly at the shifted sheet with ‖g‖ at 4 % of its start: round-off of the springs'
     /// terms, which more iterations do not lower.
     pub(super) fn gradient_floor(&self, q: &[DVec3]) -> f64 {
-        let g = self.multipliers();
         let a = &self.assembly;
         let mut sum = 0.0;
-        for ((rows, gk), &slot) in a.groups.iter().zip(&g).zip(&self.order) {
-            if self.slots[slot].as_ref().is_none_or(|group| group.hard) {
-                continue;
-            }
-            for r in rows.range() {
-                let w = gk * a.row_weight[r];
-                let entries = a.c_ptr[r]..a.c_ptr[r + 1];
-                let m: f64 = entries.clone().map(|k| a.c_val[k].abs() * q[a.c_col[k] as usize].length()).sum();
-                let c2: f64 = entries.map(|k| a.c_val[k] * a.c_val[k]).sum();
-                sum += (w * m) * (w * m) * c2;
-            }
-        }
+        self.for_each_soft_row(q, |r, w, m| {
+            let c2: f64 = (a.c_ptr[r]..a.c_ptr[r + 1]).map(|k| a.c_val[k] * a.c_val[k]).sum();
+            sum += (w * m) * (w * m) * c2;
+        });
         GRADIENT_ROUND_OFF * sum.sqrt()
     }
 }
