@@ -25,8 +25,8 @@ class UnconvergedWarning(UserWarning):
 
 
 def _warn_unconverged(report: Mapping[str, Any]) -> None:
-    """One :class:`UnconvergedWarning` per ``unconverged`` entry of a scene solve's
-    ``report["warnings"]`` (the command line's line, once)."""
+    """One :class:`UnconvergedWarning` per ``unconverged`` entry of a solve's
+    ``report["warnings"]`` (a scene's or ``Solver.solve``'s: the command line's line, once)."""
     import warnings
 
     for w in report.get("warnings", []):

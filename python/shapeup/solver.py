@@ -4,13 +4,12 @@ from __future__ import annotations
 
 import json
 import math
-import warnings
 from typing import Any
 
 import numpy as np
 
 from . import _shapeup
-from ._checks import UnconvergedWarning, _count, _vertices
+from ._checks import _count, _vertices, _warn_unconverged
 from .contact import _Contact
 from .groups import _Groups
 from .mesh import Mesh, _mesh_of
@@ -64,7 +63,8 @@ class Solver(_Groups, _Contact):
         ``relative_change``, ``rejected``, ``timings`` (seconds), ``residual`` (when all the
         iterations ran: ‖∇E(q)‖ over ‖∇E‖ where the solve began, else None) and
         ``unconverged`` (the residual above ``STATIC_RESIDUAL_LIMIT``, 0.01: the solve stopped short of its minimum,
-        which also warns, :class:`UnconvergedWarning`).
+        which also warns, :class:`UnconvergedWarning`) and ``warnings`` (that one, as a scene's
+        report lists it).
 
         The GIL is released while it runs; Ctrl+C stops it (KeyboardInterrupt).
         :class:`SolveFailed` when the system cannot be solved (e.g. nothing anchors it)."""
@@ -75,14 +75,7 @@ class Solver(_Groups, _Contact):
         x = None if q is None else self._positions(q)
         out, text = self._native.solve(x, iterations, tolerance, acceleration)
         report = json.loads(text)
-        if report.get("unconverged"):
-            warnings.warn(
-                f"the solve stopped at its {report['iterations']}-iteration cap short of its minimum: the energy's "
-                f"gradient is {report['residual']:.3g} times what it was at the start (the limit is "
-                f"{_shapeup.STATIC_RESIDUAL_LIMIT}); raise iterations, with a tolerance to stop once converged",
-                UnconvergedWarning,
-                stacklevel=2,
-            )
+        _warn_unconverged(report)
         return out, report
 
     def energy(self, q: Any) -> dict[str, Any]:

@@ -25,6 +25,7 @@ fn solve_report_json(report: &SolveReport, iterations: usize, acceleration: Acce
         "rejected": report.rejected,
         "residual": report.residual,
         "unconverged": report.residual.map(|_| report.unconverged),
+        "warnings": report.warnings().to_json(),
         "timings": {
             "setup_s": report.setup_seconds,
             "local_s": report.local_seconds,

@@ -304,15 +304,6 @@ impl Attributes {
         }
     }
 
-    /// The mesh's tetrahedra as the file the attributes come from ordered their nodes, when
-    /// that differs (see [`TetrahedronOrder`]).
-    pub fn file_tetrahedra(&self, mesh: &Mesh) -> Option<Vec<[u32; 4]>> {
-        match self {
-            Attributes::Tetrahedra(order) => order.file_order(&mesh.tetrahedra),
-            _ => None,
-        }
-    }
-
     /// Every kind of attribute the file carries, for writers of another format to say what
     /// they drop.
     pub fn kinds(&self) -> Vec<AttributeKind> {
@@ -452,7 +443,11 @@ pub fn write_mesh_with(
 /// `mesh` with its tetrahedra as the file of `attributes` ordered their nodes (see
 /// [`TetrahedronOrder`]): what the writers of tetrahedra write.
 pub(crate) fn in_file_order<'a>(mesh: &'a Mesh, attributes: &Attributes) -> std::borrow::Cow<'a, Mesh> {
-    match attributes.file_tetrahedra(mesh) {
+    let file_order = match attributes {
+        Attributes::Tetrahedra(order) => order.file_order(&mesh.tetrahedra),
+        _ => None,
+    };
+    match file_order {
         Some(tetrahedra) => {
             let mut copy = mesh.clone();
             copy.tetrahedra = tetrahedra;

@@ -505,17 +505,7 @@ impl LoadedScene {
             .system
             .solve_with(&mut q, iterations, self.scene.solver.tolerance, after_iteration)
             .map_err(|source| SceneError::Solve { path: self.scene.file.clone(), source })?;
-        if let (true, Some(residual)) = (report.unconverged, report.residual) {
-            let message = format!(
-                "static solve stopped at its {}-iteration cap short of its minimum: the energy's gradient is {} times what it was at the start (the limit is {}); raise `iterations` (or --iterations), with a `tolerance` to stop once converged",
-                report.energies.len(),
-                crate::text::three_digits(residual),
-                crate::solver::STATIC_RESIDUAL_LIMIT
-            );
-            let mut found = Warnings::new();
-            found.add("unconverged", &message, String::new);
-            self.warnings.extend(found.for_file(&self.scene.file));
-        }
+        self.warnings.extend(report.warnings().for_file(&self.scene.file));
         Ok((q, report))
     }
 

@@ -94,6 +94,24 @@ pub struct SolveReport {
     pub(super) start_gradient: Option<f64>,
 }
 
+impl SolveReport {
+    /// The `unconverged` warning of a solve that stopped at its iteration cap short of its
+    /// minimum (see [`SolveReport::residual`]); none otherwise. Every door says it in these
+    /// words: the scene's solve (naming the file), Python's `Solver.solve`.
+    pub fn warnings(&self) -> crate::warnings::Warnings {
+        let mut found = crate::warnings::Warnings::new();
+        if let (true, Some(residual)) = (self.unconverged, self.residual) {
+            let message = format!(
+                "static solve stopped at its {}-iteration cap short of its minimum: the energy's gradient is {} times what it was at the start (the limit is {STATIC_RESIDUAL_LIMIT}); raise `iterations` (or --iterations), with a `tolerance` to stop once converged",
+                self.energies.len(),
+                crate::text::three_digits(residual),
+            );
+            found.add("unconverged", &message, String::new);
+        }
+        found
+    }
+}
+
 /// What a solve asks of its iterations.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Run {
