@@ -104,7 +104,10 @@ class Scene:
         Returns ``(X, report)``: X float64 (k, n, 3) holds frame 0, every ``every``-th frame
         and the last (their numbers in ``report["frame_numbers"]``), as the command line's
         frame files hold them; writes them to the folder ``output`` in ``format`` (obj, ply,
-        off, stl, vtu, msh) when given."""
+        off, stl, vtu, msh) when given, as the command line does: through a staging folder
+        beside it, moved in when the run completes (an error or ``KeyboardInterrupt`` writes
+        nothing), replacing an earlier run's frames there (warning ``earlier_frames_removed``);
+        the folder that ``output`` goes in must exist (``FileNotFoundError``)."""
         frames = self._native.steps if frames is None else _count(frames, "frames")
         if frames < 1:
             raise ValueError("frames must be at least 1")

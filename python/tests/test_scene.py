@@ -113,7 +113,7 @@ def test_a_loaded_scene_survives_chdir(tmp_path, monkeypatch):
     assert V.shape[1] == 3
 
 
-def test_simulate_never_replaces_its_inputs_and_says_which_frames_it_did_not_write(tmp_path):
+def test_simulate_never_replaces_its_inputs_and_replaces_an_earlier_runs_frames(tmp_path):
     # A mesh that is frame 0 of an earlier run, simulated into that folder again: the first
     # frame would replace it, so nothing runs (as `shapeup simulate`).
     earlier = tmp_path / "earlier"
@@ -130,7 +130,8 @@ def test_simulate_never_replaces_its_inputs_and_says_which_frames_it_did_not_wri
         shapeup.Scene.load(scene).simulate(2, output=earlier)
     assert mesh.read_bytes() == kept
     assert sorted(p.name for p in earlier.iterdir()) == ["frame_0000.obj"]
-    # A shorter run into a longer one's folder: the old frames stay and are said once.
+    # A shorter run into a longer one's folder: it replaces that series, removing the old
+    # frames it did not write and saying so once; other files stay.
     cloth = tmp_path / "cloth.toml"
     cloth.write_text(
         '[mesh]\ngenerate = { kind = "cloth", vertices = [4, 4], size = [1.0, 1.0] }\n'
@@ -138,11 +139,29 @@ def test_simulate_never_replaces_its_inputs_and_says_which_frames_it_did_not_wri
     )
     frames = tmp_path / "frames"
     _, first = shapeup.Scene.load(cloth).simulate(5, output=frames)
-    assert not [w for w in first["warnings"] if w["kind"] == "frames_of_another_run"]
+    assert not [w for w in first["warnings"] if w["kind"] == "earlier_frames_removed"]
+    (frames / "notes.txt").write_text("mine")
     _, report = shapeup.Scene.load(cloth).simulate(2, output=frames)
-    [left] = [w for w in report["warnings"] if w["kind"] == "frames_of_another_run"]
-    assert left["count"] == 3 and left["first"] == "frame_0003.obj"
-    assert (frames / "frame_0005.obj").exists()
+    [removed] = [w for w in report["warnings"] if w["kind"] == "earlier_frames_removed"]
+    assert removed["count"] == 3 and removed["first"] == "frame_0003.obj"
+    assert sorted(p.name for p in frames.iterdir()) == [
+        "frame_0000.obj", "frame_0001.obj", "frame_0002.obj", "notes.txt"
+    ]
+    # A run that fails part-way writes nothing: the folder keeps its frames, no staging
+    # folder is left beside it, and a missing folder above the output is refused.
+    far = tmp_path / "far.toml"
+    far.write_text(cloth.read_text() + '[[constraints]]\ntype = "position"\nvertices = [0]\ntranslate = [1e200, 0.0, 0.0]\n')
+    kept = {p.name: p.read_bytes() for p in frames.iterdir()}
+    with pytest.raises(ValueError, match="not a finite number"):
+        shapeup.Scene.load(far).simulate(3, output=frames)
+    assert {p.name: p.read_bytes() for p in frames.iterdir()} == kept
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]
+    with pytest.raises(ValueError, match="step 1 of 3 failed"):
+        shapeup.Scene.load(far).simulate(3, output=tmp_path / "new")
+    assert not (tmp_path / "new").exists()
+    with pytest.raises(FileNotFoundError, match="does not exist"):
+        shapeup.Scene.load(cloth).simulate(2, output=tmp_path / "missing" / "frames")
+    assert not (tmp_path / "missing").exists()
 
 
 STIFF_SPRINGS = """

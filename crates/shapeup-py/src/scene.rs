@@ -1,15 +1,14 @@
 //! `_Scene`: a scene file, run as `shapeup deform` and `shapeup simulate` run it.
 
 use crate::convert::to_array;
-use crate::errors::{SolveFailed, check_extension, check_folder, io_error, scene_error, value_error};
+use crate::errors::{SolveFailed, check_extension, check_folder, io_error, output_error, scene_error, value_error};
 use crate::mesh::PyMesh;
 use crate::signals::Interrupt;
 use glam::DVec3;
 use numpy::PyArray2;
-use pyo3::exceptions::PyOSError;
 use pyo3::prelude::*;
 use shapeup_core::io::MESH_OUTPUT_EXTENSIONS;
-use shapeup_core::scene::frames::{FrameFormat, FrameWriter, frame_replacing_input, warn_of_frames_not_written};
+use shapeup_core::scene::frames::{FrameFolder, FrameFormat, FrameWriter, frame_replacing_input};
 use shapeup_core::scene::{RunError, Scene as CoreScene};
 use std::ops::ControlFlow;
 use std::path::PathBuf;
@@ -149,21 +148,17 @@ impl PyScene {
             check_folder(r)?;
         }
         if let Some(dir) = &output
-            && let Some(replaced) = frame_replacing_input(&self.scene.input_files(), dir, frames, every, format)
+            && let Some(replaced) = frame_replacing_input(&self.scene.input_files(), dir)
         {
             // As `shapeup simulate`: a run never replaces its inputs.
             return Err(value_error(replaced));
         }
+        // As `shapeup simulate`: frames reach `output` only when the run succeeds.
+        let folder = output.as_deref().map(FrameFolder::create).transpose().map_err(output_error)?;
         let mut loaded = py.detach(|| self.scene.load()).map_err(scene_error)?;
-        if let Some(dir) = &output {
-            std::fs::create_dir_all(dir).map_err(|e| {
-                PyOSError::new_err(format!("cannot create the output directory {}: {e}", dir.display()))
-            })?;
-            check_folder(&dir.join("frame"))?;
-        }
         let mut run = loaded.start_scene_simulation().map_err(scene_error)?;
         let loaded = &loaded;
-        let mut writer = output.as_deref().map(|dir| FrameWriter::new(loaded, dir, frames, format));
+        let mut writer = folder.as_ref().map(|f| FrameWriter::new(loaded, f.staging(), frames, format));
         let mut kept: Vec<(usize, Vec<DVec3>)> = Vec::new();
         // The core's run of `shapeup simulate` without the GIL (Ctrl+C stops it between steps;
         // the `KeyboardInterrupt` is returned after it stops). E after every step is recorded:
@@ -191,23 +186,21 @@ impl PyScene {
             e @ RunError::Step { .. } => value_error(format!("{file}: {e}")),
             e @ RunError::Energy { .. } => SolveFailed::new_err(format!("{file}: {e}")),
         });
-        // VTU: the .pvd lists the frames written, also those before an error.
-        let totals = match &writer {
-            Some(w) => w.finish(result, io_error),
-            None => result,
-        }?;
+        // Nothing reaches the output folder unless the run succeeded.
+        let totals = result?;
         let mut warnings = loaded.warnings.clone();
-        if let Some(w) = &mut writer {
+        let written = writer.as_ref().map_or(0, |w| w.written.len());
+        if let Some(mut w) = writer {
+            w.finish().map_err(io_error)?;
             warnings.extend(w.warnings.take().unwrap_or_default());
+        }
+        if let Some(f) = folder {
+            warnings.extend(py.detach(|| f.commit()).map_err(io_error)?);
         }
         // What the run says once, as the command line's report has it.
         let mut found = shapeup_core::warnings::Warnings::new();
         totals.add_warnings(&mut found);
         warnings.extend(found.for_file(&self.scene.file));
-        if let (Some(dir), Some(w)) = (&output, &writer) {
-            warnings.extend(warn_of_frames_not_written(dir, &w.written));
-        }
-        let written = writer.as_ref().map_or(0, |w| w.written.len());
         let json = loaded.simulate_report(
             &run.simulation,
             &totals,

@@ -3,9 +3,9 @@
 //! drift from the command line.
 
 use crate::Cli;
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use clap::CommandFactory;
-use shapeup_core::io::{check_output_folder, write_atomic};
+use shapeup_core::io::{create_output_folder, write_atomic};
 use std::io::Write;
 use std::path::Path;
 
@@ -49,11 +49,8 @@ pub fn man(output: Option<&Path>) -> Result<()> {
         out.write_all(main_page)?;
         return Ok(());
     };
-    if dir.exists() && !dir.is_dir() {
-        bail!("{}: not a folder", dir.display());
-    }
-    std::fs::create_dir_all(dir).map_err(|e| anyhow::anyhow!("cannot create the folder {}: {e}", dir.display()))?;
-    check_output_folder(&dir.join("shapeup.1"))?;
+    // The folder is created; the folders above it must exist (the rule of every output).
+    create_output_folder(dir)?;
     for (name, text) in &pages {
         let path = dir.join(name);
         write_atomic(&path, |w| w.write_all(text))?;

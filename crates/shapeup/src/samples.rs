@@ -4,7 +4,7 @@
 //! when no file of that name exists (`shapeup view spot`, `shapeup info suzanne`).
 
 use anyhow::{Result, bail};
-use shapeup_core::io::{LoadedMesh, check_output_folder, read_mesh, write_atomic};
+use shapeup_core::io::{LoadedMesh, create_output_folder, read_mesh, write_atomic};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -113,11 +113,8 @@ pub fn read_mesh_arg(arg: &Path) -> Result<(LoadedMesh, PathBuf)> {
 pub fn run(write: Option<&Path>) -> Result<()> {
     let mut out = std::io::stdout().lock();
     if let Some(dir) = write {
-        if dir.exists() && !dir.is_dir() {
-            bail!("{}: not a folder", dir.display());
-        }
-        std::fs::create_dir_all(dir).map_err(|e| anyhow::anyhow!("cannot create the folder {}: {e}", dir.display()))?;
-        check_output_folder(&dir.join(SAMPLES[0].file_name()))?;
+        // The folder is created; the folders above it must exist (the rule of every output).
+        create_output_folder(dir)?;
         for sample in SAMPLES {
             let path = dir.join(sample.file_name());
             write_atomic(&path, |w| w.write_all(sample.bytes))?;

@@ -3,7 +3,7 @@
 
 use anyhow::{Context, Result, bail};
 use shapeup_core::io::write_atomic;
-use shapeup_core::scene::frames::{FrameFormat, FrameWriter, frame_replacing_input, warn_of_frames_not_written};
+use shapeup_core::scene::frames::{FrameFolder, FrameFormat, FrameWriter, frame_replacing_input};
 use shapeup_core::scene::{RunError, Scene};
 use std::io::Write;
 use std::path::Path;
@@ -17,7 +17,8 @@ pub struct SimulateArgs<'a> {
     pub overrides: &'a dyn Fn(&mut shapeup_core::scene::SolverSettings),
     /// Time steps to run.
     pub frames: usize,
-    /// Output directory (created if missing); `None`: the scene's `[output] path`.
+    /// Output folder (created if missing; the folder it goes in must exist); `None`: the
+    /// scene's `[output] path`.
     pub output: Option<&'a Path>,
     /// Write frame k only when k is a multiple of this (and always the last).
     pub every: usize,
@@ -27,9 +28,8 @@ pub struct SimulateArgs<'a> {
     pub report: Option<&'a Path>,
 }
 
-/// Runs the simulation; frames are written one by one (each atomically), so an error part-way
-/// leaves the complete frames before it and no partial file (and, for VTU, a `frames.pvd` that
-/// lists them).
+/// Runs the simulation; frames are written into a staging folder beside the output folder and
+/// moved in when the run succeeds ([`FrameFolder`]), so an error part-way writes nothing.
 pub fn run(args: &SimulateArgs<'_>) -> Result<()> {
     let start = Instant::now();
     let format = FrameFormat::parse(args.format).map_err(anyhow::Error::msg)?;
@@ -57,28 +57,33 @@ pub fn run(args: &SimulateArgs<'_>) -> Result<()> {
         crate::refuse_inputs_as_outputs(&scene, &[r])?;
     }
     // A run never replaces its inputs: not with a frame either.
-    if let Some(replaced) = frame_replacing_input(&scene.input_files(), &output, args.frames, args.every, format) {
+    if let Some(replaced) = frame_replacing_input(&scene.input_files(), &output) {
         return Err(replaced.into());
     }
+    // Ctrl+C (also while loading) stops the run between steps, so that the staging folder is removed (a process
+    // killed by the signal would leave it behind).
+    let interrupted = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let flag = interrupted.clone();
+    // Fails only when a handler is already set (a second run in one process): it then stays.
+    let _ = ctrlc::set_handler(move || flag.store(true, std::sync::atomic::Ordering::Relaxed));
+    // Before any work: the folder it goes in exists and takes files, and it is not a file.
+    let folder = FrameFolder::create(&output)?;
     let spinner = crate::logging::spinner(format!("loading {}", args.scene.display()));
     let mut loaded = scene.load()?;
     let mut run = loaded.start_scene_simulation()?;
     drop(spinner);
-    std::fs::create_dir_all(output.as_path()).map_err(|e| {
-        let problem = match shapeup_core::io::file_in_the_way(&output) {
-            // `-o` naming a file (or a folder under one): say so, not "File exists".
-            Some(file) => format!("{} is a file, not a folder", file.display()),
-            None => e.to_string(),
-        };
-        anyhow::anyhow!("cannot create the output directory {}: {problem}", output.as_path().display())
-    })?;
-    // Frames go in one by one: make sure the folder takes files before the first step.
-    crate::check_parent_dir(&output.join("frame"))?;
 
-    let mut frames = FrameWriter::new(&loaded, output.as_path(), args.frames, format);
+    let mut frames = FrameWriter::new(&loaded, folder.staging(), args.frames, format);
     let progress = crate::logging::bar(args.frames as u64, "{bar:40} {pos}/{len} frames  {per_sec}  ETA {eta}");
     // Only a report needs E: plain iterations skip it (one more local step per step).
     let result = run.run(args.frames, args.every, report.is_some(), |k, simulation, keep| -> Result<()> {
+        if interrupted.load(std::sync::atomic::Ordering::Relaxed) {
+            bail!(
+                "interrupted (Ctrl+C) after step {k} of {}; nothing written to {}: frames reach it only when a run completes",
+                args.frames,
+                shapeup_core::io::one_line(output.display())
+            );
+        }
         if keep {
             frames.write(k, simulation)?;
         }
@@ -93,16 +98,19 @@ pub fn run(args: &SimulateArgs<'_>) -> Result<()> {
         e => anyhow::anyhow!("{}: {e}", args.scene.display()),
     });
     drop(progress);
-    // VTU: the .pvd lists the frames written, also those before an error.
-    let totals = frames.finish(result, anyhow::Error::from)?;
+    // Nothing reaches the output folder unless the run succeeded (the staging folder goes
+    // when `folder` is dropped).
+    let totals = result?;
+    frames.finish()?;
     let written = frames.written.len();
     let mut warnings = loaded.warnings.clone();
     warnings.extend(frames.warnings.take().unwrap_or_default());
+    drop(frames);
+    warnings.extend(folder.commit()?);
     // What the run found names the scene.
     let mut found = shapeup_core::warnings::Warnings::new();
     totals.add_warnings(&mut found);
     warnings.extend(found.for_file(args.scene));
-    warnings.extend(warn_of_frames_not_written(&output, &frames.written));
     let total = start.elapsed().as_secs_f64();
     let simulation = &run.simulation;
     let system = simulation.system();

@@ -179,3 +179,27 @@ pub fn check_output_folder(path: &Path) -> Result<(), OutputError> {
     let (_, temp) = create_temp(path).map_err(|e| unwritable(dir, e))?;
     temp.close().map_err(|e| unwritable(dir, e))
 }
+
+/// Creates the output folder `dir` when it is missing and checks that it takes files. The rule
+/// of every output: shapeup creates the file or folder named, never the folders above it (a
+/// typo in a path is refused, not made into a tree of folders).
+///
+/// # Errors
+/// [`OutputError::NotAFolder`] when `dir` (or a folder above it) is a file; what
+/// [`check_output_folder`] gives for `dir` (the folder above it is missing) and for a file in
+/// it (it does not take files).
+pub fn create_output_folder(dir: &Path) -> Result<(), OutputError> {
+    if let Some(file) = file_in_the_way(dir) {
+        return Err(OutputError::NotAFolder { path: dir.to_path_buf(), file });
+    }
+    if !dir.is_dir() {
+        check_output_folder(dir)?;
+        if let Err(source) = fs::create_dir(dir)
+            && source.kind() != io::ErrorKind::AlreadyExists
+        {
+            let parent = dir.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+            return Err(OutputError::Unwritable { path: dir.to_path_buf(), dir: parent.to_path_buf(), source });
+        }
+    }
+    check_output_folder(&dir.join("file"))
+}

@@ -56,7 +56,8 @@ use crate::warnings::Warnings;
 pub use crate::text::one_line;
 pub(crate) use crate::text::shown;
 pub use atomic::{
-    MESH_OUTPUT_EXTENSIONS, OutputError, check_output_extension, check_output_folder, file_in_the_way, write_atomic,
+    MESH_OUTPUT_EXTENSIONS, OutputError, check_output_extension, check_output_folder, create_output_folder,
+    file_in_the_way, write_atomic,
 };
 pub use attributes::{AttributeKind, NO_INDEX, TexCoords, VertexScalar};
 pub use decode::UTF8_BOM;

@@ -5,7 +5,7 @@
 use super::LoadedScene;
 use crate::dynamics::Simulation;
 use crate::io::vtu::{PointScalars, PointVectors, write_pvd, write_vtu_with_scalars};
-use crate::io::{IoError, write_atomic, write_mesh};
+use crate::io::{IoError, OutputError, check_output_folder, write_atomic, write_mesh};
 use crate::mesh::Mesh;
 use crate::warnings::Warnings;
 use glam::DVec3;
@@ -85,32 +85,29 @@ pub fn is_kept(k: usize, frames: usize, every: usize) -> bool {
     k <= frames && (k.is_multiple_of(every.max(1)) || k == frames)
 }
 
-/// The file a run into `dir` would write over one of `inputs` (as [`crate::scene::Scene::input_files`]
-/// lists them): `frames` steps, frame k kept when k is a multiple of `every` or the last, in
-/// `format`. Returns that frame and the input; `None` when the run replaces none (a scene
-/// whose mesh is `DIR/frame_0000.obj` of an earlier run, simulated into `DIR` again, would have
-/// its mesh overwritten by the first frame).
-pub fn frame_replacing_input(
-    inputs: &[(PathBuf, String)],
-    dir: &Path,
-    frames: usize,
-    every: usize,
-    format: FrameFormat,
-) -> Option<super::ReplacedInput> {
-    inputs.iter().find_map(|input| {
-        // The file itself, whatever link or relative path names it.
-        let real = std::fs::canonicalize(&input.0).ok()?;
+/// Whether `name` is a frame file's (`frame_…` with a frame format's extension) or a VTU
+/// series' `frames.pvd`: what a run into a folder replaces there.
+pub fn is_frame_file_name(name: &str) -> bool {
+    name == PVD_NAME
+        || name.starts_with("frame_")
+            && Path::new(name)
+                .extension()
+                .and_then(|e| e.to_str())
+                .is_some_and(|e| FrameFormat::ALL.iter().any(|(n, _)| n.eq_ignore_ascii_case(e)))
+}
+
+/// The input (of `inputs`, as [`crate::scene::Scene::input_files`] lists them) that a run into
+/// `dir` would replace: a frame file or `frames.pvd` in `dir`, which the run writes over or
+/// removes ([`FrameFolder::commit`]; a scene whose mesh is `DIR/frame_0000.obj` of an earlier
+/// run, simulated into `DIR` again). `None` when it replaces none.
+pub fn frame_replacing_input(inputs: &[(PathBuf, String)], dir: &Path) -> Option<super::ReplacedInput> {
+    // The folder itself, whatever link or relative path names it; a new folder holds no input.
+    let dir_real = std::fs::canonicalize(dir).ok()?;
+    inputs.iter().find_map(|(input, what)| {
+        let real = std::fs::canonicalize(input).ok()?;
         let name = real.file_name()?.to_str()?;
-        let output = if format == FrameFormat::Vtu && name == PVD_NAME {
-            dir.join(PVD_NAME)
-        } else {
-            let (digits, _) = name.strip_prefix("frame_")?.split_once('.')?;
-            let k = digits.parse::<usize>().ok().filter(|&k| is_kept(k, frames, every))?;
-            frame_path(dir, k, frames, format)
-        };
-        let (input, what) = input;
-        same_file::is_same_file(&output, &real).unwrap_or(false).then(|| super::ReplacedInput {
-            output,
+        (real.parent() == Some(dir_real.as_path()) && is_frame_file_name(name)).then(|| super::ReplacedInput {
+            output: dir.join(name),
             input: input.clone(),
             what: what.clone(),
             frame: true,
@@ -118,37 +115,123 @@ pub fn frame_replacing_input(
     })
 }
 
-/// The frame files (`frame_…` in any frame format) in `dir` whose names are not in `written`,
-/// sorted: an earlier, longer run's, which a run never deletes.
-pub fn frames_not_written(dir: &Path, written: &[(f64, String)]) -> Vec<String> {
+/// The frame files in `dir` (as [`is_frame_file_name`] says) whose names are not in
+/// `written`, sorted: an earlier run's (a longer one's, another format's), which a run
+/// replaces.
+pub fn frames_not_written(dir: &Path, written: &[String]) -> Vec<String> {
     let Ok(entries) = std::fs::read_dir(dir) else { return Vec::new() };
-    let ours: std::collections::HashSet<&str> = written.iter().map(|(_, name)| name.as_str()).collect();
+    let ours: std::collections::HashSet<&str> = written.iter().map(String::as_str).collect();
     let mut stale: Vec<String> = entries
         .filter_map(|e| e.ok()?.file_name().into_string().ok())
-        .filter(|name| {
-            name.starts_with("frame_")
-                && !ours.contains(name.as_str())
-                && Path::new(name)
-                    .extension()
-                    .and_then(|e| e.to_str())
-                    .is_some_and(|e| FrameFormat::ALL.iter().any(|(n, _)| n.eq_ignore_ascii_case(e)))
-        })
+        .filter(|name| is_frame_file_name(name) && !ours.contains(name.as_str()))
         .collect();
     stale.sort();
     stale
 }
 
-/// [`frames_not_written`] as the one warning a run gives (`frames_of_another_run`), for `dir`.
-pub fn warn_of_frames_not_written(dir: &Path, written: &[(f64, String)]) -> Warnings {
-    let stale = frames_not_written(dir, written);
-    let mut found = Warnings::new();
-    found.add_many(
-        "frames_of_another_run",
-        "frame files this run did not write are in the output folder (an earlier, longer run's, or another format's): a series read from it mixes runs; simulate into an empty folder",
-        stale.len(),
-        || stale.first().cloned().unwrap_or_default(),
-    );
-    found.for_file(dir)
+/// The folder a run's frames end in (`shapeup simulate -o DIR`, Python's
+/// `Scene.simulate(output=DIR)`), filled through a staging folder beside it so that a run
+/// that fails writes nothing.
+///
+/// Frames go into a hidden staging folder, `.DIR.partial-XXXXXXXX` beside `DIR`, and reach
+/// `DIR` only when the run succeeds ([`FrameFolder::commit`]); dropped without a commit (an
+/// error, Ctrl+C), the staging folder is removed with what it holds. A new `DIR` is the
+/// staging folder renamed in one step. Into an existing `DIR` each frame is renamed in
+/// (replacing a file of the same name) and then the frame files of an earlier run that this
+/// one did not write (a longer run's, another format's, a `frames.pvd` not this run's) are
+/// removed, with one warning that counts them: the folder holds one run's series. Other files
+/// in `DIR` stay. As for every output, the folder `DIR` goes in must exist: shapeup creates
+/// the folder named, never the folders above it.
+pub struct FrameFolder {
+    target: PathBuf,
+    staging: tempfile::TempDir,
+}
+
+impl FrameFolder {
+    /// Checks that `target` can be a folder of frames (its parent exists and takes files; it
+    /// is not a file; if it exists, it takes files) and creates the staging folder beside it.
+    ///
+    /// # Errors
+    /// [`OutputError`] naming `target`.
+    pub fn create(target: &Path) -> Result<Self, OutputError> {
+        check_output_folder(target)?;
+        if target.exists() {
+            if !target.is_dir() {
+                return Err(OutputError::NotAFolder { path: target.to_path_buf(), file: target.to_path_buf() });
+            }
+            // Frames are renamed into it at the end: it must take files.
+            check_output_folder(&target.join("frame"))?;
+        }
+        let parent = target.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+        let mut prefix = std::ffi::OsString::from(".");
+        prefix.push(target.file_name().unwrap_or(target.as_os_str()));
+        prefix.push(".partial-");
+        let mut builder = tempfile::Builder::new();
+        builder.prefix(&prefix).rand_bytes(8);
+        #[cfg(unix)]
+        {
+            // As a folder made by mkdir: the umask decides (a staging folder is 0700).
+            use std::os::unix::fs::PermissionsExt;
+            builder.permissions(std::fs::Permissions::from_mode(0o777));
+        }
+        let staging = builder.tempdir_in(parent).map_err(|source| OutputError::Unwritable {
+            path: target.to_path_buf(),
+            dir: parent.to_path_buf(),
+            source,
+        })?;
+        Ok(FrameFolder { target: target.to_path_buf(), staging })
+    }
+
+    /// Where the frames are written until [`FrameFolder::commit`].
+    pub fn staging(&self) -> &Path {
+        self.staging.path()
+    }
+
+    /// The folder the frames end in.
+    pub fn target(&self) -> &Path {
+        &self.target
+    }
+
+    /// Moves the staged frames into the target folder (see [`FrameFolder`]). Returns the
+    /// warning (`earlier_frames_removed`, naming the folder) when an earlier run's frames were
+    /// removed.
+    ///
+    /// # Errors
+    /// [`IoError::Write`] naming the folder or the file that could not be moved or removed.
+    pub fn commit(self) -> Result<Warnings, IoError> {
+        let write_error = |path: &Path, source| IoError::Write { path: path.to_path_buf(), source };
+        let target = self.target.clone();
+        if !target.exists() {
+            let staging = self.staging.keep();
+            return match std::fs::rename(&staging, &target) {
+                Ok(()) => Ok(Warnings::new()),
+                Err(e) => {
+                    let _ = std::fs::remove_dir_all(&staging);
+                    Err(write_error(&target, e))
+                }
+            };
+        }
+        let entries = std::fs::read_dir(self.staging.path()).map_err(|e| write_error(self.staging.path(), e))?;
+        let mut written = Vec::new();
+        for entry in entries {
+            let entry = entry.map_err(|e| write_error(self.staging.path(), e))?;
+            let name = entry.file_name();
+            std::fs::rename(entry.path(), target.join(&name)).map_err(|e| write_error(&target.join(&name), e))?;
+            written.push(name.to_string_lossy().into_owned());
+        }
+        let earlier = frames_not_written(&target, &written);
+        for name in &earlier {
+            std::fs::remove_file(target.join(name)).map_err(|e| write_error(&target.join(name), e))?;
+        }
+        let mut found = Warnings::new();
+        found.add_many(
+            "earlier_frames_removed",
+            "frame files of an earlier run that this one did not write (a longer run's, another format's) were removed from the output folder, so that it holds this run's series",
+            earlier.len(),
+            || earlier.first().cloned().unwrap_or_default(),
+        );
+        Ok(found.for_file(&target))
+    }
 }
 
 /// Writes the frames of a simulation, collecting what the first one reports.
@@ -164,8 +247,8 @@ pub struct FrameWriter<'a> {
 }
 
 impl<'a> FrameWriter<'a> {
-    /// Frames of `loaded`'s simulation into `dir` (which must exist), `last` the number of the
-    /// last frame (it sets the digits of the names).
+    /// Frames of `loaded`'s simulation into `dir` (which must exist: a [`FrameFolder`]'s
+    /// staging folder), `last` the number of the last frame (it sets the digits of the names).
     pub fn new(loaded: &'a LoadedScene, dir: &'a Path, last: usize, format: FrameFormat) -> Self {
         FrameWriter { loaded, dir, last, format, warnings: None, written: Vec::new() }
     }
@@ -221,24 +304,15 @@ impl FrameWriter<'_> {
         Ok(warnings.for_file(path))
     }
 
-    /// Ends a run whose frames this writer wrote, `result` what the run returned: for VTU,
-    /// writes `DIR/frames.pvd` listing the frames written, also after a run that stopped early,
-    /// so that the frames before the error stay usable. Returns `result`; after a run that
-    /// succeeded, an error writing the `.pvd` (through `io`) instead; after one that failed,
-    /// the run's error (the first one is the one to tell).
+    /// Ends a run that succeeded: for VTU, writes `DIR/frames.pvd` listing the frames written.
     ///
     /// # Errors
-    /// The run's error, or the `.pvd`'s [`IoError`] mapped by `io`.
-    pub fn finish<T, E>(&self, result: Result<T, E>, io: impl FnOnce(IoError) -> E) -> Result<T, E> {
+    /// The `.pvd`'s [`IoError`].
+    pub fn finish(&self) -> Result<(), IoError> {
         if self.format != FrameFormat::Vtu || self.written.is_empty() {
-            return result;
+            return Ok(());
         }
-        let pvd = self.write_pvd();
-        match (result, pvd) {
-            (Ok(value), Ok(())) => Ok(value),
-            (Ok(_), Err(e)) => Err(io(e)),
-            (Err(e), _) => Err(e),
-        }
+        self.write_pvd()
     }
 
     /// Writes `DIR/frames.pvd` listing every frame written so far with its time.

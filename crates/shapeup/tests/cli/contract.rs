@@ -1963,15 +1963,16 @@ fn an_output_or_report_that_is_an_input_is_refused_and_the_input_kept() {
     ws.expect_failure(&simulate("2", "1"), &["frame_0002.obj", "is the scene's mesh", "never replaces its inputs"]);
     assert_eq!(std::fs::read(earlier.join("frame_0002.obj")).unwrap(), frame, "the earlier frame was changed");
     assert!(!earlier.join("frame_0000.obj").exists(), "nothing written");
-    let out = shapeup(simulate("3", "3"));
-    assert_eq!(out.code, Some(0), "frame 2 is not written: {}", out.describe());
+    // A run that would not write frame 2 would still remove it, as an earlier run's frame.
+    ws.expect_failure(&simulate("3", "3"), &["frame_0002.obj", "is the scene's mesh"]);
     assert_eq!(std::fs::read(earlier.join("frame_0002.obj")).unwrap(), frame, "the earlier frame was changed");
 }
 
-/// A shorter run into a folder that holds a longer run's frames leaves those frames (it never
-/// deletes what it did not write), and says so once with their count and the first.
+/// A run into a folder that holds an earlier run's frames replaces that series: the frames it
+/// does not write (a longer run's, another format's, a `frames.pvd`) are removed and said once
+/// with their count and the first; other files in the folder stay.
 #[test]
-fn frames_of_an_earlier_run_left_in_the_folder_are_said_once() {
+fn a_run_into_a_folder_of_an_earlier_runs_frames_replaces_that_series() {
     let ws = Workspace::new();
     let scene = ws.scene(
         "drop.toml",
@@ -1979,15 +1980,96 @@ fn frames_of_an_earlier_run_left_in_the_folder_are_said_once() {
          [solver]\nmode = \"dynamic\"\n[[constraints]]\ntype = \"edge_spring\"\n",
     );
     let dir = ws.out("frames");
-    let first = simulate_in(None, &scene, &dir, &["--frames", "5"]);
+    let first = simulate_in(None, &scene, &dir, &["--frames", "5", "--format", "vtu"]);
     assert_eq!(first.code, Some(0), "{}", first.describe());
-    assert!(!first.stderr.contains("did not write"), "{}", first.describe());
+    assert!(!first.stderr.contains("removed"), "{}", first.describe());
+    write(&dir.join("notes.txt"), "mine");
     let out = simulate_in(None, &scene, &dir, &["--frames", "2"]);
     assert_eq!(out.code, Some(0), "{}", out.describe());
-    let line = "3 frame files this run did not write are in the output folder";
+    let line = "7 frame files of an earlier run that this one did not write";
     assert_eq!(out.stderr.matches(line).count(), 1, "{}", out.describe());
-    assert!(out.stderr.contains("(first: frame_0003.obj)"), "{}", out.describe());
-    assert!(dir.join("frame_0005.obj").exists(), "nothing of the earlier run is deleted");
+    assert!(out.stderr.contains("(first: frame_0000.vtu)"), "{}", out.describe());
+    let mut names: Vec<String> =
+        std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    names.sort();
+    assert_eq!(names, ["frame_0000.obj", "frame_0001.obj", "frame_0002.obj", "notes.txt"]);
+    assert_eq!(ws.out_entries(), ["frames"], "no staging folder is left beside it");
+}
+
+/// A run that fails part-way writes nothing: not into a new folder (which is not created), not
+/// into one that holds an earlier run's frames (which stay as they were), and no staging folder
+/// is left beside it. One rule for where outputs go: shapeup creates the folder named, never
+/// the folders above it, as `deform` does for its file.
+#[test]
+fn a_run_that_fails_part_way_writes_nothing() {
+    let ws = Workspace::new();
+    let cloth = "[mesh]\ngenerate = { kind = \"cloth\", vertices = [4, 4], size = [1.0, 1.0] }\n\
+                 [solver]\nmode = \"dynamic\"\n[[constraints]]\ntype = \"edge_spring\"\n\
+                 [[constraints]]\ntype = \"position\"\nvertices = [0]\n";
+    // Frame 0 is fine; the first step's energy overflows.
+    let failing = ws.scene("far.toml", &format!("{cloth}translate = [1e200, 0.0, 0.0]\n"));
+    let dir = ws.out("frames");
+    let args = |scene: &Path, dir: &Path| {
+        vec![OsStr::new("simulate").to_owned(), scene.into(), "--frames".into(), "3".into(), "-o".into(), dir.into()]
+    };
+    ws.expect_failure(&args(&failing, &dir), &["far.toml", "not a finite number"]);
+    let good = ws.scene("good.toml", cloth);
+    shapeup(args(&good, &dir)).success();
+    let before: Vec<Vec<u8>> = (0..=3).map(|k| std::fs::read(dir.join(format!("frame_000{k}.obj"))).unwrap()).collect();
+    let out = shapeup(args(&failing, &dir));
+    assert_eq!(out.code, Some(1), "{}", out.describe());
+    let after: Vec<Vec<u8>> = (0..=3).map(|k| std::fs::read(dir.join(format!("frame_000{k}.obj"))).unwrap()).collect();
+    assert!(before == after, "the earlier run's frames were changed");
+    assert_eq!(ws.out_entries(), ["frames"], "no staging folder is left beside it");
+    std::fs::remove_dir_all(&dir).unwrap();
+    // A missing folder above the output: refused, as deform refuses it, and nothing created.
+    ws.expect_failure(&args(&good, &ws.out("missing/frames")), &["missing", "does not exist"]);
+    ws.expect_failure(
+        &[OsStr::new("deform"), good.as_os_str(), "-o".as_ref(), ws.out("missing/result.obj").as_os_str()],
+        &["missing", "does not exist"],
+    );
+}
+
+/// Ctrl+C stops a run between steps: one line saying so, a non-zero exit, nothing written and
+/// no staging folder left (a process killed by the signal would leave it).
+#[cfg(unix)]
+#[test]
+fn a_run_stopped_by_ctrl_c_writes_nothing() {
+    let ws = Workspace::new();
+    let scene = ws.scene(
+        "long.toml",
+        "[mesh]\ngenerate = { kind = \"cloth\", vertices = [30, 30], size = [1.0, 1.0] }\n\
+         [solver]\nmode = \"dynamic\"\n[[constraints]]\ntype = \"edge_spring\"\n",
+    );
+    let dir = ws.out("frames");
+    let child = std::process::Command::new(env!("CARGO_BIN_EXE_shapeup"))
+        .args([OsStr::new("simulate"), scene.as_os_str(), "--frames".as_ref(), "100000".as_ref(), "-o".as_ref()])
+        .arg(&dir)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Wait until frames are being written (into the staging folder), then interrupt.
+    let staged = || {
+        std::fs::read_dir(ws.path("out")).unwrap().filter_map(Result::ok).any(|e| {
+            std::fs::read_dir(e.path())
+                .is_ok_and(|mut frames| frames.any(|f| f.is_ok_and(|f| f.file_name() == "frame_000010.obj")))
+        })
+    };
+    let waited = std::time::Instant::now();
+    while !staged() {
+        assert!(waited.elapsed().as_secs() < 120, "no frame was staged");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let kill = std::process::Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap();
+    assert!(kill.success());
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    let lines: Vec<&str> = stderr.lines().filter(|l| !l.trim().is_empty() && l.contains("shapeup:")).collect();
+    assert_eq!(lines.len(), 1, "{stderr}");
+    assert!(lines[0].contains("interrupted (Ctrl+C)") && lines[0].contains("nothing written"), "{stderr}");
+    assert_eq!(ws.out_entries(), Vec::<String>::new(), "{stderr}");
 }
 
 #[test]

@@ -366,7 +366,11 @@ fn man_pages_cover_every_subcommand_and_render() {
 
     std::fs::write(dir.path().join("a-file"), "x").unwrap();
     let out = run_in(dir.path(), &["man", "-o", "a-file"], &[]);
-    assert_one_line_failure(&out, "a-file");
+    assert_one_line_failure(&out, "a-file is a file, not a folder");
+    // The folder is created, never the folders above it (the rule of every output).
+    let out = run_in(dir.path(), &["man", "-o", "missing/man1"], &[]);
+    assert_one_line_failure(&out, "the folder missing does not exist");
+    assert!(!dir.path().join("missing").exists());
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -392,7 +396,15 @@ fn samples_are_listed_and_written_byte_for_byte() {
     }
     assert_eq!(std::fs::read_dir(dir.path().join("meshes")).unwrap().count(), SAMPLES.len(), "no temporary left");
     std::fs::write(dir.path().join("a-file"), "x").unwrap();
-    assert_one_line_failure(&run_in(dir.path(), &["samples", "--write", "a-file"], &[]), "a-file");
+    assert_one_line_failure(
+        &run_in(dir.path(), &["samples", "--write", "a-file"], &[]),
+        "a-file is a file, not a folder",
+    );
+    assert_one_line_failure(
+        &run_in(dir.path(), &["samples", "--write", "missing/meshes"], &[]),
+        "missing does not exist",
+    );
+    assert!(!dir.path().join("missing").exists());
 }
 
 #[test]
