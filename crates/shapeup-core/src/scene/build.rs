@@ -147,7 +147,11 @@ impl Scene {
         }
         // Name the mesh file (or, for a generated mesh, the scene) in what building found.
         let source = if self.mesh.generate.is_some() { self.file.clone() } else { self.mesh_path() };
-        let warnings = warnings.for_file(&source);
+        let mut warnings = warnings.for_file(&source);
+        // Groups at odds with each other are the scene's.
+        let mut found = Warnings::new();
+        super::conflicts::warn_of_conflicts(&system, &self.groups, &mesh, &rest.positions, &mut found);
+        warnings.extend(found.for_file(&self.file));
         Ok(LoadedScene {
             scene: self.clone(),
             mesh,

@@ -6,6 +6,7 @@
 //! reads its mesh and builds a ready-to-solve [`LoadedScene`].
 
 mod build;
+mod conflicts;
 mod error;
 pub mod frames;
 mod generated;
