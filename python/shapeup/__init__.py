@@ -15,7 +15,7 @@ and Simulation share), ``solver`` (Solver), ``simulation`` (Simulation),
 """
 
 from ._shapeup import SolveFailed, __version__, catalogue_markdown, set_threads
-from ._checks import UnconvergedWarning
+from ._checks import MeshWarning, UnconvergedWarning
 from .groups import Group
 from .mesh import Mesh, read_mesh, write_mesh
 from .scene import Scene
@@ -29,6 +29,7 @@ __all__ = [
     "ConstraintType",
     "Group",
     "Mesh",
+    "MeshWarning",
     "Scene",
     "Simulation",
     "SolveFailed",

@@ -24,6 +24,29 @@ class UnconvergedWarning(UserWarning):
     ``tolerance`` to stop once converged."""
 
 
+class MeshWarning(UserWarning):
+    """Arrays given as a mesh (``Mesh.from_arrays``, ``Solver(V, F)``) whose faces the solver
+    takes otherwise than given, said once with a count (also in ``Mesh.warnings``): faces on
+    the same vertices as an earlier face (kept: constraints on faces act there twice), faces
+    that cannot be triangulated (left out of the solver), polygons too tangled to ear-clip
+    (fanned)."""
+
+
+# The kinds of Mesh.warnings that MeshWarning raises for arrays (quads triangulated for the
+# solver are expected, not a warning).
+_ARRAY_WARNINGS = ("duplicate_faces", "faces_not_triangulated", "polygons_fanned")
+
+
+def _warn_of_arrays(native: Any) -> None:
+    """One :class:`MeshWarning` per warning of ``_ARRAY_WARNINGS`` that building a mesh from
+    arrays gave."""
+    import warnings
+
+    for kind, text in zip(native.warning_kinds, native.warnings):
+        if kind in _ARRAY_WARNINGS:
+            warnings.warn(text, MeshWarning, stacklevel=3)
+
+
 def _warn_unconverged(report: Mapping[str, Any]) -> None:
     """One :class:`UnconvergedWarning` per ``unconverged`` entry of a solve's
     ``report["warnings"]`` (a scene's or ``Solver.solve``'s: the command line's line, once)."""

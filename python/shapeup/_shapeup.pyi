@@ -20,6 +20,7 @@ class _Mesh:
     vertex_scalars: list[tuple[str, list[float]]]
     attributes: list[str]
     warnings: list[str]
+    warning_kinds: list[str]
     def with_vertices(self, vertices: npt.NDArray[np.float64]) -> _Mesh: ...
     def __len__(self) -> int: ...
 

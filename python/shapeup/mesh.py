@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 
 from . import _shapeup
-from ._checks import PathLike, _polygons, _tetrahedra, _vertices
+from ._checks import PathLike, _polygons, _tetrahedra, _vertices, _warn_of_arrays
 
 
 class Mesh:
@@ -29,14 +29,18 @@ class Mesh:
     @staticmethod
     def from_arrays(V: Any, F: Any = None, T: Any = None) -> "Mesh":
         """A mesh from ``V`` float64 (n, 3), ``F`` int (m, 3) / (m, k) or a list of polygons,
-        and ``T`` int (t, 4). ValueError / IndexError / TypeError for bad arrays."""
+        and ``T`` int (t, 4). ValueError / IndexError / TypeError for bad arrays; faces the
+        solver takes otherwise than given (duplicates, faces it cannot triangulate) are kept
+        and said once each as a :class:`MeshWarning` (and in :attr:`warnings`)."""
         V = _vertices(V)
         n = V.shape[0]
         polygons = None if F is None else _polygons(F, n)
         tets = None if T is None else _tetrahedra(T, n)
         if polygons is None and tets is None:
             raise ValueError("give F (faces) or T (tetrahedra)")
-        return Mesh(_shapeup.mesh_from_arrays(V, polygons, tets))
+        native = _shapeup.mesh_from_arrays(V, polygons, tets)
+        _warn_of_arrays(native)
+        return Mesh(native)
 
     @property
     def V(self) -> np.ndarray:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 import shapeup
@@ -78,3 +80,24 @@ def test_c_contiguous_float64_is_not_copied():
     Vf = np.asfortranarray(np.ones((4, 3)))
     assert _vertices(Vf).flags.c_contiguous
     assert _vertices(np.ones((4, 3), dtype=np.float32)).dtype == np.float64
+
+
+def test_duplicate_faces_are_kept_and_said_once():
+    # Faces on the same vertices as an earlier one (reversed, rotated) stay, in their order,
+    # and are said once with a count, as a MeshWarning and in Mesh.warnings; a quad is no
+    # warning; the solver runs on what was given.
+    V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]], float)
+    F = np.array([[0, 1, 2], [1, 3, 2], [2, 1, 0], [1, 2, 0]])
+    with pytest.warns(shapeup.MeshWarning, match=r"2 faces on the same vertices.*first: face 2, as face 0"):
+        mesh = shapeup.Mesh.from_arrays(V, F)
+    np.testing.assert_array_equal(mesh.F, F)
+    assert [w for w in mesh.warnings if "same vertices" in w]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        shapeup.Mesh.from_arrays(V, [[0, 1, 3, 2]])
+    with pytest.warns(shapeup.MeshWarning, match="1 faces on the same vertices"):
+        solver = shapeup.Solver(V, F[:3])
+    solver.add("edge_spring")
+    solver.add("position", vertices=[0, 1, 2])
+    X, _ = solver.solve()
+    assert np.isfinite(X).all()

@@ -81,6 +81,12 @@ impl PyMesh {
         warnings_list(&self.warnings)
     }
 
+    /// The kind of each of [`PyMesh::warnings`] (`duplicate_faces`, …), in the same order.
+    #[getter]
+    fn warning_kinds(&self) -> Vec<String> {
+        self.warnings.iter().map(|w| w.kind.clone()).collect()
+    }
+
     /// The same mesh (faces, attributes) with other positions, float64 (n, 3).
     fn with_vertices(&self, vertices: PyReadonlyArray2<'_, f64>) -> PyResult<PyMesh> {
         let positions = points(&vertices, "V")?;

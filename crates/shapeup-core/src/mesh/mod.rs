@@ -285,6 +285,13 @@ impl Mesh {
             triangle_polygon.resize(triangles.len(), index as u32);
             debug_assert!(triangles.len() > before);
         }
+        let duplicates = duplicate_faces(&polygons);
+        warnings.add_many(
+            "duplicate_faces",
+            "faces on the same vertices as an earlier face (in any order or orientation): kept as given, so constraints on faces act on each such place twice",
+            duplicates.len(),
+            || duplicates.first().map(|(f, earlier)| format!("face {f}, as face {earlier}")).unwrap_or_default(),
+        );
         let mesh = Mesh { positions, polygons, triangles, triangle_polygon, tetrahedra: Vec::new() };
         mesh.validate()?;
         Ok((mesh, warnings))
@@ -383,6 +390,45 @@ fn check_indices<const K: usize>(element: &'static str, elements: &[[u32; K]], n
     Ok(())
 }
 
+/// The faces on the same set of vertices as an earlier face (in any order or orientation; a
+/// repeated corner counts once), each with the first such face: `(face, earlier)`, by face.
+/// Faces are sorted by an order-free hash of their vertices; only faces of equal hash are
+/// compared.
+pub fn duplicate_faces(polygons: &Polygons) -> Vec<(usize, usize)> {
+    // splitmix64's finalizer: summed over a face's distinct vertices, any order hashes alike.
+    let mix = |v: u32| {
+        let mut z = u64::from(v).wrapping_add(0x9E37_79B9_7F4A_7C15);
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    };
+    let vertex_set = |corners: &[u32]| {
+        let mut set = corners.to_vec();
+        set.sort_unstable();
+        set.dedup();
+        set
+    };
+    let mut keys: Vec<(u64, usize)> = polygons
+        .iter()
+        .enumerate()
+        .map(|(f, corners)| (vertex_set(corners).iter().fold(0u64, |h, &v| h.wrapping_add(mix(v))), f))
+        .collect();
+    keys.sort_unstable();
+    let mut duplicates = Vec::new();
+    for run in keys.chunk_by(|a, b| a.0 == b.0).filter(|run| run.len() > 1) {
+        let mut distinct: Vec<(Vec<u32>, usize)> = Vec::new();
+        for &(_, f) in run {
+            let set = vertex_set(polygons.get(f).unwrap_or_default());
+            match distinct.iter().find(|(other, _)| *other == set) {
+                Some(&(_, earlier)) => duplicates.push((f, earlier)),
+                None => distinct.push((set, f)),
+            }
+        }
+    }
+    duplicates.sort_unstable();
+    duplicates
+}
+
 #[cfg(test)]
 mod tests {
     #![allow(clippy::unwrap_used)]
@@ -414,6 +460,19 @@ mod tests {
         assert_eq!(mesh.triangle_polygon, vec![1, 2, 3]);
         assert_eq!(warnings.count("faces_not_triangulated"), 1);
         assert!(warnings.iter().any(|w| w.first.contains("face 0")));
+    }
+
+    /// A face on the same vertices as an earlier one, in any order or orientation, is counted
+    /// once with the earlier face; faces sharing only some vertices are not.
+    #[test]
+    fn duplicate_faces_are_counted_with_the_earlier_face() {
+        let faces = polys(&[&[0, 1, 2], &[1, 3, 2], &[2, 1, 0], &[0, 1, 2, 3], &[1, 2, 0], &[3, 2, 1, 0], &[0, 1, 3]]);
+        assert_eq!(duplicate_faces(&faces), [(2, 0), (4, 0), (5, 3)]);
+        let (_, warnings) = Mesh::from_polygons(quad_positions(), faces).unwrap();
+        let w = warnings.iter().find(|w| w.kind == "duplicate_faces").unwrap();
+        assert_eq!((w.count, w.first.as_str()), (3, "face 2, as face 0"));
+        let (_, warnings) = Mesh::from_polygons(quad_positions(), polys(&[&[0, 1, 2], &[0, 2, 3]])).unwrap();
+        assert_eq!(warnings.count("duplicate_faces"), 0);
     }
 
     #[test]
