@@ -213,6 +213,29 @@ put("msh", "cube-4.1.msh", msh41_ascii())
 put("msh", "cube-surface-4.1.msh", msh41_ascii(tets=False))
 put("msh", "cube-4.1-binary.msh", msh41_binary())
 put("msh", "cube-2.2-binary.msh", msh22_binary())
+# Physical groups ("fixed": a face's triangles; "solid": the tetrahedra), a line element, sparse
+# node tags and $Entities (4.1), and CRLF line endings (2.2): what .msh -> .msh keeps.
+GROUPS_41 = (
+    '$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$PhysicalNames\n2\n2 1 "fixed"\n3 2 "solid"\n$EndPhysicalNames\n'
+    "$Entities\n0 1 1 1\n1 0 0 0 0 0 1 0 0\n1 0 0 0 0 1 1 1 1 0\n1 0 0 0 1 1 1 1 2 0\n$EndEntities\n"
+    "$Nodes\n2 8 10 80\n3 1 0 4\n" + "".join(f"{10 * (i + 1)}\n" for i in range(4))
+    + "".join(f"{x} {y} {z}\n" for x, y, z in CUBE[:4])
+    + "3 1 0 4\n" + "".join(f"{10 * (i + 5)}\n" for i in range(4))
+    + "".join(f"{x} {y} {z}\n" for x, y, z in CUBE[4:]) + "$EndNodes\n"
+    + f"$Elements\n3 {len(TETS) + 3} 100 {100 + len(TETS) + 2}\n3 1 4 {len(TETS)}\n"
+    + "".join(f"{100 + i} {' '.join(str(10 * (v + 1)) for v in t)}\n" for i, t in enumerate(TETS))
+    + f"2 1 2 2\n{100 + len(TETS)} 10 40 80\n{101 + len(TETS)} 10 80 50\n"
+    + f"1 1 1 1\n{102 + len(TETS)} 10 50\n$EndElements\n"
+)
+GROUPS_22 = (
+    '$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$PhysicalNames\n2\n2 1 "fixed"\n3 2 "solid"\n$EndPhysicalNames\n'
+    f"$Nodes\n{len(CUBE)}\n" + "".join(f"{10 * (i + 1)} {x} {y} {z}\n" for i, (x, y, z) in enumerate(CUBE))
+    + f"$EndNodes\n$Elements\n{len(TETS) + 3}\n"
+    + "".join(f"{100 + i} 4 2 2 1 {' '.join(str(10 * (v + 1)) for v in t)}\n" for i, t in enumerate(TETS))
+    + "200 2 2 1 1 10 40 80\n201 2 2 1 1 10 80 50\n202 1 2 0 1 10 50\n$EndElements\n"
+).replace("\n", "\r\n")
+put("msh", "cube-groups-4.1.msh", GROUPS_41)
+put("msh", "cube-groups-2.2-crlf.msh", GROUPS_22)
 
 # ---------------------------------------------------------------------------------------- TetGen
 # The .node file, a 0x00 byte, the .ele file.
@@ -323,6 +346,18 @@ prevent_flips = true
 type = "position"
 vertices = [0]
 spin = { axis = [0.0, 1.0, 0.0], deg_per_s = 90.0 }
+""",
+    "msh-physical.toml": """
+[mesh]
+path = "mesh.msh"
+
+[[constraints]]
+type = "tet_strain"
+physical = "solid"
+
+[[constraints]]
+type = "position"
+vertices = [0]
 """,
     "msh-tets.toml": """
 [mesh]

@@ -178,13 +178,16 @@ fn oriented_tets() -> Vec<[usize; 4]> {
 }
 
 fn cube_msh() -> String {
-    let mut s = String::from("$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n8\n");
+    // A physical group "solid" of every tetrahedron, for scenes' `physical = "solid"`.
+    let mut s = String::from(
+        "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$PhysicalNames\n1\n3 1 \"solid\"\n$EndPhysicalNames\n$Nodes\n8\n",
+    );
     for (i, [x, y, z]) in CUBE.iter().enumerate() {
         let _ = writeln!(s, "{} {x} {y} {z}", i + 1);
     }
     s.push_str("$EndNodes\n$Elements\n5\n");
     for (i, t) in oriented_tets().iter().enumerate() {
-        let _ = writeln!(s, "{} 4 2 0 1 {} {} {} {}", i + 1, t[0] + 1, t[1] + 1, t[2] + 1, t[3] + 1);
+        let _ = writeln!(s, "{} 4 2 1 1 {} {} {} {}", i + 1, t[0] + 1, t[1] + 1, t[2] + 1, t[3] + 1);
     }
     s.push_str("$EndElements\n");
     s

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -101,3 +102,28 @@ def test_duplicate_faces_are_kept_and_said_once():
     solver.add("position", vertices=[0, 1, 2])
     X, _ = solver.solve()
     assert np.isfinite(X).all()
+
+
+def test_gmsh_physical_groups_select_and_come_back(tmp_path):
+    # A .msh file's physical groups select vertices, as `physical = "fixed"` in scenes, and
+    # write_mesh(like=mesh) gives the file back with only its coordinates changed.
+    src = Path(__file__).resolve().parents[2] / "crates/shapeup-core/tests/data/cube-groups.msh"
+    mesh = shapeup.read_mesh(src)
+    solver = shapeup.Solver(mesh=mesh)
+    solver.add("tet_strain", {"physical": "solid"})
+    fixed = solver.add("position", {"physical": "fixed"}, hard=True)
+    solver.add("position", np.flatnonzero(mesh.V[:, 0] > 0.9), translate=[0.2, 0, 0])
+    X, _ = solver.solve()
+    np.testing.assert_array_equal(X[[0, 3, 4, 7]], mesh.V[[0, 3, 4, 7]])
+    assert fixed.constraints > 0
+    out = tmp_path / "out.msh"
+    shapeup.write_mesh(out, X, like=mesh)
+    before, after = src.read_text().splitlines(), out.read_text().splitlines()
+    assert len(before) == len(after)
+    assert sum(a != b for a, b in zip(before, after)) <= 8, "only node lines change"
+    assert "$PhysicalNames" in out.read_text()
+    with pytest.raises(ValueError, match='no physical group "top".*"fixed", "solid"'):
+        solver.add("position", {"physical": "top"})
+    plain = shapeup.Solver(mesh.V, mesh.F)
+    with pytest.raises(ValueError, match="has none"):
+        plain.add("position", {"physical": "fixed"})

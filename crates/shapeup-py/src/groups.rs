@@ -17,7 +17,7 @@ use shapeup_core::solver::{GroupId, System};
 
 /// Adds a group to `system` on `mesh` / `rest` (user coordinates) from `entry` (JSON text in
 /// scene keys) and `selection` (JSON text: an object holding at most the selection keys,
-/// vertices, faces, box or sphere; `{}` for every vertex). The group is named among the groups
+/// vertices, faces, box, sphere or physical; `{}` for every vertex). The group is named among the groups
 /// already in `system`: `type`, else `type_2`, `type_3`…; a given name must be new. Returns
 /// (id, name, type, constraints).
 ///
@@ -28,6 +28,7 @@ pub(crate) fn add_entry(
     system: &mut System,
     mesh: &CoreMesh,
     rest: &RestGeometry,
+    physical_groups: &[shapeup_core::io::PhysicalGroup],
     entry: &str,
     selection: &str,
 ) -> PyResult<(u32, String, String, usize)> {
@@ -46,7 +47,10 @@ pub(crate) fn add_entry(
         map.insert(key, value);
     }
     let existing: Vec<&str> = system.groups().map(|(_, g)| g.name.as_str()).collect();
-    let spec = GroupSpec::from_entry_among(map, &existing).map_err(value_error)?;
+    let mut spec = GroupSpec::from_entry_among(map, &existing).map_err(value_error)?;
+    // `physical="NAME"`: a group of the .msh file the mesh was read from.
+    spec.selection =
+        spec.selection.with_physical_groups(physical_groups, std::path::Path::new("the mesh")).map_err(value_error)?;
     let group = spec.build(mesh, rest, &WorkingFrame::IDENTITY).map_err(value_error)?;
     let (name, kind, count) = (group.name.clone(), group.kind.to_string(), group.constraints.len());
     let id = system.add_group(group).map_err(value_error)?;

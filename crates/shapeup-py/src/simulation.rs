@@ -18,6 +18,8 @@ use shapeup_core::solver::{SolveError, System};
 #[pyclass(name = "_Simulation", module = "shapeup._shapeup")]
 pub(crate) struct PySimulation {
     mesh: CoreMesh,
+    /// The physical groups of the `.msh` file the mesh was read from (`physical=` selections).
+    physical_groups: Vec<shapeup_core::io::PhysicalGroup>,
     rest: RestGeometry,
     simulation: CoreSimulation,
     contact: ContactSetup,
@@ -37,14 +39,21 @@ impl PySimulation {
         let masses = lumped_masses(&rest, settings.density);
         let system = System::new(mesh.mesh.num_vertices(), settings.solver_params());
         let simulation = CoreSimulation::new(system, masses, rest.positions.clone(), dynamics).map_err(value_error)?;
-        Ok(PySimulation { mesh: mesh.mesh.clone(), rest, simulation, contact: ContactSetup::default() })
+        let physical_groups = mesh.attributes.physical_groups().to_vec();
+        Ok(PySimulation {
+            mesh: mesh.mesh.clone(),
+            physical_groups,
+            rest,
+            simulation,
+            contact: ContactSetup::default(),
+        })
     }
 
     /// Adds a group from a scene entry and its selection (JSON text each); returns (id, name,
     /// type, constraints).
     #[pyo3(signature = (entry, selection="{}"))]
     fn add(&mut self, entry: &str, selection: &str) -> PyResult<(u32, String, String, usize)> {
-        add_entry(self.simulation.system_mut(), &self.mesh, &self.rest, entry, selection)
+        add_entry(self.simulation.system_mut(), &self.mesh, &self.rest, &self.physical_groups, entry, selection)
     }
 
     fn held(&self, id: u32) -> PyResult<Vec<u32>> {

@@ -79,6 +79,8 @@ fn solve_with_contact_interruptible(
 #[pyclass(name = "_Solver", module = "shapeup._shapeup")]
 pub(crate) struct PySolver {
     mesh: CoreMesh,
+    /// The physical groups of the `.msh` file the mesh was read from (`physical=` selections).
+    physical_groups: Vec<shapeup_core::io::PhysicalGroup>,
     rest: RestGeometry,
     system: System,
     contact: ContactSetup,
@@ -92,7 +94,15 @@ impl PySolver {
     fn new(mesh: &PyMesh) -> Self {
         let rest = RestGeometry::of_mesh(mesh.mesh.positions.clone(), &mesh.mesh);
         let system = System::new(mesh.mesh.num_vertices(), SolverParams::default());
-        PySolver { mesh: mesh.mesh.clone(), rest, system, contact: ContactSetup::default(), model: None }
+        let physical_groups = mesh.attributes.physical_groups().to_vec();
+        PySolver {
+            mesh: mesh.mesh.clone(),
+            physical_groups,
+            rest,
+            system,
+            contact: ContactSetup::default(),
+            model: None,
+        }
     }
 
     /// A new contact model (or the groups changed): the contact weights are set again,
@@ -108,7 +118,7 @@ impl PySolver {
     /// type, constraints).
     #[pyo3(signature = (entry, selection="{}"))]
     fn add(&mut self, entry: &str, selection: &str) -> PyResult<(u32, String, String, usize)> {
-        let added = add_entry(&mut self.system, &self.mesh, &self.rest, entry, selection)?;
+        let added = add_entry(&mut self.system, &self.mesh, &self.rest, &self.physical_groups, entry, selection)?;
         self.reset_contact_weights()?;
         Ok(added)
     }

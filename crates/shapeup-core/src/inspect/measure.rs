@@ -16,7 +16,7 @@ impl MeshInfo {
     /// tetrahedra ([`Volume::left_handed_tetrahedra`]).
     pub fn of_loaded(loaded: &crate::io::LoadedMesh) -> MeshInfo {
         let mut info = MeshInfo::of(&loaded.mesh);
-        if let (Some(volume), crate::io::Attributes::Tetrahedra(order)) = (&mut info.volume, &loaded.attributes) {
+        if let (Some(volume), Some(order)) = (&mut info.volume, loaded.attributes.tetrahedron_order()) {
             for &t in &order.left_handed {
                 volume.left_handed_tetrahedra.add(t);
             }

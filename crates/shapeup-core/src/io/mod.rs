@@ -65,6 +65,7 @@ pub(crate) use decode::{
     DecodeError, Lines, NotANumber, TextReader, bounded_vec, decode_text, parse_coordinate, read_error, read_text_file,
     utf16_encoding, with_decode_errors,
 };
+pub use msh::{MshSource, PhysicalGroup};
 pub use ply::PlyEncoding;
 
 use obj::ObjAttributes;
@@ -223,8 +224,11 @@ pub enum Attributes {
     Ply(Box<PlyAttributes>),
     /// Everything an OFF file held: its header keyword and the values after each vertex and face.
     Off(Box<OffAttributes>),
-    /// The node order of a `.msh` or TetGen file's tetrahedra, where some are left-handed.
+    /// The node order of a TetGen file's tetrahedra, where some are left-handed.
     Tetrahedra(Box<TetrahedronOrder>),
+    /// An ASCII `.msh` file as read: its text (written back with only the coordinates
+    /// changed), physical groups and the node order of its tetrahedra.
+    Msh(Box<msh::MshSource>),
 }
 
 /// Which tetrahedra a `.msh` or TetGen file lists left-handed: negative volume
@@ -271,7 +275,7 @@ impl Attributes {
             Attributes::Obj(a) => a.texcoords(polygons),
             Attributes::Ply(a) => a.texcoords(polygons),
             Attributes::Off(a) => a.texcoords(polygons),
-            Attributes::Tetrahedra(_) => None,
+            Attributes::Tetrahedra(_) | Attributes::Msh(_) => None,
         }
     }
 
@@ -282,7 +286,7 @@ impl Attributes {
             Attributes::Obj(a) => a.vertex_colors(),
             Attributes::Ply(a) => a.vertex_colors(),
             Attributes::Off(a) => a.vertex_colors(),
-            Attributes::Tetrahedra(_) => None,
+            Attributes::Tetrahedra(_) | Attributes::Msh(_) => None,
         }
     }
 
@@ -293,7 +297,7 @@ impl Attributes {
             Attributes::Obj(a) => a.has_normals(),
             Attributes::Ply(a) => a.has_normals(),
             Attributes::Off(a) => a.has_normals(),
-            Attributes::Tetrahedra(_) => false,
+            Attributes::Tetrahedra(_) | Attributes::Msh(_) => false,
         }
     }
 
@@ -315,6 +319,24 @@ impl Attributes {
             Attributes::Off(a) => a.kinds(),
             // Kept by every writer of tetrahedra; the others write no tetrahedra (and say so).
             Attributes::Tetrahedra(_) => Vec::new(),
+            Attributes::Msh(a) => a.kinds(),
+        }
+    }
+
+    /// Which tetrahedra the file listed left-handed (`.msh`, TetGen), if any.
+    pub fn tetrahedron_order(&self) -> Option<&TetrahedronOrder> {
+        match self {
+            Attributes::Tetrahedra(order) => Some(order),
+            Attributes::Msh(source) => source.order.as_ref(),
+            _ => None,
+        }
+    }
+
+    /// The physical groups of a `.msh` file (empty for any other).
+    pub fn physical_groups(&self) -> &[msh::PhysicalGroup] {
+        match self {
+            Attributes::Msh(source) => &source.physical_groups,
+            _ => &[],
         }
     }
 }
@@ -428,10 +450,16 @@ pub fn write_mesh_with(
         WriteFormat::Ply(encoding) => write_atomic(path, |w| ply::write_ply(w, mesh, attributes, encoding, warn))?,
         WriteFormat::StlBinary => write_atomic(path, |w| stl::write_stl_binary(w, mesh, attributes, warn))?,
         WriteFormat::Off => write_atomic(path, |w| off::write_off(w, mesh, attributes, warn))?,
-        WriteFormat::Msh => {
-            report_dropped(attributes, &[], "MSH", warn);
-            write_atomic(path, |w| msh::write_msh(w, &in_file_order(mesh, attributes)))?;
-        }
+        WriteFormat::Msh => match attributes {
+            // The file read, its coordinates replaced: tags, groups and every element kept.
+            Attributes::Msh(source) if !source.text.is_empty() && source.fits(mesh) => {
+                write_atomic(path, |w| source.write(w, mesh))?;
+            }
+            _ => {
+                report_dropped(attributes, &[], "MSH", warn);
+                write_atomic(path, |w| msh::write_msh(w, &in_file_order(mesh, attributes)))?;
+            }
+        },
         WriteFormat::TetGen => {
             report_dropped(attributes, &[], "TetGen files", warn);
             tetgen::write_tetgen_files(path, &in_file_order(mesh, attributes))?;
@@ -444,10 +472,7 @@ pub fn write_mesh_with(
 /// `mesh` with its tetrahedra as the file of `attributes` ordered their nodes (see
 /// [`TetrahedronOrder`]): what the writers of tetrahedra write.
 pub(crate) fn in_file_order<'a>(mesh: &'a Mesh, attributes: &Attributes) -> std::borrow::Cow<'a, Mesh> {
-    let file_order = match attributes {
-        Attributes::Tetrahedra(order) => order.file_order(&mesh.tetrahedra),
-        _ => None,
-    };
+    let file_order = attributes.tetrahedron_order().and_then(|order| order.file_order(&mesh.tetrahedra));
     match file_order {
         Some(tetrahedra) => {
             let mut copy = mesh.clone();

@@ -54,9 +54,29 @@ impl Scene {
         let t = Instant::now();
         let loaded = self.read_mesh()?;
         let load_seconds = t.elapsed().as_secs_f64();
-        let mut built = self.build(loaded.mesh, loaded.warnings, load_seconds)?;
+        let scene = self.with_physical_groups(loaded.attributes.physical_groups())?;
+        let mut built = scene.build(loaded.mesh, loaded.warnings, load_seconds)?;
         built.attributes = loaded.attributes;
         Ok(built)
+    }
+
+    /// The scene with each `physical = "NAME"` selection replaced by the vertices of the mesh's
+    /// physical group ([`SelectionSpec::with_physical_groups`]).
+    ///
+    /// # Errors
+    /// [`SceneError::Invalid`] naming the entry: no physical group of that name (listing the
+    /// mesh's), or one without vertices.
+    fn with_physical_groups(&self, groups: &[crate::io::PhysicalGroup]) -> Result<Scene, SceneError> {
+        let mut scene = self.clone();
+        let mesh = self.mesh_path();
+        for (i, spec) in scene.groups.iter_mut().enumerate() {
+            spec.selection = spec.selection.with_physical_groups(groups, &mesh).map_err(|e| SceneError::Invalid {
+                path: self.file.clone(),
+                entry: format!("constraints[{i}] (\"{}\")", spec.name),
+                message: e.to_string(),
+            })?;
+        }
+        Ok(scene)
     }
 
     /// The scene's mesh: read from its file, or generated.

@@ -52,6 +52,9 @@ pub enum SelectionSpec {
         /// Upper corner.
         max: [f64; 3],
     },
+    /// The vertices of a `.msh` mesh's physical group, by its name (or, for an unnamed group,
+    /// its tag as text): resolved when the scene loads its mesh ([`crate::scene::Scene::load`]).
+    Physical(String),
     /// Vertices inside a ball (boundary included).
     Sphere {
         /// Centre.
@@ -62,8 +65,46 @@ pub enum SelectionSpec {
 }
 
 impl SelectionSpec {
+    /// This selection with `physical = "NAME"` replaced by the vertices (ascending) of the
+    /// physical groups of `groups` named NAME, or unnamed with tag NAME (groups of one name in
+    /// several dimensions are joined); any other selection as it is. `mesh` names the file in
+    /// errors.
+    ///
+    /// # Errors
+    /// No such group (the message lists the mesh's), or one without vertices.
+    pub fn with_physical_groups(
+        &self,
+        groups: &[crate::io::PhysicalGroup],
+        mesh: &std::path::Path,
+    ) -> Result<SelectionSpec, SpecError> {
+        let SelectionSpec::Physical(name) = self else { return Ok(self.clone()) };
+        let matching: Vec<&crate::io::PhysicalGroup> =
+            groups.iter().filter(|g| g.label() == *name || g.tag.to_string() == *name).collect();
+        if matching.is_empty() {
+            let known: Vec<String> = groups.iter().map(|g| format!("\"{}\"", g.label())).collect();
+            let has = if known.is_empty() {
+                format!(
+                    "{} has none (physical groups come from an ASCII .msh file's $PhysicalNames and element tags)",
+                    mesh.display()
+                )
+            } else {
+                format!("{} has {}", mesh.display(), known.join(", "))
+            };
+            return Err(SpecError::Invalid(format!("no physical group \"{name}\": {has}")));
+        }
+        let mut vertices: Vec<usize> = matching.iter().flat_map(|g| g.vertices.iter().map(|&v| v as usize)).collect();
+        vertices.sort_unstable();
+        vertices.dedup();
+        if vertices.is_empty() {
+            return Err(SpecError::Invalid(format!(
+                "physical group \"{name}\" has no elements, so no vertices to select"
+            )));
+        }
+        Ok(SelectionSpec::Vertices(vertices))
+    }
+
     /// The keys of a scene entry that give its selection (an entry has at most one).
-    pub const KEYS: [&'static str; 4] = SELECTION_KEYS;
+    pub const KEYS: [&'static str; 5] = SELECTION_KEYS;
 
     /// The vertex indices it picks among `positions` (input frame): every vertex for
     /// [`SelectionSpec::All`], the listed order for a list, ascending for a box or sphere.
@@ -86,6 +127,11 @@ impl SelectionSpec {
             }
             SelectionSpec::Faces(_) => {
                 return Err("a face selection needs the mesh's faces: use scene::resolve_selection".into());
+            }
+            SelectionSpec::Physical(name) => {
+                return Err(SpecError::Invalid(format!(
+                    "\"physical\" = \"{name}\" needs the physical groups of a .msh mesh (it selects a group's vertices when a scene loads its mesh)"
+                )));
             }
             SelectionSpec::Box { min, max } => {
                 let (lo, hi) = (glam::DVec3::from(*min), glam::DVec3::from(*max));
@@ -298,7 +344,7 @@ pub fn resolve_selection(spec: &SelectionSpec, mesh: &Mesh, rest: &RestGeometry)
 }
 
 /// Keys every group takes; the rest go to the type's builder (which rejects unknown ones).
-const SELECTION_KEYS: [&str; 4] = ["vertices", "faces", "box", "sphere"];
+const SELECTION_KEYS: [&str; 5] = ["vertices", "faces", "box", "sphere", "physical"];
 
 /// An empty selection list `key = []` (every type refuses a group with nothing selected): said
 /// as what the file has, not as a group of no elements.
@@ -334,7 +380,7 @@ fn parse_group(mut entry: Map<String, Value>) -> Result<GroupSpec, SpecError> {
     let given: Vec<&str> = SELECTION_KEYS.iter().copied().filter(|k| entry.contains_key(*k)).collect();
     if given.len() > 1 {
         return Err(SpecError::Invalid(format!(
-            "give at most one of vertices, faces, box, sphere (found {})",
+            "give at most one of vertices, faces, box, sphere, physical (found {})",
             given.join(" and ")
         )));
     }
@@ -369,6 +415,17 @@ fn parse_group(mut entry: Map<String, Value>) -> Result<GroupSpec, SpecError> {
             )));
         }
         SelectionSpec::Box { min: b.min, max: b.max }
+    } else if let Some(v) = entry.remove("physical") {
+        match v {
+            Value::String(name) if !name.is_empty() => SelectionSpec::Physical(name),
+            Value::Number(tag) => SelectionSpec::Physical(tag.to_string()),
+            other => {
+                return Err(format!(
+                    "\"physical\" must name a physical group of the .msh mesh (\"fixed\", or an unnamed group's tag), found {other}"
+                )
+                .into());
+            }
+        }
     } else if let Some(v) = entry.remove("sphere") {
         #[derive(Deserialize)]
         #[serde(deny_unknown_fields)]

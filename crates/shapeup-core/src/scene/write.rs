@@ -88,6 +88,7 @@ impl Scene {
                     table.insert("max".into(), vec3(*max));
                     line(&mut out, "box", Value::Table(table));
                 }
+                SelectionSpec::Physical(name) => line(&mut out, "physical", Value::String(name.clone())),
                 SelectionSpec::Sphere { center, radius } => {
                     let mut table = toml::Table::new();
                     table.insert("center".into(), vec3(*center));

@@ -210,13 +210,29 @@ fn left_handed_tetrahedra_are_written_back_as_the_file_lists_them() {
             let dir = tempfile::tempdir().unwrap();
             let path = dir.path().join(written);
             let warnings = write_mesh(&path, &loaded.mesh, &loaded.attributes).unwrap();
-            assert!(warnings.is_empty(), "{written}: {warnings:?}");
+            // TetGen files cannot hold an MSH file's physical groups (and say so).
+            let dropped_groups = written == "out.ele" && files[0].0 == "m.msh";
+            assert!(
+                warnings.iter().all(|w| dropped_groups && w.kind == "attributes_dropped"),
+                "{written}: {warnings:?}"
+            );
             let text = fs::read_to_string(&path).unwrap();
             let again = read_mesh(&path).unwrap();
             assert_eq!(again.mesh.tetrahedra, two_tets_expected(), "{written}");
-            assert_eq!(again.attributes, loaded.attributes, "{written} lists the same tetrahedron left-handed");
-            // One-based node tags (MSH) or indices (TetGen): the second tetrahedron as listed.
-            assert!(text.lines().any(|l| l.trim_end().ends_with(" 2 4 3 5")), "{written}:\n{text}");
+            let order = again.attributes.tetrahedron_order();
+            assert_eq!(
+                order,
+                loaded.attributes.tetrahedron_order(),
+                "{written} lists the same tetrahedron left-handed"
+            );
+            if files[0].0 == "m.msh" && written == "out.msh" {
+                // The file written back: its elements exactly as listed, with its own tags.
+                let elements = |t: &str| t.split("$Elements").nth(1).map(str::to_owned);
+                assert_eq!(elements(&text), elements(files[0].1), "{written}:\n{text}");
+            } else {
+                // One-based indices: the second tetrahedron as listed.
+                assert!(text.lines().any(|l| l.trim_end().ends_with(" 2 4 3 5")), "{written}:\n{text}");
+            }
         }
     }
 }
@@ -519,4 +535,133 @@ fn invalid_mesh_or_missing_directory_writes_nothing() {
         assert!(matches!(err, IoError::Write { .. }), "{err}");
     }
     assert!(dir_entries(dir.path()).is_empty(), "no file and no temp file");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Gmsh in, Gmsh out: physical groups, tags and every element kept
+
+/// A unit cube of five tetrahedra, MSH 4.1: node tags 10–80 in two blocks, physical groups
+/// "fixed" (the two triangles of the face x = 0) and "solid" (the tetrahedra), and a line
+/// element of no group.
+const CUBE_41: &str = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$PhysicalNames\n2\n2 1 \"fixed\"\n3 2 \"solid\"\n\
+$EndPhysicalNames\n$Entities\n0 1 1 1\n1 0 0 0 0 0 1 0 0\n1 0 0 0 0 1 1 1 1 0\n1 0 0 0 1 1 1 1 2 0\n$EndEntities\n\
+$Nodes\n2 8 10 80\n3 1 0 4\n10\n20\n30\n40\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 1 0 4\n50\n60\n70\n80\n0 0 1\n1 0 1\n\
+1 1 1\n0 1 1\n$EndNodes\n$Elements\n3 8 100 107\n3 1 4 5\n100 10 20 40 50\n101 30 40 20 70\n102 60 50 70 20\n\
+103 80 70 50 40\n104 20 40 50 70\n2 1 2 2\n105 10 40 80\n106 10 80 50\n1 1 1 1\n107 10 50\n$EndElements\n";
+
+/// The same cube as MSH 2.2 (CRLF line endings): physical tags as each element's first tag.
+const CUBE_22: &str = "$MeshFormat\r\n2.2 0 8\r\n$EndMeshFormat\r\n$PhysicalNames\r\n2\r\n2 1 \"fixed\"\r\n3 2 \"solid\"\r\n\
+$EndPhysicalNames\r\n$Nodes\r\n8\r\n10 0 0 0\r\n20 1 0 0\r\n30 1 1 0\r\n40 0 1 0\r\n50 0 0 1\r\n60 1 0 1\r\n\
+70 1 1 1\r\n80 0 1 1\r\n$EndNodes\r\n$Elements\r\n8\r\n100 4 2 2 1 10 20 40 50\r\n101 4 2 2 1 30 40 20 70\r\n\
+102 4 2 2 1 60 50 70 20\r\n103 4 2 2 1 80 70 50 40\r\n104 4 2 2 1 20 40 50 70\r\n105 2 2 1 1 10 40 80\r\n\
+106 2 2 1 1 10 80 50\r\n107 1 2 0 1 10 50\r\n$EndElements\r\n";
+
+/// `.msh` → `.msh` keeps `$PhysicalNames`, `$Entities`, node and element tags, the file's own
+/// triangles and lines and its line endings: only the coordinates change, and they read back
+/// exactly. Other formats say once that they drop the groups and the other elements; a mesh
+/// that is not the file's falls back to the plain writer and says so too.
+#[test]
+fn msh_comes_back_with_its_groups_tags_and_elements_moved() {
+    for (name, text) in [("41", CUBE_41), ("22", CUBE_22)] {
+        let loaded = read_files(&[("cube.msh", text)], "cube.msh").unwrap();
+        let groups: Vec<(i32, i64, Option<String>, Vec<u32>)> = loaded
+            .attributes
+            .physical_groups()
+            .iter()
+            .map(|g| (g.dim, g.tag, g.name.clone(), g.vertices.clone()))
+            .collect();
+        // Vertex i is the i-th node: tags 10, 20, … 80 are vertices 0–7.
+        let expected = vec![
+            (2, 1, Some("fixed".to_string()), vec![0, 3, 4, 7]),
+            (3, 2, Some("solid".to_string()), (0..8).collect()),
+        ];
+        assert_eq!(groups, expected, "{name}");
+        let moved: Vec<DVec3> =
+            loaded.mesh.positions.iter().map(|&p| p * 1.5 + DVec3::new(1.0 / 3.0, -2e-7, 7.0)).collect();
+        let mesh = loaded.mesh.with_positions(moved.clone());
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("out.msh");
+        let warnings = write_mesh(&out, &mesh, &loaded.attributes).unwrap();
+        assert!(warnings.is_empty(), "{name}: {warnings:?}");
+        let written = fs::read_to_string(&out).unwrap();
+        let (before, after): (Vec<&str>, Vec<&str>) =
+            (text.split_inclusive('\n').collect(), written.split_inclusive('\n').collect());
+        assert_eq!(before.len(), after.len(), "{name}: line for line");
+        let changed: Vec<usize> = (0..before.len()).filter(|&i| before[i] != after[i]).collect();
+        let coordinate_lines =
+            if name == "41" { [21, 22, 23, 24, 30, 31, 32, 33] } else { [10, 11, 12, 13, 14, 15, 16, 17] };
+        assert_eq!(changed, coordinate_lines, "{name}: only the coordinate lines change\n{written}");
+        assert!(
+            after.iter().all(|l| l.ends_with(if name == "22" { "\r\n" } else { "\n" })),
+            "{name}: line endings kept"
+        );
+        let again = read_mesh(&out).unwrap();
+        assert_eq!(again.mesh.positions, moved, "{name}: coordinates exact");
+        assert_eq!(again.attributes.physical_groups(), loaded.attributes.physical_groups(), "{name}");
+        // Another format drops the groups and the line element, and says so once.
+        let warnings = write_mesh(&dir.path().join("out.obj"), &mesh, &loaded.attributes).unwrap();
+        let dropped = warnings.iter().find(|w| w.kind == "attributes_dropped").unwrap();
+        assert!(dropped.message.contains("Gmsh physical groups") && dropped.message.contains("other than tetrahedra"));
+        // Another mesh (a vertex fewer) is written plainly, saying what it leaves out.
+        let other = Mesh::with_tetrahedra(loaded.mesh.positions[..7].to_vec(), Vec::new(), vec![[0, 1, 3, 4]]).unwrap();
+        let warnings = write_mesh(&out, &other, &loaded.attributes).unwrap();
+        assert!(warnings.iter().any(|w| w.kind == "attributes_dropped"), "{name}: {warnings:?}");
+    }
+}
+
+/// Gmsh's own files (4.8.4, `gmsh_box.geo`): the 4.1 (with parametric nodes) and 2.2 ASCII
+/// files name the same four physical groups (a point, a curve, a surface, the volume) with the
+/// same vertices, and each comes back line for line with only its node lines changed (a 4.1
+/// node keeps its parametric coordinates).
+#[test]
+fn gmsh_files_keep_their_physical_groups_and_come_back_line_for_line() {
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data");
+    let mut groups_of_each = Vec::new();
+    for name in ["gmsh_box_41_ascii.msh", "gmsh_box_22_ascii.msh"] {
+        let path = data.join(name);
+        let loaded = read_mesh(&path).unwrap();
+        let groups: Vec<(String, i32, usize)> =
+            loaded.attributes.physical_groups().iter().map(|g| (g.label(), g.dim, g.vertices.len())).collect();
+        let labels: Vec<&str> = groups.iter().map(|g| g.0.as_str()).collect();
+        assert_eq!(labels, ["corner", "edge", "bottom", "solid"], "{name}");
+        assert_eq!(groups[0].2, 1, "{name}: a point");
+        assert_eq!(groups[3].2, loaded.mesh.num_vertices(), "{name}: the volume has every node");
+        let sets: Vec<Vec<DVec3>> = loaded
+            .attributes
+            .physical_groups()
+            .iter()
+            .map(|g| g.vertices.iter().map(|&v| loaded.mesh.positions[v as usize]).collect())
+            .collect();
+        groups_of_each.push(sets);
+        let moved: Vec<DVec3> = loaded.mesh.positions.iter().map(|&p| p + DVec3::new(0.5, 0.0, -1.0)).collect();
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join(name);
+        write_mesh(&out, &loaded.mesh.with_positions(moved.clone()), &loaded.attributes).unwrap();
+        let (before, after) = (fs::read_to_string(&path).unwrap(), fs::read_to_string(&out).unwrap());
+        let changed: Vec<(&str, &str)> = before.lines().zip(after.lines()).filter(|(a, b)| a != b).collect();
+        assert_eq!(before.lines().count(), after.lines().count(), "{name}");
+        assert_eq!(changed.len(), loaded.mesh.num_vertices(), "{name}: the node lines only");
+        if name.contains("41") {
+            let parametric = changed.iter().filter(|(a, _)| a.split_whitespace().count() > 3).count();
+            assert!(parametric > 0, "{name}: has parametric nodes");
+            for (a, b) in &changed {
+                assert_eq!(
+                    a.split_whitespace().skip(3).collect::<Vec<_>>(),
+                    b.split_whitespace().skip(3).collect::<Vec<_>>()
+                );
+            }
+        }
+        assert_eq!(read_mesh(&out).unwrap().mesh.positions, moved, "{name}");
+    }
+    // Node order differs between the versions; the groups hold the same points.
+    let sorted = |sets: &Vec<Vec<DVec3>>| -> Vec<Vec<[u64; 3]>> {
+        sets.iter()
+            .map(|s| {
+                let mut keys: Vec<[u64; 3]> = s.iter().map(|p| p.to_array().map(f64::to_bits)).collect();
+                keys.sort_unstable();
+                keys
+            })
+            .collect()
+    };
+    assert_eq!(sorted(&groups_of_each[0]), sorted(&groups_of_each[1]));
 }

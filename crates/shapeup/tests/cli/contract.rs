@@ -1052,6 +1052,7 @@ fn selected(selection: &SelectionSpec, mesh: &Mesh) -> Vec<bool> {
             list.iter().flat_map(|&f| mesh.polygons.get(f).unwrap_or(&[])).for_each(|&v| s[v as usize] = true);
             s
         }
+        SelectionSpec::Physical(name) => panic!("no example selects a physical group ({name})"),
     }
 }
 
@@ -2135,4 +2136,43 @@ fn a_solve_stopped_short_of_its_minimum_says_so_once() {
     assert!(report["residual"].as_f64().unwrap() > 0.01, "{report}");
     let kinds: Vec<&str> = report["warnings"].as_array().unwrap().iter().filter_map(|w| w["kind"].as_str()).collect();
     assert_eq!(kinds, ["unconverged"]);
+}
+
+/// Handles built in Gmsh: `physical = "NAME"` selects the vertices of a `.msh` file's physical
+/// group, and `deform -o X.msh` gives the file back with its groups and tags, only the
+/// coordinates moved. A name the file does not have is one line listing the ones it has.
+#[test]
+fn physical_groups_of_a_gmsh_file_select_vertices_and_come_back_out() {
+    let ws = Workspace::new();
+    let input = concat!(env!("CARGO_MANIFEST_DIR"), "/../shapeup-core/tests/data/cube-groups.msh");
+    std::fs::copy(input, ws.path("cube.msh")).unwrap();
+    let scene = |fixed: &str| {
+        format!(
+            "[mesh]\npath = 'cube.msh'\nnormalize = false\n[[constraints]]\ntype = \"tet_strain\"\nphysical = \"solid\"\n\
+             [[constraints]]\ntype = \"position\"\nphysical = {fixed}\nhard = true\n\
+             [[constraints]]\ntype = \"position\"\nbox = {{ min = [0.9, -0.1, -0.1], max = [1.1, 1.1, 1.1] }}\ntranslate = [0.2, 0.0, 0.0]\n"
+        )
+    };
+    let good = ws.scene("good.toml", &scene("\"fixed\""));
+    let out = ws.out("result.msh");
+    shapeup([OsStr::new("deform"), good.as_os_str(), "-o".as_ref(), out.as_os_str()]).success();
+    let (input_text, output_text) = (std::fs::read_to_string(input).unwrap(), std::fs::read_to_string(&out).unwrap());
+    let elements = |t: &str| t.split("$Nodes").next().unwrap().to_owned() + t.split("$EndNodes").nth(1).unwrap();
+    assert_eq!(elements(&output_text), elements(&input_text), "all but the nodes as the file has them");
+    let (before, after) = (read(Path::new(input)), read(&out));
+    // "fixed" is the face x = 0 (vertices 0, 3, 4, 7), held hard where it is; x = 1 moved.
+    for v in 0..8 {
+        let held = [0, 3, 4, 7].contains(&v);
+        assert_eq!(after.positions[v] == before.positions[v], held, "vertex {v}");
+    }
+    // The tag of an unnamed group, or a name the file lacks.
+    std::fs::remove_file(&out).unwrap();
+    let bad = ws.scene("bad.toml", &scene("\"top\""));
+    ws.expect_failure(
+        &[OsStr::new("deform"), bad.as_os_str(), "-o".as_ref(), out.as_os_str()],
+        &["bad.toml", "constraints[1]", "no physical group \"top\"", "cube.msh has \"fixed\", \"solid\""],
+    );
+    let by_tag = ws.scene("tag.toml", &scene("1"));
+    shapeup([OsStr::new("deform"), by_tag.as_os_str(), "-o".as_ref(), out.as_os_str()]).success();
+    assert_eq!(read(&out).positions, after.positions, "tag 1 is \"fixed\"");
 }

@@ -3,7 +3,10 @@
 use std::io::BufRead;
 use std::str::SplitWhitespace;
 
+use std::collections::HashMap;
+
 use super::model::{Elements, Nodes, parse_point};
+use super::source::element_dim;
 use super::{TETRAHEDRON, TRIANGLE};
 use crate::io::records::Records;
 use crate::io::{IoError, bounded_vec, shown};
@@ -20,6 +23,7 @@ pub(super) fn read_nodes_2<R: BufRead>(r: &mut Records<'_, R>, nodes: &mut Nodes
         let tag = nodes.add_text(r, fields.first().copied().unwrap_or(""), 0)?;
         let p = parse_point(fields.get(1..).unwrap_or(&[])).map_err(|m| r.error(format!("node {tag}: {m}")))?;
         nodes.positions.push(p);
+        nodes.lines.push(u32::try_from(r.line).unwrap_or(u32::MAX));
     }
     r.expect_line("$EndNodes", &format!(" ($Nodes of line {header} says {count} nodes)"))
 }
@@ -52,6 +56,7 @@ pub(super) fn read_nodes_41<R: BufRead>(r: &mut Records<'_, R>, nodes: &mut Node
             r.require_line(|| format!("coordinates {} of {n} of node block {}", k + 1, b + 1))?;
             let fields: Vec<&str> = r.tokens().take(3).collect();
             nodes.positions.push(parse_point(&fields).map_err(|m| r.error(format!("node {tag}: {m}")))?);
+            nodes.lines.push(u32::try_from(r.line).unwrap_or(u32::MAX));
         }
         total = total.saturating_add(n);
     }
@@ -62,13 +67,16 @@ pub(super) fn read_nodes_41<R: BufRead>(r: &mut Records<'_, R>, nodes: &mut Node
     Ok(())
 }
 
-/// `$Elements` of either version. 2.2: a count, then `tag type ntags tag… node…` lines. 4.1:
-/// `blocks elements min max`, then per block `dim entity type n` and `n` lines `tag node…`.
+/// `$Elements` of either version. 2.2: a count, then `tag type ntags tag… node…` lines (the
+/// first tag is the physical group). 4.1: `blocks elements min max`, then per block `dim entity
+/// type n` and `n` lines `tag node…` (the entity's physical groups are in `entities`). The
+/// nodes of every element in a physical group, of any type, are added to it.
 pub(super) fn read_elements<R: BufRead>(
     r: &mut Records<'_, R>,
     nodes: &Nodes,
     out: &mut Elements,
     v2: bool,
+    entities: &HashMap<(i32, i64), Vec<i64>>,
 ) -> Result<(), IoError> {
     let header = r.line;
     let what = if v2 { "the number of elements" } else { "'numEntityBlocks numElements minElementTag maxElementTag'" };
@@ -81,30 +89,49 @@ pub(super) fn read_elements<R: BufRead>(
         (blocks, count)
     };
     let mut total = 0usize;
+    let mut groups: Vec<i64> = Vec::new();
     for b in 0..blocks {
-        let (kind, n) = if v2 {
+        let (block, n) = if v2 {
             (None, count)
         } else {
             r.require_line(|| format!("element block {} of {blocks} ($Elements of line {header})", b + 1))?;
-            let [_, _, kind, n] = r.counts("'entityDim entityTag elementType numElementsInBlock'")?;
-            (Some(kind), n)
+            let [dim, entity, kind, n] = r.counts("'entityDim entityTag elementType numElementsInBlock'")?;
+            let (dim, entity) = (i32::try_from(dim).unwrap_or(-1), i64::try_from(entity).unwrap_or(-1));
+            (Some((kind, dim, entities.get(&(dim, entity)).cloned().unwrap_or_default())), n)
         };
         for k in 0..n {
             r.require_line(|| format!("element {} of {n} ($Elements of line {header})", k + 1))?;
             let mut tokens = r.tokens();
             let tag = tokens.next().unwrap_or("");
-            let kind = match kind {
-                Some(kind) => kind,
+            let (kind, dim) = match &block {
+                Some((kind, dim, physical)) => {
+                    groups.clone_from(physical);
+                    (*kind, *dim)
+                }
                 None => {
                     let kind = integer_field(r, &mut tokens, "element type")?;
                     let tags = integer_field(r, &mut tokens, "number of tags")?;
                     // Stops at the end of the line, however many tags are claimed.
-                    tokens.by_ref().take(tags).for_each(drop);
-                    kind
+                    groups.clear();
+                    let mut listed = tokens.by_ref().take(tags);
+                    if let Some(physical) = listed.next().and_then(|t| t.parse::<i64>().ok()).filter(|&t| t != 0) {
+                        groups.push(physical);
+                    }
+                    listed.for_each(drop);
+                    (kind, element_dim(kind).unwrap_or(-1))
                 }
             };
+            if !groups.is_empty() {
+                // Node tags the file does not define are an error below for the elements kept;
+                // for the others they only add nothing.
+                let vertices: Vec<u32> = tokens.clone().filter_map(|t| nodes.lookup(r, t, tag).ok()).collect();
+                for &g in &groups {
+                    out.physical.entry((dim, g)).or_default().extend_from_slice(&vertices);
+                }
+            }
             if kind != TETRAHEDRON && kind != TRIANGLE {
                 out.skipped.insert(kind);
+                out.other += 1;
                 continue;
             }
             // The first four node tags, and how many the line lists (without collecting them all).
@@ -125,6 +152,59 @@ pub(super) fn read_elements<R: BufRead>(
         return Err(r.error(format!("$Elements of line {header} says {count} elements, but its blocks hold {total}")));
     }
     Ok(())
+}
+
+/// A `$PhysicalNames` line: ((dimension, tag), name).
+pub(super) type PhysicalName = ((i32, i64), String);
+
+/// `$PhysicalNames`: a count, then `dim tag "name"` lines.
+pub(super) fn read_physical_names<R: BufRead>(r: &mut Records<'_, R>) -> Result<Vec<PhysicalName>, IoError> {
+    let header = r.line;
+    r.require_line(|| "the number of physical names".to_owned())?;
+    let [count] = r.counts("the number of physical names")?;
+    let mut names = bounded_vec(count);
+    for i in 0..count {
+        r.require_line(|| format!("physical name {} of {count} ($PhysicalNames of line {header})", i + 1))?;
+        let text = r.text().to_owned();
+        let mut tokens = text.splitn(3, char::is_whitespace);
+        let (dim, tag) = (tokens.next().and_then(|t| t.parse().ok()), tokens.next().and_then(|t| t.parse().ok()));
+        let (Some(dim), Some(tag)) = (dim, tag) else {
+            return Err(r.error(format!("expected 'dimension tag \"name\"', found '{}'", shown(&text))));
+        };
+        let name = tokens.next().unwrap_or("").trim();
+        let name = name.strip_prefix('"').and_then(|n| n.strip_suffix('"')).unwrap_or(name);
+        names.push(((dim, tag), name.to_owned()));
+    }
+    r.expect_line("$EndPhysicalNames", &format!(" ($PhysicalNames of line {header} says {count} names)"))?;
+    Ok(names)
+}
+
+/// MSH 4.1 `$Entities`: `points curves surfaces volumes`, then a line per entity: `tag x y z
+/// nphys phys…` for points, `tag minx miny minz maxx maxy maxz nphys phys… nbound bound…` for
+/// the others. Returns the physical tags of each (dimension, entity tag).
+pub(super) fn read_entities<R: BufRead>(r: &mut Records<'_, R>) -> Result<HashMap<(i32, i64), Vec<i64>>, IoError> {
+    let header = r.line;
+    r.require_line(|| "'numPoints numCurves numSurfaces numVolumes'".to_owned())?;
+    let counts: [usize; 4] = r.counts("'numPoints numCurves numSurfaces numVolumes'")?;
+    let mut entities = HashMap::new();
+    for (dim, &count) in counts.iter().enumerate() {
+        for i in 0..count {
+            r.require_line(|| format!("entity {} of {count} of dimension {dim} ($Entities of line {header})", i + 1))?;
+            let tokens: Vec<&str> = r.tokens().collect();
+            let at = if dim == 0 { 4 } else { 7 };
+            let integer = |k: usize| tokens.get(k).and_then(|t| t.parse::<i64>().ok());
+            let (Some(tag), Some(n)) = (integer(0), integer(at)) else {
+                return Err(r.error(format!("entity line '{}': expected a tag and physical tags", shown(r.text()))));
+            };
+            let physical: Option<Vec<i64>> =
+                (0..usize::try_from(n).unwrap_or(usize::MAX).min(tokens.len())).map(|k| integer(at + 1 + k)).collect();
+            let physical =
+                physical.ok_or_else(|| r.error(format!("entity {tag}: its physical tags are not integers")))?;
+            entities.insert((dim as i32, tag), physical);
+        }
+    }
+    r.expect_line("$EndEntities", &format!(" ($Entities of line {header})"))?;
+    Ok(entities)
 }
 
 /// The next token of an ASCII 2.2 element line as a non-negative integer; `name` names it in errors.

@@ -1,8 +1,11 @@
 //! Gmsh `.msh`: versions 4.1 and 2.2 (2.0 and 2.1 read as 2.2), ASCII and binary.
 //!
-//! Read: `$MeshFormat`, `$Nodes` and `$Elements`; in binary 4.1 files `$Entities` is parsed (its
-//! layout is binary there) only to step over it; every other section (`$PhysicalNames`,
-//! `$Entities` in ASCII files, `$NodeData`, `$Periodic`, …) is skipped up to its `$End…` line,
+//! Read: `$MeshFormat`, `$Nodes` and `$Elements`; in ASCII files also `$PhysicalNames` and (4.1)
+//! `$Entities`, for the physical groups ([`PhysicalGroup`]: the nodes of every element, of any
+//! type, whose physical tag is the group's: 2.2's first element tag, 4.1's entity's physical
+//! tags), which scenes select (`physical = "NAME"`); in binary 4.1 files `$Entities` is parsed
+//! (its layout is binary there) only to step over it, and binary files' physical groups are not
+//! read. Every other section (`$NodeData`, `$Periodic`, …) is skipped up to its `$End…` line,
 //! which binary files always put on a line of its own after their data. Node tags may be sparse
 //! and in any order: vertex *i* of the mesh is the *i*-th node of the file. Element type 4 (4-node
 //! tetrahedron) and type 2 (3-node triangle) are read; every other type (points, lines, quads,
@@ -24,8 +27,12 @@
 //! allocation beyond [`super::MAX_PREALLOCATION`], and every count is checked against the data
 //! that actually follows, so a short file claiming 2⁶⁰ nodes fails quickly at its end.
 //!
-//! Write: MSH 4.1 ASCII without `$Entities` (Gmsh creates discrete entities for it): one node
-//! block, one block of tetrahedra if there are any and one of the surface triangles.
+//! Write: a mesh read from an ASCII `.msh` file, with the same nodes and elements, is written
+//! as that file with only its node coordinates replaced ([`MshSource`]): `$PhysicalNames`,
+//! `$Entities`, node and element tags, every element of every type, parametric coordinates and
+//! line endings come back as read. Any other mesh is written as MSH 4.1 ASCII without
+//! `$Entities` (Gmsh creates discrete entities for it): one node block, one block of tetrahedra
+//! if there are any and one of the surface triangles, saying what of the source it drops.
 //!
 //! Hand-written rather than the `mshio` crate: mshio 0.4 (nom 5) reserves vectors of the sizes a
 //! header claims (`count(parser, n)` calls `Vec::with_capacity(n)`, so a 1 KB file claiming 2⁶⁰
@@ -38,6 +45,7 @@
 mod ascii;
 mod binary;
 mod model;
+mod source;
 mod write;
 
 use std::io::BufRead;
@@ -45,11 +53,15 @@ use std::path::Path;
 
 use super::records::Records;
 use super::{IoError, LoadedMesh, decode_text, read_error, shown, utf16_encoding};
-use ascii::{read_elements, read_nodes_2, read_nodes_41};
+use std::collections::HashMap;
+
+use super::Attributes;
+use ascii::{PhysicalName, read_elements, read_entities, read_nodes_2, read_nodes_41, read_physical_names};
 use binary::{Binary, read_binary};
 use model::{Elements, Nodes, Place, finish};
 
 pub(super) use model::{parse_point, tetrahedral_mesh};
+pub use source::{MshSource, PhysicalGroup};
 pub use write::write_msh;
 
 /// Gmsh element type of a 3-node triangle.
@@ -70,8 +82,31 @@ const TETRAHEDRON: usize = 4;
 /// which is a tetrahedron or triangle; [`IoError::Mesh`] for a non-finite coordinate;
 /// [`IoError::Read`] if reading fails.
 pub fn read_msh(mut reader: impl BufRead, path: &Path) -> Result<LoadedMesh, IoError> {
-    let utf16 = utf16_encoding(reader.fill_buf().map_err(|e| read_error(path, e))?);
-    let reader = decode_text(reader).map_err(|e| read_error(path, e))?;
+    // Whole, so that an ASCII file can be written back with only its coordinates changed.
+    let mut raw = Vec::new();
+    reader.read_to_end(&mut raw).map_err(|e| read_error(path, e))?;
+    let utf16 = utf16_encoding(&raw);
+    let mut loaded = read_msh_text(&raw, path, utf16)?;
+    if let Some(source) = loaded.1.take() {
+        let order = match std::mem::take(&mut loaded.0.attributes) {
+            Attributes::Tetrahedra(order) => Some(*order),
+            _ => None,
+        };
+        // A UTF-16 file's lines are not its bytes: it keeps its groups, not its text.
+        let text = if utf16.is_none() { raw } else { Vec::new() };
+        loaded.0.attributes = Attributes::Msh(Box::new(MshSource { text, order, ..source }));
+    }
+    Ok(loaded.0)
+}
+
+/// [`read_msh`] of the bytes `raw`; for an ASCII file also what its source keeps (all but the
+/// text and the tetrahedra's order).
+fn read_msh_text(
+    raw: &[u8],
+    path: &Path,
+    utf16: Option<&'static str>,
+) -> Result<(LoadedMesh, Option<MshSource>), IoError> {
+    let reader = decode_text(std::io::Cursor::new(raw)).map_err(|e| read_error(path, e))?;
     let mut r = Records::new(reader, path, None);
     if !r.advance()? {
         return Err(r.error_at(1, "empty file (expected '$MeshFormat')"));
@@ -112,7 +147,7 @@ pub fn read_msh(mut reader: impl BufRead, path: &Path) -> Result<LoadedMesh, IoE
             };
             let offset = r.lines.consumed;
             let mut b = Binary { reader: r.lines.into_inner(), offset, path, big_endian: false, size_t };
-            return read_binary(&mut b, version_2);
+            return Ok((read_binary(&mut b, version_2)?, None));
         }
         _ => return Err(bad_version()),
     }
@@ -120,12 +155,16 @@ pub fn read_msh(mut reader: impl BufRead, path: &Path) -> Result<LoadedMesh, IoE
 
     let mut nodes = Nodes::default();
     let mut elements = Elements::default();
+    let mut names = Vec::new();
+    let mut entities = HashMap::new();
     while r.advance()? {
         let section = r.text().to_owned();
         match section.as_str() {
             "$Nodes" if version_2 => read_nodes_2(&mut r, &mut nodes)?,
             "$Nodes" => read_nodes_41(&mut r, &mut nodes)?,
-            "$Elements" => read_elements(&mut r, &nodes, &mut elements, version_2)?,
+            "$Elements" => read_elements(&mut r, &nodes, &mut elements, version_2, &entities)?,
+            "$PhysicalNames" => names.extend(read_physical_names(&mut r)?),
+            "$Entities" if !version_2 => entities = read_entities(&mut r)?,
             s if is_section(s) => {
                 // A section we do not need: skip it whole.
                 let end = format!("$End{}", &s[1..]);
@@ -139,7 +178,36 @@ pub fn read_msh(mut reader: impl BufRead, path: &Path) -> Result<LoadedMesh, IoE
             s => return Err(r.error(format!("expected a section such as '$Nodes', found '{}'", shown(s)))),
         }
     }
-    finish(path, nodes, elements, Place::Line)
+    let node_lines = std::mem::take(&mut nodes.lines);
+    let counts = (elements.tets.len(), elements.triangles.len());
+    let other_elements = elements.other;
+    let physical_groups = physical_groups(std::mem::take(&mut elements.physical), names);
+    let loaded = finish(path, nodes, elements, Place::Line)?;
+    let source = MshSource {
+        text: Vec::new(),
+        node_lines,
+        version_2,
+        elements: counts,
+        other_elements,
+        order: None,
+        physical_groups,
+    };
+    Ok((loaded, Some(source)))
+}
+
+/// The physical groups from the vertices of their elements and `$PhysicalNames`, by dimension
+/// and tag (a named group without elements has no vertices).
+fn physical_groups(mut vertices: HashMap<(i32, i64), Vec<u32>>, names: Vec<PhysicalName>) -> Vec<PhysicalGroup> {
+    let mut named: HashMap<(i32, i64), String> = names.into_iter().collect();
+    let keys: std::collections::BTreeSet<(i32, i64)> = vertices.keys().chain(named.keys()).copied().collect();
+    keys.into_iter()
+        .map(|(dim, tag)| {
+            let mut list = vertices.remove(&(dim, tag)).unwrap_or_default();
+            list.sort_unstable();
+            list.dedup();
+            PhysicalGroup { dim, tag, name: named.remove(&(dim, tag)), vertices: list }
+        })
+        .collect()
 }
 
 /// Whether `text` opens a section (`$Name`, one word, not `$End…`).

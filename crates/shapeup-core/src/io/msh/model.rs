@@ -44,6 +44,8 @@ pub(super) fn finish(path: &Path, nodes: Nodes, elements: Elements, place: Place
 pub(super) struct Nodes {
     pub(super) positions: Vec<DVec3>,
     pub(super) index: HashMap<u64, u32>,
+    /// ASCII files: the 1-based line of each node's coordinates, by index.
+    pub(super) lines: Vec<u32>,
 }
 
 impl Nodes {
@@ -143,6 +145,10 @@ pub(super) struct Elements {
     pub(super) tet_origins: Vec<(u64, u64)>,
     pub(super) triangles: Vec<[u32; 3]>,
     pub(super) skipped: BTreeSet<usize>,
+    /// How many elements of the skipped types the file has.
+    pub(super) other: usize,
+    /// ASCII files: the vertices of each physical group's elements, by (dimension, tag).
+    pub(super) physical: HashMap<(i32, i64), Vec<u32>>,
 }
 
 impl Elements {
