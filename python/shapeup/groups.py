@@ -54,7 +54,7 @@ class _Groups:
         ``selection``: None (every vertex, and every face), an int array of vertex indices, a
         boolean mask of length n, or a dict in scene keys: ``{"faces": [...]}``,
         ``{"box": {"min": [x, y, z], "max": [...]}}``, ``{"sphere": {"center": [...],
-        "radius": r}}``, ``{"physical": "fixed"}`` (a physical group of the ASCII ``.msh`` file
+        "radius": r}}``, ``{"physical": "fixed"}`` (a physical group of the ``.msh`` file
         the mesh was read from, by name or tag). Position-like types take ``translate=[dx, dy, dz]``,
         ``rotate={"axis": ..., "angle_deg": ..., "center": ...}``, ``targets=(k, 3) array``
         or ``hard=True``.

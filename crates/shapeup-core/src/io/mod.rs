@@ -226,8 +226,8 @@ pub enum Attributes {
     Off(Box<OffAttributes>),
     /// The node order of a TetGen file's tetrahedra, where some are left-handed.
     Tetrahedra(Box<TetrahedronOrder>),
-    /// An ASCII `.msh` file as read: its text (written back with only the coordinates
-    /// changed), physical groups and the node order of its tetrahedra.
+    /// A `.msh` file as read: its bytes (written back with only the coordinates changed),
+    /// physical groups and the node order of its tetrahedra.
     Msh(Box<msh::MshSource>),
 }
 

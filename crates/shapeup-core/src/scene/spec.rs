@@ -84,7 +84,7 @@ impl SelectionSpec {
             let known: Vec<String> = groups.iter().map(|g| format!("\"{}\"", g.label())).collect();
             let has = if known.is_empty() {
                 format!(
-                    "{} has none (physical groups come from an ASCII .msh file's $PhysicalNames and element tags)",
+                    "{} has none (physical groups come from a .msh file's $PhysicalNames and element tags)",
                     mesh.display()
                 )
             } else {

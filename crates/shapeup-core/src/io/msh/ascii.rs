@@ -23,7 +23,7 @@ pub(super) fn read_nodes_2<R: BufRead>(r: &mut Records<'_, R>, nodes: &mut Nodes
         let tag = nodes.add_text(r, fields.first().copied().unwrap_or(""), 0)?;
         let p = parse_point(fields.get(1..).unwrap_or(&[])).map_err(|m| r.error(format!("node {tag}: {m}")))?;
         nodes.positions.push(p);
-        nodes.lines.push(u32::try_from(r.line).unwrap_or(u32::MAX));
+        nodes.origins.push(r.line as u64);
     }
     r.expect_line("$EndNodes", &format!(" ($Nodes of line {header} says {count} nodes)"))
 }
@@ -56,7 +56,7 @@ pub(super) fn read_nodes_41<R: BufRead>(r: &mut Records<'_, R>, nodes: &mut Node
             r.require_line(|| format!("coordinates {} of {n} of node block {}", k + 1, b + 1))?;
             let fields: Vec<&str> = r.tokens().take(3).collect();
             nodes.positions.push(parse_point(&fields).map_err(|m| r.error(format!("node {tag}: {m}")))?);
-            nodes.lines.push(u32::try_from(r.line).unwrap_or(u32::MAX));
+            nodes.origins.push(r.line as u64);
         }
         total = total.saturating_add(n);
     }
@@ -165,18 +165,25 @@ pub(super) fn read_physical_names<R: BufRead>(r: &mut Records<'_, R>) -> Result<
     let mut names = bounded_vec(count);
     for i in 0..count {
         r.require_line(|| format!("physical name {} of {count} ($PhysicalNames of line {header})", i + 1))?;
-        let text = r.text().to_owned();
-        let mut tokens = text.splitn(3, char::is_whitespace);
-        let (dim, tag) = (tokens.next().and_then(|t| t.parse().ok()), tokens.next().and_then(|t| t.parse().ok()));
-        let (Some(dim), Some(tag)) = (dim, tag) else {
-            return Err(r.error(format!("expected 'dimension tag \"name\"', found '{}'", shown(&text))));
-        };
-        let name = tokens.next().unwrap_or("").trim();
-        let name = name.strip_prefix('"').and_then(|n| n.strip_suffix('"')).unwrap_or(name);
-        names.push(((dim, tag), name.to_owned()));
+        names.push(parse_physical_name(r.text()).map_err(|m| r.error(m))?);
     }
     r.expect_line("$EndPhysicalNames", &format!(" ($PhysicalNames of line {header} says {count} names)"))?;
     Ok(names)
+}
+
+/// A `$PhysicalNames` line, `dim tag "name"` (the quotes are optional).
+///
+/// # Errors
+/// The message for a line without an integer dimension and tag.
+pub(super) fn parse_physical_name(text: &str) -> Result<PhysicalName, String> {
+    let mut tokens = text.trim().splitn(3, char::is_whitespace);
+    let (dim, tag) = (tokens.next().and_then(|t| t.parse().ok()), tokens.next().and_then(|t| t.parse().ok()));
+    let (Some(dim), Some(tag)) = (dim, tag) else {
+        return Err(format!("expected 'dimension tag \"name\"', found '{}'", shown(text)));
+    };
+    let name = tokens.next().unwrap_or("").trim();
+    let name = name.strip_prefix('"').and_then(|n| n.strip_suffix('"')).unwrap_or(name);
+    Ok(((dim, tag), name.to_owned()))
 }
 
 /// MSH 4.1 `$Entities`: `points curves surfaces volumes`, then a line per entity: `tag x y z

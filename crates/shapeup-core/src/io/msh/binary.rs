@@ -6,9 +6,13 @@ use std::path::Path;
 
 use glam::DVec3;
 
-use super::model::{Elements, Nodes, Place, finish};
+use std::collections::HashMap;
+
+use super::ascii::{PhysicalName, parse_physical_name};
+use super::model::{Elements, Nodes};
+use super::source::element_dim;
 use super::{TETRAHEDRON, TRIANGLE, is_section};
-use crate::io::{IoError, LoadedMesh, bounded_vec, read_error, shown};
+use crate::io::{IoError, bounded_vec, read_error, shown};
 
 /// Number of nodes of each Gmsh element type (`None`: no such type, or one of variable size), as
 /// Gmsh 4.8's `getElementProperties` gives them (prisms 90, 91 and 106–117 and type 140, which it
@@ -246,7 +250,10 @@ impl<R: BufRead> Binary<'_, R> {
 }
 
 /// The sections of a binary file after its version line.
-pub(super) fn read_binary<R: BufRead>(b: &mut Binary<'_, R>, version_2: bool) -> Result<LoadedMesh, IoError> {
+pub(super) fn read_binary<R: BufRead>(
+    b: &mut Binary<'_, R>,
+    version_2: bool,
+) -> Result<(Nodes, Elements, Vec<PhysicalName>), IoError> {
     let mark = b.offset;
     let one = b.bytes::<4>(&|| "the integer 1 that gives a binary file's byte order".to_owned())?;
     b.big_endian = match one {
@@ -263,13 +270,16 @@ pub(super) fn read_binary<R: BufRead>(b: &mut Binary<'_, R>, version_2: bool) ->
 
     let mut nodes = Nodes::default();
     let mut elements = Elements::default();
+    let mut names = Vec::new();
+    let mut entities = HashMap::new();
     while let Some((offset, section)) = b.line()? {
         match section.as_str() {
             "$Nodes" if version_2 => read_nodes_2_binary(b, &mut nodes, offset)?,
             "$Nodes" => read_nodes_41_binary(b, &mut nodes, offset)?,
             "$Elements" if version_2 => read_elements_2_binary(b, &nodes, &mut elements, offset)?,
-            "$Elements" => read_elements_41_binary(b, &nodes, &mut elements, offset)?,
-            "$Entities" if !version_2 => skip_entities_binary(b, offset)?,
+            "$Elements" => read_elements_41_binary(b, &nodes, &mut elements, offset, &entities)?,
+            "$Entities" if !version_2 => entities = read_entities_binary(b, offset)?,
+            "$PhysicalNames" => names.extend(read_physical_names_binary(b, offset)?),
             s if is_section(s) => {
                 // Found by its line: Gmsh ends every section's binary data with a line break.
                 let end = format!("$End{}", &s[1..]);
@@ -289,28 +299,50 @@ pub(super) fn read_binary<R: BufRead>(b: &mut Binary<'_, R>, version_2: bool) ->
             s => return Err(b.error(offset, format!("expected a section such as '$Nodes', found '{}'", shown(s)))),
         }
     }
-    finish(b.path, nodes, elements, Place::Offset)
+    Ok((nodes, elements, names))
+}
+
+/// `$PhysicalNames` of a binary file: text lines, as in an ASCII file.
+fn read_physical_names_binary<R: BufRead>(b: &mut Binary<'_, R>, at: u64) -> Result<Vec<PhysicalName>, IoError> {
+    let count = b.count_line("the number of physical names")?;
+    let mut names = bounded_vec(usize::try_from(count).unwrap_or(usize::MAX));
+    for i in 1..=count {
+        let Some((offset, text)) = b.line()? else {
+            let what = format!("physical name {i} of {count} ($PhysicalNames at byte offset {at})");
+            return Err(b.error(b.offset, format!("file ends early: expected {what}")));
+        };
+        names.push(parse_physical_name(&text).map_err(|m| b.error(offset, m))?);
+    }
+    b.expect_line("$EndPhysicalNames", &format!(" (closing '$PhysicalNames' at byte offset {at})"))?;
+    Ok(names)
 }
 
 /// Binary MSH 4.1 `$Entities`: four counts, then points (`int` tag, 3 `double`s, physical tags)
 /// and curves, surfaces and volumes (`int` tag, 6 `double`s, physical tags, bounding entities),
-/// each list a `size_t` count of `int`s. Only stepped over.
-fn skip_entities_binary<R: BufRead>(b: &mut Binary<'_, R>, at: u64) -> Result<(), IoError> {
+/// each list a `size_t` count of `int`s. Returns the physical tags of each (dimension, tag).
+fn read_entities_binary<R: BufRead>(b: &mut Binary<'_, R>, at: u64) -> Result<HashMap<(i32, i64), Vec<i64>>, IoError> {
     let header = || format!("the counts of $Entities (at byte offset {at})");
     let counts = [b.size(&header)?, b.size(&header)?, b.size(&header)?, b.size(&header)?];
+    let mut entities = HashMap::new();
     for (dim, (&count, kind)) in counts.iter().zip(["point", "curve", "surface", "volume"]).enumerate() {
         for i in 0..count {
             let what = || format!("{kind} entity {} of {count} ($Entities at byte offset {at})", i + 1);
-            b.int(&what)?;
+            let tag = b.int(&what)?;
             b.skip(if dim == 0 { 3 } else { 6 }, 8, &what)?;
-            let lists = if dim == 0 { 1 } else { 2 };
-            for _ in 0..lists {
+            let n = b.size(&what)?;
+            let mut physical = bounded_vec(usize::try_from(n).unwrap_or(usize::MAX));
+            for _ in 0..n {
+                physical.push(i64::from(b.int(&what)?));
+            }
+            entities.insert((dim as i32, i64::from(tag)), physical);
+            if dim > 0 {
                 let n = b.size(&what)?;
                 b.skip(n, 4, &what)?;
             }
         }
     }
-    b.expect_line("$EndEntities", &format!(" (closing '$Entities' at byte offset {at})"))
+    b.expect_line("$EndEntities", &format!(" (closing '$Entities' at byte offset {at})"))?;
+    Ok(entities)
 }
 
 /// Binary MSH 4.1 `$Nodes`: the `size_t`s `blocks nodes min max`, then per block the `int`s
@@ -346,6 +378,7 @@ fn read_nodes_41_binary<R: BufRead>(b: &mut Binary<'_, R>, nodes: &mut Nodes, at
         }
         for (k, tag) in tags.iter().enumerate() {
             let what = || format!("the coordinates of node {tag} ({} of {n} of node block {block})", k + 1);
+            nodes.origins.push(b.offset);
             let p = DVec3::new(b.double(&what)?, b.double(&what)?, b.double(&what)?);
             b.skip(extra, 8, &what)?;
             nodes.positions.push(p);
@@ -367,6 +400,7 @@ fn read_elements_41_binary<R: BufRead>(
     nodes: &Nodes,
     out: &mut Elements,
     at: u64,
+    entities: &HashMap<(i32, i64), Vec<i64>>,
 ) -> Result<(), IoError> {
     let header = || {
         format!(
@@ -379,8 +413,9 @@ fn read_elements_41_binary<R: BufRead>(
     for block in 1..=blocks {
         let start = b.offset;
         let what = || format!("element block {block} of {blocks} ($Elements at byte offset {at})");
-        let [_, _, kind] = [b.int(&what)?, b.int(&what)?, b.int(&what)?];
+        let [dim, entity, kind] = [b.int(&what)?, b.int(&what)?, b.int(&what)?];
         let n = b.size(&what)?;
+        let groups = entities.get(&(dim, i64::from(entity))).map_or(&[][..], Vec::as_slice);
         let corners = nodes_per_element(kind).ok_or_else(|| {
             b.error(
                 start + 8,
@@ -400,10 +435,26 @@ fn read_elements_41_binary<R: BufRead>(
                         b.error(offset, format!("element {id}: node tag {tag} is not defined in $Nodes"))
                     })?;
                 }
+                out.add_to_groups(dim, groups, &v[..usize::try_from(corners).unwrap_or(0).min(4)]);
                 out.push(kind, id, v, offset);
+            }
+        } else if !groups.is_empty() {
+            // Elements of a physical group: their nodes join it.
+            out.skipped.insert(kind);
+            out.other = out.other.saturating_add(usize::try_from(n).unwrap_or(usize::MAX));
+            for k in 1..=n {
+                let what = || format!("element {k} of {n} of element block {block} (type {kind})");
+                b.size(&what)?;
+                let mut vertices = Vec::new();
+                for _ in 0..corners {
+                    let tag = b.size(&what)?;
+                    vertices.extend(nodes.index.get(&tag).copied());
+                }
+                out.add_to_groups(dim, groups, &vertices);
             }
         } else {
             out.skipped.insert(kind);
+            out.other = out.other.saturating_add(usize::try_from(n).unwrap_or(usize::MAX));
             let what = || format!("element block {block} of {blocks} ({n} elements of type {kind})");
             b.skip(n, (1 + corners) * size, &what)?;
         }
@@ -430,6 +481,7 @@ fn read_nodes_2_binary<R: BufRead>(b: &mut Binary<'_, R>, nodes: &mut Nodes, at:
         let tag =
             u64::try_from(tag).map_err(|_| b.error(offset, format!("node tag {tag} is not a positive integer")))?;
         nodes.add(tag, 0).map_err(|e| b.error(offset, e.to_string()))?;
+        nodes.origins.push(b.offset);
         let p = DVec3::new(b.double(&what)?, b.double(&what)?, b.double(&what)?);
         nodes.positions.push(p);
     }
@@ -457,6 +509,7 @@ fn read_elements_2_binary<R: BufRead>(
             b.error(start + 4, format!("{following} elements follow, expected 1 to the {left} left of {count}"))
         })?;
         let tags = u64::try_from(tags).map_err(|_| b.error(start + 8, format!("number of tags {tags} is negative")))?;
+        let dim = element_dim(usize::try_from(kind).unwrap_or(0)).unwrap_or(-1);
         let kind = usize::try_from(kind).unwrap_or(0);
         if kind == TETRAHEDRON || kind == TRIANGLE {
             for k in 1..=following {
@@ -464,7 +517,9 @@ fn read_elements_2_binary<R: BufRead>(
                 let what = || format!("element {} of {count} ($Elements at byte offset {at})", read + k);
                 let id = b.int(&what)?;
                 let id = u64::try_from(id).map_err(|_| b.error(offset, format!("element tag {id} is negative")))?;
-                b.skip(tags, 4, &what)?;
+                // The first tag is the physical group (0: none).
+                let physical = if tags > 0 { i64::from(b.int(&what)?) } else { 0 };
+                b.skip(tags.saturating_sub(1), 4, &what)?;
                 let mut v = [0u32; 4];
                 for slot in v.iter_mut().take(usize::try_from(corners).unwrap_or(0)) {
                     let tag = b.int(&what)?;
@@ -473,9 +528,31 @@ fn read_elements_2_binary<R: BufRead>(
                         b.error(offset, format!("element {id}: node tag {tag} is not defined in $Nodes"))
                     })?;
                 }
+                if physical != 0 {
+                    out.add_to_groups(dim, &[physical], &v[..usize::try_from(corners).unwrap_or(0).min(4)]);
+                }
                 out.push(kind, id, v, offset);
             }
+        } else if tags > 0 {
+            // The nodes of each element join its physical group.
+            out.skipped.insert(kind);
+            out.other = out.other.saturating_add(usize::try_from(following).unwrap_or(usize::MAX));
+            for k in 1..=following {
+                let what = || format!("element {} of {count} ($Elements at byte offset {at})", read + k);
+                b.int(&what)?;
+                let physical = i64::from(b.int(&what)?);
+                b.skip(tags - 1, 4, &what)?;
+                let mut vertices = Vec::new();
+                for _ in 0..corners {
+                    let tag = b.int(&what)?;
+                    vertices.extend(u64::try_from(tag).ok().and_then(|t| nodes.index.get(&t).copied()));
+                }
+                if physical != 0 {
+                    out.add_to_groups(dim, &[physical], &vertices);
+                }
+            }
         } else {
+            out.other = out.other.saturating_add(usize::try_from(following).unwrap_or(usize::MAX));
             out.skipped.insert(kind);
             let what = || format!("elements {} to {} of {count} (type {kind})", read + 1, read + following);
             // `tags` comes from an `int`, so the sum cannot overflow.

@@ -1,12 +1,10 @@
 //! Gmsh `.msh`: versions 4.1 and 2.2 (2.0 and 2.1 read as 2.2), ASCII and binary.
 //!
-//! Read: `$MeshFormat`, `$Nodes` and `$Elements`; in ASCII files also `$PhysicalNames` and (4.1)
-//! `$Entities`, for the physical groups ([`PhysicalGroup`]: the nodes of every element, of any
-//! type, whose physical tag is the group's: 2.2's first element tag, 4.1's entity's physical
-//! tags), which scenes select (`physical = "NAME"`); in binary 4.1 files `$Entities` is parsed
-//! (its layout is binary there) only to step over it, and binary files' physical groups are not
-//! read. Every other section (`$NodeData`, `$Periodic`, …) is skipped up to its `$End…` line,
-//! which binary files always put on a line of its own after their data. Node tags may be sparse
+//! Read: `$MeshFormat`, `$Nodes`, `$Elements`, `$PhysicalNames` and (4.1) `$Entities`, for the
+//! physical groups ([`PhysicalGroup`]: the nodes of every element, of any type, whose physical
+//! tag is the group's: 2.2's first element tag, 4.1's entity's physical tags), which scenes
+//! select (`physical = "NAME"`). Every other section (`$NodeData`, `$Periodic`, …) is skipped
+//! up to its `$End…` line, which binary files always put on a line of its own after their data. Node tags may be sparse
 //! and in any order: vertex *i* of the mesh is the *i*-th node of the file. Element type 4 (4-node
 //! tetrahedron) and type 2 (3-node triangle) are read; every other type (points, lines, quads,
 //! second-order elements, …) is skipped (in binary files by its number of nodes, from Gmsh's table
@@ -27,10 +25,11 @@
 //! allocation beyond [`super::MAX_PREALLOCATION`], and every count is checked against the data
 //! that actually follows, so a short file claiming 2⁶⁰ nodes fails quickly at its end.
 //!
-//! Write: a mesh read from an ASCII `.msh` file, with the same nodes and elements, is written
-//! as that file with only its node coordinates replaced ([`MshSource`]): `$PhysicalNames`,
-//! `$Entities`, node and element tags, every element of every type, parametric coordinates and
-//! line endings come back as read. Any other mesh is written as MSH 4.1 ASCII without
+//! Write: a mesh read from a `.msh` file, with the same nodes and elements, is written as that
+//! file with only its node coordinates replaced ([`MshSource`]; ASCII or binary, in the file's
+//! byte order): `$PhysicalNames`, `$Entities`, node and element tags, every element of every
+//! type, parametric coordinates and line endings come back as read (a UTF-16 file keeps its
+//! groups but is written anew). Any other mesh is written as MSH 4.1 ASCII without
 //! `$Entities` (Gmsh creates discrete entities for it): one node block, one block of tetrahedra
 //! if there are any and one of the surface triangles, saying what of the source it drops.
 //!
@@ -61,7 +60,7 @@ use binary::{Binary, read_binary};
 use model::{Elements, Nodes, Place, finish};
 
 pub(super) use model::{parse_point, tetrahedral_mesh};
-pub use source::{MshSource, PhysicalGroup};
+pub use source::{Layout, MshSource, PhysicalGroup};
 pub use write::write_msh;
 
 /// Gmsh element type of a 3-node triangle.
@@ -147,7 +146,15 @@ fn read_msh_text(
             };
             let offset = r.lines.consumed;
             let mut b = Binary { reader: r.lines.into_inner(), offset, path, big_endian: false, size_t };
-            return Ok((read_binary(&mut b, version_2)?, None));
+            let (nodes, elements, names) = read_binary(&mut b, version_2)?;
+            return with_source(
+                path,
+                nodes,
+                elements,
+                names,
+                Layout::Binary { big_endian: b.big_endian },
+                Place::Offset,
+            );
         }
         _ => return Err(bad_version()),
     }
@@ -178,15 +185,29 @@ fn read_msh_text(
             s => return Err(r.error(format!("expected a section such as '$Nodes', found '{}'", shown(s)))),
         }
     }
-    let node_lines = std::mem::take(&mut nodes.lines);
+    let layout = if version_2 { Layout::Text22 } else { Layout::Text41 };
+    with_source(path, nodes, elements, names, layout, Place::Line)
+}
+
+/// The mesh of `nodes` and `elements`, and what its source keeps but its text (which
+/// [`read_msh`] adds) and the tetrahedra's order (in the mesh's attributes).
+fn with_source(
+    path: &Path,
+    mut nodes: Nodes,
+    mut elements: Elements,
+    names: Vec<PhysicalName>,
+    layout: Layout,
+    place: Place,
+) -> Result<(LoadedMesh, Option<MshSource>), IoError> {
+    let node_origins = std::mem::take(&mut nodes.origins);
     let counts = (elements.tets.len(), elements.triangles.len());
     let other_elements = elements.other;
     let physical_groups = physical_groups(std::mem::take(&mut elements.physical), names);
-    let loaded = finish(path, nodes, elements, Place::Line)?;
+    let loaded = finish(path, nodes, elements, place)?;
     let source = MshSource {
         text: Vec::new(),
-        node_lines,
-        version_2,
+        node_origins,
+        layout,
         elements: counts,
         other_elements,
         order: None,

@@ -44,8 +44,9 @@ pub(super) fn finish(path: &Path, nodes: Nodes, elements: Elements, place: Place
 pub(super) struct Nodes {
     pub(super) positions: Vec<DVec3>,
     pub(super) index: HashMap<u64, u32>,
-    /// ASCII files: the 1-based line of each node's coordinates, by index.
-    pub(super) lines: Vec<u32>,
+    /// Where each node's coordinates are, by index: the 1-based line (ASCII files) or the byte
+    /// offset of its x (binary files).
+    pub(super) origins: Vec<u64>,
 }
 
 impl Nodes {
@@ -147,11 +148,18 @@ pub(super) struct Elements {
     pub(super) skipped: BTreeSet<usize>,
     /// How many elements of the skipped types the file has.
     pub(super) other: usize,
-    /// ASCII files: the vertices of each physical group's elements, by (dimension, tag).
+    /// The vertices of each physical group's elements, by (dimension, tag).
     pub(super) physical: HashMap<(i32, i64), Vec<u32>>,
 }
 
 impl Elements {
+    /// Adds `vertices` (of an element of dimension `dim`) to each physical group of `groups`.
+    pub(super) fn add_to_groups(&mut self, dim: i32, groups: &[i64], vertices: &[u32]) {
+        for &g in groups {
+            self.physical.entry((dim, g)).or_default().extend_from_slice(vertices);
+        }
+    }
+
     /// Keeps element `id` of `kind` (a tetrahedron or a triangle) with vertices `v`, found at
     /// `origin` (a line or byte offset).
     pub(super) fn push(&mut self, kind: usize, id: u64, v: [u32; 4], origin: u64) {

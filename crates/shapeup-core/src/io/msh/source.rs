@@ -1,5 +1,5 @@
-//! An ASCII `.msh` file as read, to write it back moved: its text, the line of each node's
-//! coordinates and its physical groups. Writing a mesh of the same nodes and elements back to
+//! A `.msh` file as read, to write it back moved: its bytes, where each node's coordinates are
+//! (a line, or a byte offset in a binary file) and its physical groups. Writing a mesh of the same nodes and elements back to
 //! `.msh` rewrites only the coordinates on those lines; everything else (`$PhysicalNames`,
 //! `$Entities`, node and element tags, every element of every type with its tags, any other
 //! section) comes back byte for byte.
@@ -29,15 +29,30 @@ impl PhysicalGroup {
     }
 }
 
-/// What an ASCII `.msh` file carries besides the mesh ([`crate::io::Attributes::Msh`]).
+/// How a `.msh` file holds its node coordinates.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Layout {
+    /// ASCII 2.2: `tag x y z` lines.
+    Text22,
+    /// ASCII 4.1: `x y z [u v]` lines.
+    Text41,
+    /// Binary: three `double`s, big or little endian.
+    Binary {
+        /// Big endian.
+        big_endian: bool,
+    },
+}
+
+/// What a `.msh` file carries besides the mesh ([`crate::io::Attributes::Msh`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct MshSource {
-    /// The file as read (UTF-8; a UTF-16 file keeps no source).
+    /// The file as read (empty for a UTF-16 file, which is written anew).
     pub(crate) text: Vec<u8>,
-    /// Per mesh vertex, the 1-based line of its coordinates (ascending: nodes in file order).
-    pub(crate) node_lines: Vec<u32>,
-    /// Version 2.2 (`tag x y z` lines) rather than 4.1 (`x y z [u v]` lines).
-    pub(crate) version_2: bool,
+    /// Per mesh vertex, where its coordinates are (ascending: nodes in file order): the 1-based
+    /// line (text) or the byte offset of its x (binary).
+    pub(crate) node_origins: Vec<u64>,
+    /// How the coordinates are written.
+    pub(crate) layout: Layout,
     /// Tetrahedra and triangles the mesh was read with: a mesh with other counts is another
     /// mesh, which the source does not describe.
     pub(crate) elements: (usize, usize),
@@ -55,7 +70,7 @@ impl MshSource {
     /// can be written back with its coordinates replaced.
     pub fn fits(&self, mesh: &Mesh) -> bool {
         // With tetrahedra, the mesh's triangles are their boundary, not the file's.
-        mesh.num_vertices() == self.node_lines.len()
+        mesh.num_vertices() == self.node_origins.len()
             && mesh.num_tetrahedra() == self.elements.0
             && (self.elements.0 > 0 || mesh.num_triangles() == self.elements.1)
     }
@@ -73,16 +88,29 @@ impl MshSource {
     }
 
     /// Writes the file with each node's coordinates replaced by `mesh`'s (which [`Self::fits`]):
-    /// a 2.2 node line keeps its tag, a 4.1 one its parametric coordinates; every other byte
-    /// is the file's.
+    /// an ASCII 2.2 node line keeps its tag, a 4.1 one its parametric coordinates, a binary node
+    /// its three `double`s' place and byte order; every other byte is the file's.
     ///
     /// # Errors
     /// Any error of `w`.
     pub(crate) fn write(&self, w: &mut dyn Write, mesh: &Mesh) -> io::Result<()> {
-        let mut next = self.node_lines.iter().zip(&mesh.positions).peekable();
+        if let Layout::Binary { big_endian } = self.layout {
+            let mut bytes = self.text.clone();
+            for (&at, p) in self.node_origins.iter().zip(&mesh.positions) {
+                for (k, x) in p.to_array().into_iter().enumerate() {
+                    let value = if big_endian { x.to_be_bytes() } else { x.to_le_bytes() };
+                    let start = usize::try_from(at).unwrap_or(usize::MAX).saturating_add(8 * k);
+                    if let Some(slot) = bytes.get_mut(start..start.saturating_add(8)) {
+                        slot.copy_from_slice(&value);
+                    }
+                }
+            }
+            return w.write_all(&bytes);
+        }
+        let mut next = self.node_origins.iter().zip(&mesh.positions).peekable();
         for (i, line) in self.text.split_inclusive(|&b| b == b'\n').enumerate() {
             let number = i as u64 + 1;
-            let Some(&(_, &p)) = next.peek().filter(|&&(&l, _)| u64::from(l) == number) else {
+            let Some(&(_, &p)) = next.peek().filter(|&&(&l, _)| l == number) else {
                 w.write_all(line)?;
                 continue;
             };
@@ -92,7 +120,7 @@ impl MshSource {
             let ending = &line[body.len()..];
             let text = String::from_utf8_lossy(body);
             let mut tokens = text.split_whitespace();
-            if self.version_2 {
+            if self.layout == Layout::Text22 {
                 write!(w, "{} ", tokens.next().unwrap_or_default())?;
                 write_xyz(w, p)?;
             } else {
