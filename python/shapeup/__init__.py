@@ -15,7 +15,7 @@ and Simulation share), ``solver`` (Solver), ``simulation`` (Simulation),
 """
 
 from ._shapeup import SolveFailed, __version__, catalogue_markdown, set_threads
-from ._checks import MeshWarning, UnconvergedWarning
+from ._checks import MeshWarning, RoundOffWarning, UnconvergedWarning
 from .groups import Group
 from .mesh import Mesh, read_mesh, write_mesh
 from .scene import Scene
@@ -30,6 +30,7 @@ __all__ = [
     "Group",
     "Mesh",
     "MeshWarning",
+    "RoundOffWarning",
     "Scene",
     "Simulation",
     "SolveFailed",

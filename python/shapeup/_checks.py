@@ -47,16 +47,28 @@ def _warn_of_arrays(native: Any) -> None:
             warnings.warn(text, MeshWarning, stacklevel=3)
 
 
+class RoundOffWarning(UserWarning):
+    """Groups whose weights are so far below the others' where they act (10¹³ and more) that
+    the factorization cannot see them: the shape ignores them (``groups_lost_to_round_off``);
+    bring the weights within 1e12 of each other."""
+
+
+# The kinds of a solve report's warnings raised in Python, and as what.
+_SOLVE_WARNINGS = {"unconverged": UnconvergedWarning, "groups_lost_to_round_off": RoundOffWarning}
+
+
 def _warn_unconverged(report: Mapping[str, Any]) -> None:
     """One :class:`UnconvergedWarning` per ``unconverged`` entry of a solve's
-    ``report["warnings"]`` (a scene's or ``Solver.solve``'s: the command line's line, once)."""
+    ``report["warnings"]`` (a scene's or ``Solver.solve``'s: the command line's line, once), and
+    one :class:`RoundOffWarning` per ``groups_lost_to_round_off`` entry."""
     import warnings
 
     for w in report.get("warnings", []):
-        if w.get("kind") == "unconverged":
+        category = _SOLVE_WARNINGS.get(w.get("kind"))
+        if category is not None:
             file = f"{w['file']}: " if w.get("file") else ""
             first = f" (first: {w['first']})" if w.get("first") else ""
-            warnings.warn(f"{file}{w['count']} {w['message']}{first}", UnconvergedWarning, stacklevel=3)
+            warnings.warn(f"{file}{w['count']} {w['message']}{first}", category, stacklevel=3)
 
 
 def _vertices(V: Any, name: str = "V") -> np.ndarray:

@@ -114,3 +114,21 @@ def test_equals_the_command_line(tmp_path, cli):
     q, report = s.solve(iterations=30)
     assert report["iterations"] == 30
     np.testing.assert_allclose(q, expected, rtol=0, atol=1e-12)
+
+
+def test_groups_lost_to_round_off_are_said(recwarn):
+    # Springs at 1e8 dwarf handles at 1e-8: the factorization cannot see the handles. With
+    # another anchor the solve runs and says so (RoundOffWarning, report "warnings"); with none
+    # the error names the groups instead of asking for a position group.
+    V, F = grid(5, 5)
+    solver = shapeup.Solver(V, F)
+    solver.add("edge_spring", weight=1e8)
+    solver.add("position", [0, 5], weight=1e-8, name="pin")
+    with pytest.raises(shapeup.SolveFailed, match=r'lost to round-off.*"pin" \(weight 1e-8\) against "edge_spring"'):
+        solver.solve(iterations=3)
+    solver.add("position", [0], name="anchor")
+    with pytest.warns(shapeup.RoundOffWarning, match='1 groups whose terms are below round-off.*"pin"'):
+        _, report = solver.solve(iterations=3)
+    assert [w["kind"] for w in report["warnings"] if w["kind"] == "groups_lost_to_round_off"] == [
+        "groups_lost_to_round_off"
+    ]

@@ -263,7 +263,7 @@ impl Assembly {
     }
 
     /// The solved index of vertex `v`, if it is solved.
-    fn solved(&self, v: u32) -> Option<usize> {
+    pub(super) fn solved(&self, v: u32) -> Option<usize> {
         let s = self.solved_index[v as usize];
         (s != u32::MAX).then_some(s as usize)
     }

@@ -92,6 +92,9 @@ pub struct SolveReport {
     /// ‖A q − b(q)‖ where the solve began, when an iteration computed it (L-BFGS's first):
     /// the static residual's denominator without a gradient pass of its own.
     pub(super) start_gradient: Option<f64>,
+    /// The groups the factorization could not see ([`super::LostGroup`]): their weights so far
+    /// below the others' where they act that the shape ignores them.
+    pub lost_groups: Vec<super::LostGroup>,
 }
 
 impl SolveReport {
@@ -108,6 +111,15 @@ impl SolveReport {
             );
             found.add("unconverged", &message, String::new);
         }
+        found.add_many(
+            "groups_lost_to_round_off",
+            &format!(
+                "groups whose terms are below round-off of the others where they act (at most {:e} of the matrix's diagonal): the factorization cannot see them and the shape ignores them; bring the weights within 1e12 of each other",
+                super::ROUND_OFF_SHARE
+            ),
+            self.lost_groups.len(),
+            || self.lost_groups.first().map(super::LostGroup::describe).unwrap_or_default(),
+        );
         found
     }
 }

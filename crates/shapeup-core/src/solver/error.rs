@@ -31,6 +31,17 @@ pub enum SolveError {
          group, or a shape constraint over all vertices)"
     )]
     Singular(FactorError),
+    /// The factorization found the matrix singular with groups lost to round-off: their only
+    /// anchor (a handle) is below the last digits of the other terms where it acts.
+    #[error(
+        "singular system: {count} group(s) lost to round-off, their terms below the last digits of the others where they act (first: {first}); bring the weights within 1e12 of each other"
+    )]
+    LostToRoundOff {
+        /// The first lost group, named with its weight and the group that dwarfs it.
+        first: String,
+        /// How many groups are lost.
+        count: usize,
+    },
     /// The factorization could not be built: its factor overflows 32-bit indices or memory (a
     /// mesh of millions of vertices, or constraints that couple wide neighbourhoods).
     #[error(

@@ -30,6 +30,7 @@ mod local;
 mod ordering;
 mod params;
 mod rhs;
+mod round_off;
 mod triangular;
 
 pub use crate::constraints::{ConstraintGroup, GroupId};
@@ -42,6 +43,7 @@ pub use error::SolveError;
 pub use params::{
     Acceleration, DEFAULT_ANDERSON_WINDOW, DEFAULT_LBFGS_MEMORY, MAX_ANDERSON_WINDOW, MAX_LBFGS_MEMORY, SolverParams,
 };
+pub use round_off::{LostGroup, ROUND_OFF_SHARE};
 
 use crate::constraints::Constraint;
 use anderson::Anderson;
@@ -144,6 +146,8 @@ pub struct System {
     /// What does not change between iterations per solved vertex: μ s (dynamic mode) minus the
     /// fixed vertices' share, −Σ_r w_r c_{r,v} Σ_{f fixed} c_{r,f} x_f; empty when neither.
     constant_rhs: Vec<DVec3>,
+    /// The groups lost to round-off in the matrix last factored ([`LostGroup`]).
+    lost: Vec<LostGroup>,
 }
 
 impl System {
@@ -179,6 +183,7 @@ impl System {
             load_scale: 1.0,
             factorizations: 0,
             constant_rhs: Vec::new(),
+            lost: Vec::new(),
         }
     }
 
@@ -414,8 +419,15 @@ impl System {
         for (s, &v) in self.assembly.solved.iter().enumerate() {
             self.diagonal[v as usize] = values[self.assembly.slot(s, s)];
         }
+        self.lost = self.groups_lost_to_round_off(&values, &g);
         if let Some(factor) = self.factor.as_mut() {
-            factor.factorize(&values).map_err(SolveError::from_factor)?;
+            factor.factorize(&values).map_err(|e| match (SolveError::from_factor(e), self.lost.first()) {
+                // Said as the cause, not as a piece without a handle.
+                (SolveError::Singular(_), Some(lost)) => {
+                    SolveError::LostToRoundOff { first: lost.describe(), count: self.lost.len() }
+                }
+                (e, _) => e,
+            })?;
             self.factorizations += 1;
         }
         self.stale = Stale::Fresh;
@@ -507,6 +519,7 @@ impl System {
             self.pin_held(q);
             Ok::<_, SolveError>(())
         })?;
+        report.lost_groups.clone_from(&self.lost);
         let at_last_projection = self.projected_at.as_slice() == &q[..];
         Ok((report, at_last_projection))
     }

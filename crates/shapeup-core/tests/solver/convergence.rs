@@ -86,3 +86,47 @@ fn a_static_solve_stopped_short_of_its_minimum_says_so_once() {
     let (_, report) = early.solve_static(None).unwrap();
     assert!(report.energies.len() < 5000 && report.residual.is_none() && !report.unconverged);
 }
+
+/// A 6 × 6 cloth of springs at `springs`, its corners 0 and 5 pinned and corner 35 pulled by
+/// handles at `handles`, and (`anchor`) vertex 0 also held by a handle of weight 1.
+fn lopsided(springs: f64, handles: f64, anchor: bool) -> String {
+    let anchor = if anchor { "[[constraints]]\ntype = \"position\"\nname = \"anchor\"\nvertices = [0]\n" } else { "" };
+    format!(
+        "[mesh]\ngenerate = {{ kind = \"cloth\", vertices = [6, 6], size = [1.0, 1.0] }}\n\
+         [[constraints]]\ntype = \"edge_spring\"\nweight = {springs:e}\n\
+         [[constraints]]\ntype = \"position\"\nname = \"pin\"\nvertices = [0, 5]\nweight = {handles:e}\n\
+         [[constraints]]\ntype = \"position\"\nname = \"pull\"\nvertices = [35]\ntranslate = [0.0, 0.0, 0.5]\nweight = {handles:e}\n{anchor}"
+    )
+}
+
+/// Weights so far apart that the factorization cannot see the small ones are said, naming the
+/// groups: as the error when they were the only anchor (not "add a position group", which the
+/// scene has), as a warning with a count when the solve runs without them; weights 10⁸ apart
+/// are no such case.
+#[test]
+fn groups_lost_to_round_off_are_named() {
+    let scene =
+        Scene::parse(&lopsided(1e8, 1e-8, false), SceneFormat::Toml, &PathBuf::from("l.toml"), PathBuf::new()).unwrap();
+    let error = scene.load().and_then(|mut l| l.solve_static(Some(5)).map(|_| ())).unwrap_err().to_string();
+    assert!(error.contains("2 group(s) lost to round-off"), "{error}");
+    assert!(error.contains("\"pin\" (weight 1e-8) against \"edge_spring\" (weight 1e8)"), "{error}");
+    assert!(!error.contains("add a position group"), "{error}");
+
+    let mut loaded = load(&lopsided(1e8, 1e-8, true));
+    let (_, report) = loaded.solve_static(Some(5)).unwrap();
+    let names: Vec<&str> = report.lost_groups.iter().map(|g| g.name.as_str()).collect();
+    assert_eq!(names, ["pin", "pull"]);
+    assert!(report.lost_groups.iter().all(|g| g.share <= shapeup_core::solver::ROUND_OFF_SHARE));
+    let warning = loaded.warnings.iter().find(|w| w.kind == "groups_lost_to_round_off").unwrap();
+    assert_eq!(
+        (warning.count, warning.first.as_str()),
+        (2, "\"pin\" (weight 1e-8) against \"edge_spring\" (weight 1e8)")
+    );
+
+    for (springs, handles) in [(1e4, 1e-4), (10.0, 1.0), (1.0, 1e3)] {
+        let mut loaded = load(&lopsided(springs, handles, false));
+        let (_, report) = loaded.solve_static(Some(5)).unwrap();
+        assert!(report.lost_groups.is_empty(), "{springs} vs {handles}: {:?}", report.lost_groups);
+        assert!(loaded.warnings.iter().all(|w| w.kind != "groups_lost_to_round_off"));
+    }
+}

@@ -1,0 +1,92 @@
+//! Groups the factorization cannot see: where a group acts, its terms w g c² are below
+//! round-off of the matrix diagonal A_vv = Σ (all groups, inertia, contact), so that A (and
+//! the shape) is the same to the last digit with or without it. Weights 10¹³ or more apart
+//! do this (springs at 1e12 against a handle at 0.1): the handle is silently ignored, or, when
+//! it is the only anchor, the factorization finds the matrix singular.
+
+use super::System;
+
+/// A group is lost to round-off when, on every solved vertex it touches, its share of the
+/// diagonal, w g c² / A_vv, is at most this (about 450 ε: a term this small changes A_vv in its
+/// last two or three digits at most).
+pub const ROUND_OFF_SHARE: f64 = 1e-13;
+
+/// A group lost to round-off ([`ROUND_OFF_SHARE`]), and the group that dwarfs it where it
+/// holds the most.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LostGroup {
+    /// Its name.
+    pub name: String,
+    /// Its multiplier (the scene's `weight`).
+    pub weight: f64,
+    /// Its largest share of a diagonal entry.
+    pub share: f64,
+    /// The group with the largest term on that diagonal entry.
+    pub dominant: String,
+    /// That group's multiplier.
+    pub dominant_weight: f64,
+}
+
+impl LostGroup {
+    /// `"NAME" (weight W), below round-off of "OTHER" (weight W')`: the warning's and the
+    /// error's words.
+    pub fn describe(&self) -> String {
+        format!(
+            "\"{}\" (weight {:e}) against \"{}\" (weight {:e})",
+            self.name, self.weight, self.dominant, self.dominant_weight
+        )
+    }
+}
+
+impl System {
+    /// The groups of positive weight lost to round-off in the matrix whose values (lower
+    /// triangle, as factored) are `values`, with multipliers `g` per group in assembly order.
+    pub(super) fn groups_lost_to_round_off(&self, values: &[f64], g: &[f64]) -> Vec<LostGroup> {
+        let a = &self.assembly;
+        let diagonal: Vec<f64> = (0..a.num_solved()).map(|s| values[a.slot(s, s)]).collect();
+        // Per group: its largest share and the solved vertex where it has it.
+        let mut best: Vec<Option<(f64, usize)>> = vec![None; g.len()];
+        let terms = |r: usize| {
+            let weight = a.row_weight[r] * g[a.row_group[r] as usize];
+            a.c_col[a.c_ptr[r]..a.c_ptr[r + 1]]
+                .iter()
+                .zip(&a.c_val[a.c_ptr[r]..a.c_ptr[r + 1]])
+                .filter_map(move |(&v, &c)| a.solved(v).map(|s| (s, weight * c * c)))
+        };
+        for r in 0..a.num_rows() {
+            let group = a.row_group[r] as usize;
+            for (s, term) in terms(r) {
+                let share = if diagonal[s] > 0.0 { term / diagonal[s] } else { 1.0 };
+                if best[group].is_none_or(|(b, _)| share > b) {
+                    best[group] = Some((share, s));
+                }
+            }
+        }
+        let name = |group: usize| self.slots[self.order[group]].as_ref().map_or(String::new(), |g| g.name.clone());
+        let mut lost = Vec::new();
+        for (group, found) in best.iter().enumerate() {
+            let Some((share, s)) = *found else { continue };
+            if g[group] <= 0.0 || share > ROUND_OFF_SHARE {
+                continue;
+            }
+            // The group with the largest term where this one holds the most.
+            let mut per_group = vec![0.0_f64; g.len()];
+            for r in 0..a.num_rows() {
+                for (t, term) in terms(r) {
+                    if t == s {
+                        per_group[a.row_group[r] as usize] += term;
+                    }
+                }
+            }
+            let dominant = (0..g.len()).max_by(|&i, &j| per_group[i].total_cmp(&per_group[j])).unwrap_or(group);
+            lost.push(LostGroup {
+                name: name(group),
+                weight: g[group],
+                share,
+                dominant: name(dominant),
+                dominant_weight: g[dominant],
+            });
+        }
+        lost
+    }
+}
