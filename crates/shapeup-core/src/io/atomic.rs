@@ -141,7 +141,9 @@ pub enum OutputError {
 /// # Errors
 /// [`OutputError::IsAFolder`], [`OutputError::Extension`].
 pub fn check_output_extension(path: &Path, allowed: &'static [&'static str]) -> Result<(), OutputError> {
-    if path.is_dir() {
+    // `r.json/` names a folder (Path drops the trailing separator from its components).
+    let trailing = path.as_os_str().as_encoded_bytes().last().is_some_and(|&b| std::path::is_separator(b as char));
+    if path.is_dir() || trailing {
         return Err(OutputError::IsAFolder { path: path.to_path_buf(), allowed });
     }
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).unwrap_or_default();

@@ -109,13 +109,18 @@ fn rigid_groups_broken_by_hard_targets(system: &System, rest: &[DVec3], size: f6
 }
 
 /// Two held vertices whose distance the targets change (by another ratio than the rest, when
-/// `scales`), if there are any; `held`: (vertex, target).
+/// `scales`), if there are any, or two of four that the targets mirror (distances kept, the
+/// handedness of a tetrahedron of them reversed: no rotation does that); `held`: (vertex,
+/// target).
 fn motion_breaker(held: &[(u32, DVec3)], rest: &[DVec3], scales: bool, size: f64) -> Option<(u32, u32)> {
     let n = held.len();
     if n < 2 {
         return None;
     }
     let rest_at = |v: u32| rest.get(v as usize).copied().unwrap_or(DVec3::ZERO);
+    if let Some(pair) = mirrored(held, &rest_at, size) {
+        return Some(pair);
+    }
     let references = [0, n / 3, 2 * n / 3];
     // Similarity: the ratio of the first pair with a rest distance sets the scale.
     let mut ratio: Option<f64> = None;
@@ -138,6 +143,29 @@ fn motion_breaker(held: &[(u32, DVec3)], rest: &[DVec3], scales: bool, size: f64
         }
     }
     None
+}
+
+/// Two of four held vertices spanning a tetrahedron (the first; the farthest from it; the
+/// farthest from their line; the farthest from their plane, at rest) whose signed volume the
+/// targets reverse: a mirror image, which keeps every distance.
+fn mirrored(held: &[(u32, DVec3)], rest_at: &dyn Fn(u32) -> DVec3, size: f64) -> Option<(u32, u32)> {
+    let farthest = |score: &dyn Fn(DVec3) -> f64| {
+        held.iter().copied().max_by(|a, b| score(rest_at(a.0)).total_cmp(&score(rest_at(b.0))))
+    };
+    let a = held[0];
+    let pa = rest_at(a.0);
+    let b = farthest(&|p| p.distance(pa))?;
+    let pb = rest_at(b.0);
+    let c = farthest(&|p| (p - pa).cross(pb - pa).length())?;
+    let pc = rest_at(c.0);
+    let normal = (pb - pa).cross(pc - pa);
+    let d = farthest(&|p| (p - pa).dot(normal).abs())?;
+    let volume = |p: [DVec3; 4]| (p[1] - p[0]).dot((p[2] - p[0]).cross(p[3] - p[0]));
+    let at_rest = volume([a, b, c, d].map(|(v, _)| rest_at(v)));
+    let moved = volume([a.1, b.1, c.1, d.1]);
+    // Flat at rest (within round-off of the size cubed): any handedness is a rotation.
+    let flat = 1e-9 * size.powi(3);
+    (at_rest.abs() > flat && moved * at_rest < 0.0).then_some((a.0.min(d.0), a.0.max(d.0)))
 }
 
 /// The faces listed in `faces = [...]` selections that their face type cannot take (a face of
@@ -191,6 +219,16 @@ mod tests {
         assert!(motion_breaker(&held(&scaled), &rest, false, 1.0).is_some());
         assert_eq!(motion_breaker(&held(&scaled), &rest, true, 1.0), None);
         assert_eq!(motion_breaker(&held(&[(2, [9.0, 9.0, 9.0])]), &rest, false, 1.0), None, "one vertex is any motion");
+        // A mirror image keeps every distance; no rigid motion (or similarity) makes it.
+        let mirrored: Vec<(u32, [f64; 3])> =
+            (0..4).map(|v| (v, (rest[v as usize] * DVec3::new(-1.0, 1.0, 1.0)).to_array())).collect();
+        assert!(motion_breaker(&held(&mirrored), &rest, false, 1.0).is_some());
+        assert!(motion_breaker(&held(&mirrored), &rest, true, 1.0).is_some());
+        // A flat set mirrored is a half turn: a rigid motion.
+        let flat = [DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::new(1.0, 1.0, 0.0)];
+        let turned: Vec<(u32, [f64; 3])> =
+            (0..4).map(|v| (v, (flat[v as usize] * DVec3::new(-1.0, 1.0, 1.0)).to_array())).collect();
+        assert_eq!(motion_breaker(&held(&turned), &flat, false, 1.0), None);
     }
 
     fn warnings_of(body: &str) -> Vec<(String, usize, String)> {

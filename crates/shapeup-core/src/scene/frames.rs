@@ -85,15 +85,15 @@ pub fn is_kept(k: usize, frames: usize, every: usize) -> bool {
     k <= frames && (k.is_multiple_of(every.max(1)) || k == frames)
 }
 
-/// Whether `name` is a frame file's (`frame_…` with a frame format's extension) or a VTU
-/// series' `frames.pvd`: what a run into a folder replaces there.
+/// Whether `name` is a frame file's (`frame_` and digits, with a frame format's extension) or a
+/// VTU series' `frames.pvd`: what a run into a folder replaces there.
 pub fn is_frame_file_name(name: &str) -> bool {
-    name == PVD_NAME
-        || name.starts_with("frame_")
-            && Path::new(name)
-                .extension()
-                .and_then(|e| e.to_str())
-                .is_some_and(|e| FrameFormat::ALL.iter().any(|(n, _)| n.eq_ignore_ascii_case(e)))
+    let frame = name.strip_prefix("frame_").and_then(|rest| rest.split_once('.')).is_some_and(|(digits, ext)| {
+        !digits.is_empty()
+            && digits.bytes().all(|b| b.is_ascii_digit())
+            && FrameFormat::ALL.iter().any(|(n, _)| n.eq_ignore_ascii_case(ext))
+    });
+    name == PVD_NAME || frame
 }
 
 /// The input (of `inputs`, as [`crate::scene::Scene::input_files`] lists them) that a run into
@@ -115,14 +115,16 @@ pub fn frame_replacing_input(inputs: &[(PathBuf, String)], dir: &Path) -> Option
     })
 }
 
-/// The frame files in `dir` (as [`is_frame_file_name`] says) whose names are not in
-/// `written`, sorted: an earlier run's (a longer one's, another format's), which a run
-/// replaces.
+/// The frame files in `dir` (files, or links, named as [`is_frame_file_name`] says; never a
+/// folder) whose names are not in `written`, sorted: an earlier run's (a longer one's, another
+/// format's), which a run replaces.
 pub fn frames_not_written(dir: &Path, written: &[String]) -> Vec<String> {
     let Ok(entries) = std::fs::read_dir(dir) else { return Vec::new() };
     let ours: std::collections::HashSet<&str> = written.iter().map(String::as_str).collect();
     let mut stale: Vec<String> = entries
-        .filter_map(|e| e.ok()?.file_name().into_string().ok())
+        .filter_map(Result::ok)
+        .filter(|e| e.file_type().is_ok_and(|t| !t.is_dir()))
+        .filter_map(|e| e.file_name().into_string().ok())
         .filter(|name| is_frame_file_name(name) && !ours.contains(name.as_str()))
         .collect();
     stale.sort();
@@ -155,6 +157,12 @@ impl FrameFolder {
     /// [`OutputError`] naming `target`.
     pub fn create(target: &Path) -> Result<Self, OutputError> {
         check_output_folder(target)?;
+        // A link to nothing: neither a folder to fill nor a name to rename the frames to.
+        if !target.exists()
+            && let Ok(pointed) = std::fs::read_link(target)
+        {
+            return Err(OutputError::MissingFolder { path: target.to_path_buf(), dir: pointed });
+        }
         if target.exists() {
             if !target.is_dir() {
                 return Err(OutputError::NotAFolder { path: target.to_path_buf(), file: target.to_path_buf() });
@@ -212,13 +220,22 @@ impl FrameFolder {
             };
         }
         let entries = std::fs::read_dir(self.staging.path()).map_err(|e| write_error(self.staging.path(), e))?;
-        let mut written = Vec::new();
+        let mut staged = Vec::new();
         for entry in entries {
             let entry = entry.map_err(|e| write_error(self.staging.path(), e))?;
-            let name = entry.file_name();
-            std::fs::rename(entry.path(), target.join(&name)).map_err(|e| write_error(&target.join(&name), e))?;
-            written.push(name.to_string_lossy().into_owned());
+            staged.push(entry.file_name());
         }
+        // Before anything moves: a folder in the way of a frame fails the run with the target
+        // as it was.
+        if let Some(name) = staged.iter().find(|name| target.join(name).is_dir()) {
+            let source = std::io::Error::new(std::io::ErrorKind::IsADirectory, "a folder of that name is in the way");
+            return Err(write_error(&target.join(name), source));
+        }
+        for name in &staged {
+            let to = target.join(name);
+            std::fs::rename(self.staging.path().join(name), &to).map_err(|e| write_error(&to, e))?;
+        }
+        let written: Vec<String> = staged.iter().map(|n| n.to_string_lossy().into_owned()).collect();
         let earlier = frames_not_written(&target, &written);
         for name in &earlier {
             std::fs::remove_file(target.join(name)).map_err(|e| write_error(&target.join(name), e))?;

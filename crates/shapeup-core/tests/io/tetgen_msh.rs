@@ -693,3 +693,17 @@ fn gmsh_files_keep_their_physical_groups_and_come_back_line_for_line() {
         assert_eq!(sorted(&groups_of_each[0]), sorted(other));
     }
 }
+
+/// A `$PhysicalNames` line must be `dimension tag "name"` with a dimension 0–3 and the name
+/// quoted whole (or one word): an unterminated quote, words after the name or a dimension 7
+/// are refused at their line, never read as odd names.
+#[test]
+fn malformed_physical_names_are_refused_at_their_line() {
+    for bad in ["2 1 \"fixed", "2 1 \"fixed\" junk", "7 1 \"fixed\"", "2 1 two words", "x 1 \"fixed\""] {
+        let text = CUBE_41.replace("2 1 \"fixed\"", bad);
+        let err = malformed(&[("cube.msh", &text)], "cube.msh", "cube.msh", &["line 6", "dimension tag"]);
+        assert!(err.to_string().contains(bad), "{bad}: {err}");
+    }
+    let unquoted = read_files(&[("cube.msh", &CUBE_41.replace("\"fixed\"", "fixed"))], "cube.msh").unwrap();
+    assert_eq!(unquoted.attributes.physical_groups()[0].label(), "fixed");
+}

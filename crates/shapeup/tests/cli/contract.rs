@@ -1984,16 +1984,37 @@ fn a_run_into_a_folder_of_an_earlier_runs_frames_replaces_that_series() {
     let first = simulate_in(None, &scene, &dir, &["--frames", "5", "--format", "vtu"]);
     assert_eq!(first.code, Some(0), "{}", first.describe());
     assert!(!first.stderr.contains("removed"), "{}", first.describe());
+    // The user's own files stay, also those named almost like frames, and folders.
     write(&dir.join("notes.txt"), "mine");
+    write(&dir.join("frame_notes.obj"), "mine");
+    std::fs::create_dir(dir.join("frame_0099.obj")).unwrap();
     let out = simulate_in(None, &scene, &dir, &["--frames", "2"]);
     assert_eq!(out.code, Some(0), "{}", out.describe());
     let line = "7 frame files of an earlier run that this one did not write";
     assert_eq!(out.stderr.matches(line).count(), 1, "{}", out.describe());
     assert!(out.stderr.contains("(first: frame_0000.vtu)"), "{}", out.describe());
-    let mut names: Vec<String> =
-        std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
-    names.sort();
-    assert_eq!(names, ["frame_0000.obj", "frame_0001.obj", "frame_0002.obj", "notes.txt"]);
+    let names = || {
+        let mut names: Vec<String> =
+            std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+        names.sort();
+        names
+    };
+    let kept = ["frame_0000.obj", "frame_0001.obj", "frame_0002.obj", "frame_0099.obj", "frame_notes.obj", "notes.txt"];
+    assert_eq!(names(), kept);
+    assert_eq!(ws.out_entries(), ["frames"], "no staging folder is left beside it");
+    // A folder where a frame goes fails the run before anything moves.
+    std::fs::remove_file(dir.join("frame_0001.obj")).unwrap();
+    std::fs::create_dir(dir.join("frame_0001.obj")).unwrap();
+    let before = std::fs::read(dir.join("frame_0000.obj")).unwrap();
+    let out = simulate_in(None, &scene, &dir, &["--frames", "3"]);
+    assert_eq!(out.code, Some(1), "{}", out.describe());
+    assert!(
+        out.stderr.contains("frame_0001.obj") && out.stderr.contains("a folder of that name is in the way"),
+        "{}",
+        out.describe()
+    );
+    assert_eq!(std::fs::read(dir.join("frame_0000.obj")).unwrap(), before, "the folder is as it was");
+    assert!(!dir.join("frame_0003.obj").exists());
     assert_eq!(ws.out_entries(), ["frames"], "no staging folder is left beside it");
 }
 
@@ -2023,6 +2044,30 @@ fn a_run_that_fails_part_way_writes_nothing() {
     assert!(before == after, "the earlier run's frames were changed");
     assert_eq!(ws.out_entries(), ["frames"], "no staging folder is left beside it");
     std::fs::remove_dir_all(&dir).unwrap();
+    // A report named as a folder (trailing slash) and a link to nothing as the output folder:
+    // refused before any step.
+    ws.expect_failure(
+        &[
+            OsStr::new("simulate"),
+            good.as_os_str(),
+            "--frames".as_ref(),
+            "3".as_ref(),
+            "-o".as_ref(),
+            ws.out("frames").as_os_str(),
+            "--report".as_ref(),
+            format!("{}/", ws.path("r.json").display()).as_ref(),
+        ],
+        &["r.json/", "is a folder"],
+    );
+    #[cfg(unix)]
+    {
+        let link = ws.path("dangling");
+        std::os::unix::fs::symlink(ws.path("nowhere"), &link).unwrap();
+        let out = shapeup(args(&good, &link));
+        assert_eq!(out.code, Some(1), "{}", out.describe());
+        assert!(out.stderr.contains("nowhere does not exist"), "{}", out.describe());
+        assert!(!ws.path("nowhere").exists() && out.stdout.is_empty(), "{}", out.describe());
+    }
     // A missing folder above the output: refused, as deform refuses it, and nothing created.
     ws.expect_failure(&args(&good, &ws.out("missing/frames")), &["missing", "does not exist"]);
     ws.expect_failure(

@@ -178,11 +178,18 @@ pub(super) fn read_physical_names<R: BufRead>(r: &mut Records<'_, R>) -> Result<
 pub(super) fn parse_physical_name(text: &str) -> Result<PhysicalName, String> {
     let mut tokens = text.trim().splitn(3, char::is_whitespace);
     let (dim, tag) = (tokens.next().and_then(|t| t.parse().ok()), tokens.next().and_then(|t| t.parse().ok()));
-    let (Some(dim), Some(tag)) = (dim, tag) else {
-        return Err(format!("expected 'dimension tag \"name\"', found '{}'", shown(text)));
-    };
+    let bad = || format!("expected 'dimension tag \"name\"' (dimension 0 to 3), found '{}'", shown(text));
+    let (Some(dim), Some(tag)) = (dim, tag) else { return Err(bad()) };
+    if !(0..=3).contains(&dim) {
+        return Err(bad());
+    }
     let name = tokens.next().unwrap_or("").trim();
-    let name = name.strip_prefix('"').and_then(|n| n.strip_suffix('"')).unwrap_or(name);
+    // "a name" whole, or one word without quotes.
+    let name = match name.strip_prefix('"') {
+        Some(quoted) => quoted.strip_suffix('"').filter(|n| !n.contains('"')).ok_or_else(bad)?,
+        None if name.contains(['"', ' ', '\t']) => return Err(bad()),
+        None => name,
+    };
     Ok(((dim, tag), name.to_owned()))
 }
 
