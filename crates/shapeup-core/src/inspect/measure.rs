@@ -13,9 +13,20 @@ use crate::topology::{connected_pieces, polygon_edges, tetrahedron_boundary, tet
 
 impl MeshInfo {
     /// [`MeshInfo::of`] a mesh read from a file, with what only the file says: its left-handed
-    /// tetrahedra ([`Volume::left_handed_tetrahedra`]).
+    /// tetrahedra ([`Volume::left_handed_tetrahedra`]) and physical groups.
     pub fn of_loaded(loaded: &crate::io::LoadedMesh) -> MeshInfo {
         let mut info = MeshInfo::of(&loaded.mesh);
+        info.physical_groups = loaded
+            .attributes
+            .physical_groups()
+            .iter()
+            .map(|g| super::PhysicalGroupInfo {
+                name: g.label(),
+                dimension: g.dim,
+                tag: g.tag,
+                vertices: g.vertices.len(),
+            })
+            .collect();
         if let (Some(volume), Some(order)) = (&mut info.volume, loaded.attributes.tetrahedron_order()) {
             for &t in &order.left_handed {
                 volume.left_handed_tetrahedra.add(t);
@@ -47,6 +58,7 @@ impl MeshInfo {
             volume,
             degenerate,
             units_guess: UnitsGuess::from_diagonal(scale),
+            physical_groups: Vec::new(),
             bounding_box,
         }
     }

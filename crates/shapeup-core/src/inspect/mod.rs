@@ -64,6 +64,22 @@ pub struct MeshInfo {
     pub bounding_box: BoundingBox,
     /// A guess at the length unit from the bounding box's diagonal (see [`UnitsGuess`]).
     pub units_guess: UnitsGuess,
+    /// A `.msh` file's physical groups, which scenes select with `physical = "NAME"` (empty
+    /// for other files and for [`MeshInfo::of`] a bare mesh).
+    pub physical_groups: Vec<PhysicalGroupInfo>,
+}
+
+/// A physical group of a `.msh` file, as `info` lists it.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct PhysicalGroupInfo {
+    /// Its name, or for an unnamed group its tag as text: what `physical = "…"` takes.
+    pub name: String,
+    /// Dimension of its elements (0 points … 3 volumes).
+    pub dimension: i32,
+    /// Its tag.
+    pub tag: i64,
+    /// Vertices of its elements.
+    pub vertices: usize,
 }
 
 /// Element counts.

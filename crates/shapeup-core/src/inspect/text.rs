@@ -148,6 +148,14 @@ impl fmt::Display for MeshInfo {
                 )?;
             }
         }
+        if !self.physical_groups.is_empty() {
+            let groups: Vec<String> = self
+                .physical_groups
+                .iter()
+                .map(|g| format!("\"{}\" (dimension {}, tag {}, {} vertices)", g.name, g.dimension, g.tag, g.vertices))
+                .collect();
+            writeln!(f, "physical groups: {}", groups.join(", "))?;
+        }
         let b = &self.bounding_box;
         writeln!(f, "bounding box:    min {} max {}", triple(&b.min), triple(&b.max))?;
         writeln!(f, "size:            {}, diagonal {}", triple(&b.size), number(b.diagonal))?;

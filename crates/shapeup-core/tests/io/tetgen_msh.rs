@@ -576,6 +576,13 @@ fn msh_comes_back_with_its_groups_tags_and_elements_moved() {
             (3, 2, Some("solid".to_string()), (0..8).collect()),
         ];
         assert_eq!(groups, expected, "{name}");
+        let info = shapeup_core::inspect::MeshInfo::of_loaded(&loaded);
+        assert!(
+            info.to_string().contains(
+                "physical groups: \"fixed\" (dimension 2, tag 1, 4 vertices), \"solid\" (dimension 3, tag 2, 8 vertices)"
+            ),
+            "{info}"
+        );
         let moved: Vec<DVec3> =
             loaded.mesh.positions.iter().map(|&p| p * 1.5 + DVec3::new(1.0 / 3.0, -2e-7, 7.0)).collect();
         let mesh = loaded.mesh.with_positions(moved.clone());
