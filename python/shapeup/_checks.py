@@ -49,7 +49,8 @@ def _warn_of_arrays(native: Any) -> None:
 
 class RoundOffWarning(UserWarning):
     """Groups whose weights are so far below the others' where they act (10¹³ and more) that
-    the factorization cannot see them: the shape ignores them (``groups_lost_to_round_off``);
+    the factorization cannot resolve them: what they hold is left to round-off
+    (``groups_lost_to_round_off``);
     bring the weights within 1e12 of each other."""
 
 

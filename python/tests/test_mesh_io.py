@@ -89,14 +89,14 @@ def test_duplicate_faces_are_kept_and_said_once():
     # warning; the solver runs on what was given.
     V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]], float)
     F = np.array([[0, 1, 2], [1, 3, 2], [2, 1, 0], [1, 2, 0]])
-    with pytest.warns(shapeup.MeshWarning, match=r"2 faces on the same vertices.*first: face 2, as face 0"):
+    with pytest.warns(shapeup.MeshWarning, match=r"2 face\(s\) on the same vertices.*first: face 2, as face 0"):
         mesh = shapeup.Mesh.from_arrays(V, F)
     np.testing.assert_array_equal(mesh.F, F)
     assert [w for w in mesh.warnings if "same vertices" in w]
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         shapeup.Mesh.from_arrays(V, [[0, 1, 3, 2]])
-    with pytest.warns(shapeup.MeshWarning, match="1 faces on the same vertices"):
+    with pytest.warns(shapeup.MeshWarning, match=r"1 face\(s\) on the same vertices"):
         solver = shapeup.Solver(V, F[:3])
     solver.add("edge_spring")
     solver.add("position", vertices=[0, 1, 2])

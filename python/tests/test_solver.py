@@ -127,7 +127,7 @@ def test_groups_lost_to_round_off_are_said(recwarn):
     with pytest.raises(shapeup.SolveFailed, match=r'lost to round-off.*"pin" \(weight 1e-8\) against "edge_spring"'):
         solver.solve(iterations=3)
     solver.add("position", [0], name="anchor")
-    with pytest.warns(shapeup.RoundOffWarning, match='1 groups whose terms are below round-off.*"pin"'):
+    with pytest.warns(shapeup.RoundOffWarning, match=r'1 group\(s\) whose terms are below round-off.*"pin"'):
         _, report = solver.solve(iterations=3)
     assert [w["kind"] for w in report["warnings"] if w["kind"] == "groups_lost_to_round_off"] == [
         "groups_lost_to_round_off"

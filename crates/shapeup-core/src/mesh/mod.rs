@@ -288,7 +288,7 @@ impl Mesh {
         let duplicates = duplicate_faces(&polygons);
         warnings.add_many(
             "duplicate_faces",
-            "faces on the same vertices as an earlier face (in any order or orientation): kept as given, so constraints on faces act on each such place twice",
+            "face(s) on the same vertices as an earlier face (in any order or orientation): kept as given, so constraints on faces act on each such place twice",
             duplicates.len(),
             || duplicates.first().map(|(f, earlier)| format!("face {f}, as face {earlier}")).unwrap_or_default(),
         );

@@ -29,21 +29,21 @@ pub(super) fn warn_of_conflicts(
     let (count, first) = hard_groups_at_odds(system, size);
     warnings.add_many(
         "hard_groups_conflict",
-        "vertices held by two hard groups at different points: the later group's target holds each (give each vertex one hard group)",
+        "vertex(es) held by two hard groups at different points: the later group's target holds each (give each vertex one hard group)",
         count,
         || first.unwrap_or_default(),
     );
     let (count, first) = rigid_groups_broken_by_hard_targets(system, rest, size);
     warnings.add_many(
         "hard_targets_break_rigid_group",
-        "rigid or similarity groups whose hard-held vertices are moved to targets no rigid motion (or uniform scaling) reaches: the hard targets win and the group cannot keep its shape",
+        "rigid or similarity group(s) whose hard-held vertices are moved to targets no rigid motion (or uniform scaling) reaches, a mirror image among them: the hard targets win and the group cannot keep its shape",
         count,
         || first.unwrap_or_default(),
     );
     let (count, first) = faces_not_taken(groups, mesh);
     warnings.add_many(
         "faces_not_taken",
-        "listed faces that their group's type cannot take (plane and circle act on faces of 4 or more corners, rectangle and parallelogram on quads), left out of the group",
+        "listed face(s) that their group's type cannot take (plane and circle act on faces of 4 or more corners, rectangle and parallelogram on quads), left out of the group",
         count,
         || first.unwrap_or_default(),
     );

@@ -156,6 +156,15 @@ impl FrameFolder {
     /// # Errors
     /// [`OutputError`] naming `target`.
     pub fn create(target: &Path) -> Result<Self, OutputError> {
+        // `.`, `..`, `sub/..`: the folder itself, by a name that has a folder above it.
+        let named;
+        let target = match std::fs::canonicalize(target) {
+            Ok(real) if target.is_dir() && target.file_name().is_none() => {
+                named = real;
+                named.as_path()
+            }
+            _ => target,
+        };
         check_output_folder(target)?;
         // A link to nothing: neither a folder to fill nor a name to rename the frames to.
         if !target.exists()

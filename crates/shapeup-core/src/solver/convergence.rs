@@ -114,7 +114,7 @@ impl SolveReport {
         found.add_many(
             "groups_lost_to_round_off",
             &format!(
-                "groups whose terms are below round-off of the others where they act (at most {:e} of the matrix's diagonal): the factorization cannot see them and the shape ignores them; bring the weights within 1e12 of each other",
+                "group(s) whose terms are below round-off of the others where they act (at most {:e} of the matrix's diagonal): the factorization cannot resolve them, so what they hold is left to round-off (the shape may ignore them, or the system read as singular); bring the weights within 1e12 of each other",
                 super::ROUND_OFF_SHARE
             ),
             self.lost_groups.len(),

@@ -1,8 +1,10 @@
-//! Groups the factorization cannot see: where a group acts, its terms w g c² are below
-//! round-off of the matrix diagonal A_vv = Σ (all groups, inertia, contact), so that A (and
-//! the shape) is the same to the last digit with or without it. Weights 10¹³ or more apart
-//! do this (springs at 1e12 against a handle at 0.1): the handle is silently ignored, or, when
-//! it is the only anchor, the factorization finds the matrix singular.
+//! Groups the factorization cannot resolve: where a group acts, its terms w g c² are below
+//! round-off of the matrix diagonal A_vv = Σ (all groups, inertia, contact), so that A is the
+//! same to its last digits with or without it. Weights 10¹³ or more apart do this (springs at
+//! 1e8 against handles at 1e-8): what the handle holds is left to round-off. When it is the
+//! only anchor of a piece, the pivot of that piece's free motion is the handle's weight plus
+//! the round-off of the others', of the same size: the factorization may find the matrix
+//! singular, or solve and move the piece by a ratio of round-offs (right or wrong, by luck).
 
 use super::System;
 

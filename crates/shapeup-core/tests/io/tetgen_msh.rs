@@ -711,6 +711,8 @@ fn malformed_physical_names_are_refused_at_their_line() {
         let err = malformed(&[("cube.msh", &text)], "cube.msh", "cube.msh", &["line 6", "dimension tag"]);
         assert!(err.to_string().contains(bad), "{bad}: {err}");
     }
+    let twice = CUBE_41.replace("3 2 \"solid\"", "2 1 \"solid\"");
+    malformed(&[("cube.msh", &twice)], "cube.msh", "cube.msh", &["line 7", "tag 1 is named twice (first \"fixed\")"]);
     let unquoted = read_files(&[("cube.msh", &CUBE_41.replace("\"fixed\"", "fixed"))], "cube.msh").unwrap();
     assert_eq!(unquoted.attributes.physical_groups()[0].label(), "fixed");
 }

@@ -2016,6 +2016,13 @@ fn a_run_into_a_folder_of_an_earlier_runs_frames_replaces_that_series() {
     assert_eq!(std::fs::read(dir.join("frame_0000.obj")).unwrap(), before, "the folder is as it was");
     assert!(!dir.join("frame_0003.obj").exists());
     assert_eq!(ws.out_entries(), ["frames"], "no staging folder is left beside it");
+    // The folder one is in, as `.`: its own name is used for the staging folder beside it.
+    std::fs::remove_dir_all(&dir).unwrap();
+    std::fs::create_dir(&dir).unwrap();
+    let out = simulate_in(Some(&dir), &scene, Path::new("."), &["--frames", "1"]);
+    assert_eq!(out.code, Some(0), "{}", out.describe());
+    assert!(dir.join("frame_0001.obj").exists());
+    assert_eq!(ws.out_entries(), ["frames"], "no staging folder is left beside it");
 }
 
 /// A run that fails part-way writes nothing: not into a new folder (which is not created), not

@@ -165,7 +165,15 @@ pub(super) fn read_physical_names<R: BufRead>(r: &mut Records<'_, R>) -> Result<
     let mut names = bounded_vec(count);
     for i in 0..count {
         r.require_line(|| format!("physical name {} of {count} ($PhysicalNames of line {header})", i + 1))?;
-        names.push(parse_physical_name(r.text()).map_err(|m| r.error(m))?);
+        let name = parse_physical_name(r.text()).map_err(|m| r.error(m))?;
+        if let Some(first) = names.iter().find(|(key, _)| *key == name.0) {
+            let ((dim, tag), _) = name;
+            return Err(r.error(format!(
+                "physical group of dimension {dim} and tag {tag} is named twice (first \"{}\")",
+                first.1
+            )));
+        }
+        names.push(name);
     }
     r.expect_line("$EndPhysicalNames", &format!(" ($PhysicalNames of line {header} says {count} names)"))?;
     Ok(names)

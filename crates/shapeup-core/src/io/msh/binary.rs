@@ -311,7 +311,14 @@ fn read_physical_names_binary<R: BufRead>(b: &mut Binary<'_, R>, at: u64) -> Res
             let what = format!("physical name {i} of {count} ($PhysicalNames at byte offset {at})");
             return Err(b.error(b.offset, format!("file ends early: expected {what}")));
         };
-        names.push(parse_physical_name(&text).map_err(|m| b.error(offset, m))?);
+        let name = parse_physical_name(&text).map_err(|m| b.error(offset, m))?;
+        if let Some(first) = names.iter().find(|(key, _): &&PhysicalName| *key == name.0) {
+            let ((dim, tag), _) = name;
+            let message =
+                format!("physical group of dimension {dim} and tag {tag} is named twice (first \"{}\")", first.1);
+            return Err(b.error(offset, message));
+        }
+        names.push(name);
     }
     b.expect_line("$EndPhysicalNames", &format!(" (closing '$PhysicalNames' at byte offset {at})"))?;
     Ok(names)

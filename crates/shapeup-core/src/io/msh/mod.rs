@@ -219,7 +219,11 @@ fn with_source(
 /// The physical groups from the vertices of their elements and `$PhysicalNames`, by dimension
 /// and tag (a named group without elements has no vertices).
 fn physical_groups(mut vertices: HashMap<(i32, i64), Vec<u32>>, names: Vec<PhysicalName>) -> Vec<PhysicalGroup> {
-    let mut named: HashMap<(i32, i64), String> = names.into_iter().collect();
+    // A (dimension, tag) named twice keeps its first name (read_*_physical_names refuse it).
+    let mut named: HashMap<(i32, i64), String> = HashMap::new();
+    for (key, name) in names {
+        named.entry(key).or_insert(name);
+    }
     let keys: std::collections::BTreeSet<(i32, i64)> = vertices.keys().chain(named.keys()).copied().collect();
     keys.into_iter()
         .map(|(dim, tag)| {
