@@ -125,9 +125,7 @@ pub(super) fn read_elements<R: BufRead>(
                 // Node tags the file does not define are an error below for the elements kept;
                 // for the others they only add nothing.
                 let vertices: Vec<u32> = tokens.clone().filter_map(|t| nodes.lookup(r, t, tag).ok()).collect();
-                for &g in &groups {
-                    out.physical.entry((dim, g)).or_default().extend_from_slice(&vertices);
-                }
+                out.add_to_groups(dim, &groups, &vertices);
             }
             if kind != TETRAHEDRON && kind != TRIANGLE {
                 out.skipped.insert(kind);
@@ -157,33 +155,43 @@ pub(super) fn read_elements<R: BufRead>(
 /// A `$PhysicalNames` line: ((dimension, tag), name).
 pub(super) type PhysicalName = ((i32, i64), String);
 
-/// `$PhysicalNames`: a count, then `dim tag "name"` lines.
-pub(super) fn read_physical_names<R: BufRead>(r: &mut Records<'_, R>) -> Result<Vec<PhysicalName>, IoError> {
+/// `$PhysicalNames`: a count, then `dim tag "name"` lines, added to `names` (those of earlier
+/// sections).
+pub(super) fn read_physical_names<R: BufRead>(
+    r: &mut Records<'_, R>,
+    names: &mut Vec<PhysicalName>,
+) -> Result<(), IoError> {
     let header = r.line;
     r.require_line(|| "the number of physical names".to_owned())?;
     let [count] = r.counts("the number of physical names")?;
-    let mut names = bounded_vec(count);
+    names.reserve(count.min(crate::io::MAX_PREALLOCATION));
     for i in 0..count {
         r.require_line(|| format!("physical name {} of {count} ($PhysicalNames of line {header})", i + 1))?;
-        let name = parse_physical_name(r.text()).map_err(|m| r.error(m))?;
-        if let Some(first) = names.iter().find(|(key, _)| *key == name.0) {
-            let ((dim, tag), _) = name;
-            return Err(r.error(format!(
-                "physical group of dimension {dim} and tag {tag} is named twice (first \"{}\")",
-                first.1
-            )));
-        }
-        names.push(name);
+        add_physical_name(names, r.text()).map_err(|m| r.error(m))?;
     }
-    r.expect_line("$EndPhysicalNames", &format!(" ($PhysicalNames of line {header} says {count} names)"))?;
-    Ok(names)
+    r.expect_line("$EndPhysicalNames", &format!(" ($PhysicalNames of line {header} says {count} names)"))
+}
+
+/// Adds the `$PhysicalNames` line `text` to `names` (every section's, ASCII or binary).
+///
+/// # Errors
+/// The message for a malformed line ([`parse_physical_name`]) or a (dimension, tag) that
+/// `names` has already.
+pub(super) fn add_physical_name(names: &mut Vec<PhysicalName>, text: &str) -> Result<(), String> {
+    let name = parse_physical_name(text)?;
+    if let Some((_, first)) = names.iter().find(|(key, _)| *key == name.0) {
+        let ((dim, tag), _) = name;
+        return Err(format!("physical group of dimension {dim} and tag {tag} is named twice (first \"{first}\")"));
+    }
+    names.push(name);
+    Ok(())
 }
 
 /// A `$PhysicalNames` line, `dim tag "name"` (the quotes are optional).
 ///
 /// # Errors
 /// The message for a line without an integer dimension and tag.
-pub(super) fn parse_physical_name(text: &str) -> Result<PhysicalName, String> {
+fn parse_physical_name(text: &str) -> Result<PhysicalName, String> {
     let mut tokens = text.trim().splitn(3, char::is_whitespace);
     let (dim, tag) = (tokens.next().and_then(|t| t.parse().ok()), tokens.next().and_then(|t| t.parse().ok()));
     let bad = || format!("expected 'dimension tag \"name\"' (dimension 0 to 3), found '{}'", shown(text));

@@ -8,7 +8,7 @@ use glam::DVec3;
 
 use std::collections::HashMap;
 
-use super::ascii::{PhysicalName, parse_physical_name};
+use super::ascii::{PhysicalName, add_physical_name};
 use super::model::{Elements, Nodes};
 use super::source::element_dim;
 use super::{TETRAHEDRON, TRIANGLE, is_section};
@@ -279,7 +279,7 @@ pub(super) fn read_binary<R: BufRead>(
             "$Elements" if version_2 => read_elements_2_binary(b, &nodes, &mut elements, offset)?,
             "$Elements" => read_elements_41_binary(b, &nodes, &mut elements, offset, &entities)?,
             "$Entities" if !version_2 => entities = read_entities_binary(b, offset)?,
-            "$PhysicalNames" => names.extend(read_physical_names_binary(b, offset)?),
+            "$PhysicalNames" => read_physical_names_binary(b, offset, &mut names)?,
             s if is_section(s) => {
                 // Found by its line: Gmsh ends every section's binary data with a line break.
                 let end = format!("$End{}", &s[1..]);
@@ -302,26 +302,21 @@ pub(super) fn read_binary<R: BufRead>(
     Ok((nodes, elements, names))
 }
 
-/// `$PhysicalNames` of a binary file: text lines, as in an ASCII file.
-fn read_physical_names_binary<R: BufRead>(b: &mut Binary<'_, R>, at: u64) -> Result<Vec<PhysicalName>, IoError> {
+/// `$PhysicalNames` of a binary file: text lines, as in an ASCII file, added to `names`.
+fn read_physical_names_binary<R: BufRead>(
+    b: &mut Binary<'_, R>,
+    at: u64,
+    names: &mut Vec<PhysicalName>,
+) -> Result<(), IoError> {
     let count = b.count_line("the number of physical names")?;
-    let mut names = bounded_vec(usize::try_from(count).unwrap_or(usize::MAX));
     for i in 1..=count {
         let Some((offset, text)) = b.line()? else {
             let what = format!("physical name {i} of {count} ($PhysicalNames at byte offset {at})");
             return Err(b.error(b.offset, format!("file ends early: expected {what}")));
         };
-        let name = parse_physical_name(&text).map_err(|m| b.error(offset, m))?;
-        if let Some(first) = names.iter().find(|(key, _): &&PhysicalName| *key == name.0) {
-            let ((dim, tag), _) = name;
-            let message =
-                format!("physical group of dimension {dim} and tag {tag} is named twice (first \"{}\")", first.1);
-            return Err(b.error(offset, message));
-        }
-        names.push(name);
+        add_physical_name(names, &text).map_err(|m| b.error(offset, m))?;
     }
-    b.expect_line("$EndPhysicalNames", &format!(" (closing '$PhysicalNames' at byte offset {at})"))?;
-    Ok(names)
+    b.expect_line("$EndPhysicalNames", &format!(" (closing '$PhysicalNames' at byte offset {at})"))
 }
 
 /// Binary MSH 4.1 `$Entities`: four counts, then points (`int` tag, 3 `double`s, physical tags)

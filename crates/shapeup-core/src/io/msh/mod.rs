@@ -170,7 +170,7 @@ fn read_msh_text(
             "$Nodes" if version_2 => read_nodes_2(&mut r, &mut nodes)?,
             "$Nodes" => read_nodes_41(&mut r, &mut nodes)?,
             "$Elements" => read_elements(&mut r, &nodes, &mut elements, version_2, &entities)?,
-            "$PhysicalNames" => names.extend(read_physical_names(&mut r)?),
+            "$PhysicalNames" => read_physical_names(&mut r, &mut names)?,
             "$Entities" if !version_2 => entities = read_entities(&mut r)?,
             s if is_section(s) => {
                 // A section we do not need: skip it whole.
@@ -219,11 +219,8 @@ fn with_source(
 /// The physical groups from the vertices of their elements and `$PhysicalNames`, by dimension
 /// and tag (a named group without elements has no vertices).
 fn physical_groups(mut vertices: HashMap<(i32, i64), Vec<u32>>, names: Vec<PhysicalName>) -> Vec<PhysicalGroup> {
-    // A (dimension, tag) named twice keeps its first name (read_*_physical_names refuse it).
-    let mut named: HashMap<(i32, i64), String> = HashMap::new();
-    for (key, name) in names {
-        named.entry(key).or_insert(name);
-    }
+    // Each (dimension, tag) once: the readers refuse a second name (`add_physical_name`).
+    let mut named: HashMap<(i32, i64), String> = names.into_iter().collect();
     let keys: std::collections::BTreeSet<(i32, i64)> = vertices.keys().chain(named.keys()).copied().collect();
     keys.into_iter()
         .map(|(dim, tag)| {
