@@ -58,20 +58,26 @@ fn same_point(a: DVec3, b: DVec3, size: f64) -> bool {
     (a - b).length() <= SAME_POINT * size.max(a.length()).max(b.length())
 }
 
+/// (group name, vertex, point) of every vertex a hard group holds, group after group in the
+/// system's order.
+fn hard_held_points(system: &System) -> impl Iterator<Item = (&str, u32, DVec3)> {
+    system.groups().filter(|(_, g)| g.hard).flat_map(|(_, group)| {
+        group.constraints.iter().filter_map(|c| c.held_points()).flat_map(move |(vertices, points)| {
+            vertices.iter().zip(points).map(move |(&v, &p)| (group.name.as_str(), v, p))
+        })
+    })
+}
+
 /// The vertices that two hard groups hold at different points (the later one wins: the
 /// solver's rule), and the first as `vertex V: "A" and "B"`.
 fn hard_groups_at_odds(system: &System, size: f64) -> (usize, Option<String>) {
     let mut held: HashMap<u32, (&str, DVec3)> = HashMap::new();
     let mut conflicting: Vec<(u32, String)> = Vec::new();
-    for (_, group) in system.groups().filter(|(_, g)| g.hard) {
-        for (vertices, points) in group.constraints.iter().filter_map(|c| c.held_points()) {
-            for (&v, &p) in vertices.iter().zip(points) {
-                if let Some((name, earlier)) = held.insert(v, (&group.name, p))
-                    && !same_point(earlier, p, size)
-                {
-                    conflicting.push((v, format!("vertex {v}: \"{name}\" and \"{}\"", group.name)));
-                }
-            }
+    for (group, v, p) in hard_held_points(system) {
+        if let Some((name, earlier)) = held.insert(v, (group, p))
+            && !same_point(earlier, p, size)
+        {
+            conflicting.push((v, format!("vertex {v}: \"{name}\" and \"{group}\"")));
         }
     }
     conflicting.sort_by_key(|(v, _)| *v);
@@ -86,12 +92,8 @@ fn hard_groups_at_odds(system: &System, size: f64) -> (usize, Option<String>) {
 /// vertex to three of them (the first, and those a third and two thirds along): a distance
 /// that changes (or changes by another ratio) cannot be one motion.
 fn rigid_groups_broken_by_hard_targets(system: &System, rest: &[DVec3], size: f64) -> (usize, Option<String>) {
-    let mut target: HashMap<u32, DVec3> = HashMap::new();
-    for (_, group) in system.groups().filter(|(_, g)| g.hard) {
-        for (vertices, points) in group.constraints.iter().filter_map(|c| c.held_points()) {
-            target.extend(vertices.iter().copied().zip(points.iter().copied()));
-        }
-    }
+    // The later hard group's point, as the solver holds it.
+    let target: HashMap<u32, DVec3> = hard_held_points(system).map(|(_, v, p)| (v, p)).collect();
     let mut broken = Vec::new();
     for (_, group) in system.groups().filter(|(_, g)| !g.hard && matches!(g.kind.as_str(), "rigid" | "similarity")) {
         let scales = group.kind == "similarity";

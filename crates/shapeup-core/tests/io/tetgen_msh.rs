@@ -616,6 +616,12 @@ fn msh_comes_back_with_its_groups_tags_and_elements_moved() {
     }
 }
 
+/// The points of each physical group of `loaded`, in the order of its groups.
+fn group_points(loaded: &LoadedMesh) -> Vec<Vec<DVec3>> {
+    let groups = loaded.attributes.physical_groups();
+    groups.iter().map(|g| g.vertices.iter().map(|&v| loaded.mesh.positions[v as usize]).collect()).collect()
+}
+
 /// Gmsh's own files (4.8.4, `gmsh_box.geo`): the 4.1 (with parametric nodes) and 2.2 files,
 /// ASCII and binary, name the same four physical groups (a point, a curve, a surface, the
 /// volume) with the same vertices, and each comes back with only its node coordinates changed:
@@ -630,13 +636,7 @@ fn gmsh_files_keep_their_physical_groups_and_come_back_line_for_line() {
         let loaded = read_mesh(&path).unwrap();
         let labels: Vec<String> = loaded.attributes.physical_groups().iter().map(|g| g.label()).collect();
         assert_eq!(labels, ["corner", "edge", "bottom", "solid"], "{name}");
-        let sets: Vec<Vec<DVec3>> = loaded
-            .attributes
-            .physical_groups()
-            .iter()
-            .map(|g| g.vertices.iter().map(|&v| loaded.mesh.positions[v as usize]).collect())
-            .collect();
-        groups_of_each.push(sets);
+        groups_of_each.push(group_points(&loaded));
         let moved: Vec<DVec3> =
             loaded.mesh.positions.iter().map(|&p| p * 2.0 - DVec3::new(0.0, 1.0 / 3.0, 0.0)).collect();
         let dir = tempfile::tempdir().unwrap();
@@ -657,13 +657,7 @@ fn gmsh_files_keep_their_physical_groups_and_come_back_line_for_line() {
         assert_eq!(labels, ["corner", "edge", "bottom", "solid"], "{name}");
         assert_eq!(groups[0].2, 1, "{name}: a point");
         assert_eq!(groups[3].2, loaded.mesh.num_vertices(), "{name}: the volume has every node");
-        let sets: Vec<Vec<DVec3>> = loaded
-            .attributes
-            .physical_groups()
-            .iter()
-            .map(|g| g.vertices.iter().map(|&v| loaded.mesh.positions[v as usize]).collect())
-            .collect();
-        groups_of_each.push(sets);
+        groups_of_each.push(group_points(&loaded));
         let moved: Vec<DVec3> = loaded.mesh.positions.iter().map(|&p| p + DVec3::new(0.5, 0.0, -1.0)).collect();
         let dir = tempfile::tempdir().unwrap();
         let out = dir.path().join(name);
@@ -713,6 +707,9 @@ fn malformed_physical_names_are_refused_at_their_line() {
     }
     let twice = CUBE_41.replace("3 2 \"solid\"", "2 1 \"solid\"");
     malformed(&[("cube.msh", &twice)], "cube.msh", "cube.msh", &["line 7", "tag 1 is named twice (first \"fixed\")"]);
+    // Also across sections: a second $PhysicalNames renaming a group.
+    let again = CUBE_41.replace("$Entities\n", "$PhysicalNames\n1\n2 1 \"other\"\n$EndPhysicalNames\n$Entities\n");
+    malformed(&[("cube.msh", &again)], "cube.msh", "cube.msh", &["line 11", "tag 1 is named twice (first \"fixed\")"]);
     let unquoted = read_files(&[("cube.msh", &CUBE_41.replace("\"fixed\"", "fixed"))], "cube.msh").unwrap();
     assert_eq!(unquoted.attributes.physical_groups()[0].label(), "fixed");
 }
