@@ -71,6 +71,15 @@ impl Warnings {
         }
     }
 
+    /// Names `to` instead of `from` in the warnings that name `from` (a file written under a
+    /// staging name, said under the name it will have).
+    pub fn renamed(mut self, from: &Path, to: &Path) -> Self {
+        for w in self.list.iter_mut().filter(|w| w.file.as_deref() == Some(from)) {
+            w.file = Some(to.to_path_buf());
+        }
+        self
+    }
+
     /// Names `file` in every warning that names none yet.
     pub fn for_file(mut self, file: &Path) -> Self {
         for w in self.list.iter_mut().filter(|w| w.file.is_none()) {

@@ -158,7 +158,7 @@ impl PyScene {
         let mut loaded = py.detach(|| self.scene.load()).map_err(scene_error)?;
         let mut run = loaded.start_scene_simulation().map_err(scene_error)?;
         let loaded = &loaded;
-        let mut writer = folder.as_ref().map(|f| FrameWriter::new(loaded, f.staging(), frames, format));
+        let mut writer = folder.as_ref().map(|f| FrameWriter::new(loaded, f, frames, format));
         let mut kept: Vec<(usize, Vec<DVec3>)> = Vec::new();
         // The core's run of `shapeup simulate` without the GIL (Ctrl+C stops it between steps;
         // the `KeyboardInterrupt` is returned after it stops). E after every step is recorded:

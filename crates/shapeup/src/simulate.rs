@@ -73,7 +73,7 @@ pub fn run(args: &SimulateArgs<'_>) -> Result<()> {
     let mut run = loaded.start_scene_simulation()?;
     drop(spinner);
 
-    let mut frames = FrameWriter::new(&loaded, folder.staging(), args.frames, format);
+    let mut frames = FrameWriter::new(&loaded, &folder, args.frames, format);
     let progress = crate::logging::bar(args.frames as u64, "{bar:40} {pos}/{len} frames  {per_sec}  ETA {eta}");
     // Only a report needs E: plain iterations skip it (one more local step per step).
     let result = run.run(args.frames, args.every, report.is_some(), |k, simulation, keep| -> Result<()> {

@@ -264,6 +264,8 @@ impl FrameFolder {
 pub struct FrameWriter<'a> {
     loaded: &'a LoadedScene,
     dir: &'a Path,
+    /// The folder the frames reach: what messages name.
+    shown: &'a Path,
     last: usize,
     format: FrameFormat,
     /// What writing the first frame reported (the same holds for every frame).
@@ -273,10 +275,12 @@ pub struct FrameWriter<'a> {
 }
 
 impl<'a> FrameWriter<'a> {
-    /// Frames of `loaded`'s simulation into `dir` (which must exist: a [`FrameFolder`]'s
-    /// staging folder), `last` the number of the last frame (it sets the digits of the names).
-    pub fn new(loaded: &'a LoadedScene, dir: &'a Path, last: usize, format: FrameFormat) -> Self {
-        FrameWriter { loaded, dir, last, format, warnings: None, written: Vec::new() }
+    /// Frames of `loaded`'s simulation into `folder`'s staging folder (warnings name the
+    /// files as they will be in its target), `last` the number of the last frame (it sets the
+    /// digits of the names).
+    pub fn new(loaded: &'a LoadedScene, folder: &'a FrameFolder, last: usize, format: FrameFormat) -> Self {
+        let (dir, shown) = (folder.staging(), folder.target());
+        FrameWriter { loaded, dir, shown, last, format, warnings: None, written: Vec::new() }
     }
 }
 
@@ -294,10 +298,10 @@ impl FrameWriter<'_> {
         } else {
             write_mesh(&path, &mesh, &self.loaded.attributes)?
         };
-        if self.warnings.is_none() {
-            self.warnings = Some(warnings);
-        }
         let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        if self.warnings.is_none() {
+            self.warnings = Some(warnings.renamed(&path, &self.shown.join(&name)));
+        }
         self.written.push((simulation.time(), name));
         Ok(())
     }

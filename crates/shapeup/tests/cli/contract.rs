@@ -2029,6 +2029,33 @@ fn a_run_into_a_folder_of_an_earlier_runs_frames_replaces_that_series() {
 /// into one that holds an earlier run's frames (which stay as they were), and no staging folder
 /// is left beside it. One rule for where outputs go: shapeup creates the folder named, never
 /// the folders above it, as `deform` does for its file.
+/// What writing the frames says names them where they end, not in the staging folder.
+#[test]
+fn frame_warnings_name_the_output_folder() {
+    let ws = Workspace::new();
+    let scene = ws.scene(
+        "bar.toml",
+        "[mesh]\ngenerate = { kind = \"tet_box\", cells = [2, 1, 1], size = [2.0, 1.0, 1.0] }\n\
+         [solver]\nmode = \"dynamic\"\n[[constraints]]\ntype = \"tet_strain\"\n",
+    );
+    let dir = ws.out("frames");
+    let out = shapeup([
+        OsStr::new("simulate"),
+        scene.as_os_str(),
+        "--frames".as_ref(),
+        "1".as_ref(),
+        "-o".as_ref(),
+        dir.as_os_str(),
+    ]);
+    assert_eq!(out.code, Some(0), "{}", out.describe());
+    let line = out.stderr.lines().find(|l| l.contains("tetrahedra not written")).unwrap_or_default();
+    assert!(
+        line.contains(&format!("{}: ", dir.join("frame_0000.obj").display())) && !line.contains("partial"),
+        "{}",
+        out.describe()
+    );
+}
+
 #[test]
 fn a_run_that_fails_part_way_writes_nothing() {
     let ws = Workspace::new();
