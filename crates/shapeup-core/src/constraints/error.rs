@@ -40,7 +40,7 @@ pub enum ConstraintError {
         problem: String,
     },
     /// The selection contains no element this type can constrain.
-    #[error("the {kind} group selects no {element} (check its vertices, box or sphere)")]
+    #[error("the {kind} group selects no {element} (check its vertices, faces, box or sphere)")]
     NothingSelected {
         /// Constraint type.
         kind: &'static str,

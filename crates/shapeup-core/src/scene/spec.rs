@@ -337,6 +337,11 @@ pub fn resolve_selection(spec: &SelectionSpec, mesh: &Mesh, rest: &RestGeometry)
                     format!("face {f} is out of range (the mesh has {m} faces: 0..{})", m.saturating_sub(1)).into()
                 );
             }
+            // As a vertex listed twice: a slip in the list, said rather than merged.
+            let mut seen = vec![false; m];
+            if let Some(&f) = list.iter().find(|&&f| std::mem::replace(&mut seen[f], true)) {
+                return Err(format!("face {f} is listed twice").into());
+            }
             Selection::from_faces(n, &rest.faces, list)
         }
         _ => Selection::from_indices(n, &spec.resolve(&mesh.positions)?),

@@ -289,6 +289,12 @@ fn long_selection_and_target_lists_are_read_in_proportion() {
         SceneFormat::Toml,
         &["constraints[0]", "vertex 0 is listed twice"],
     );
+    // A face listed twice is said as a vertex is, not merged quietly.
+    refused_with(
+        &format!("{MESH}[[constraints]]\ntype = \"triangle_strain\"\nfaces = [{zeros}]\n"),
+        SceneFormat::Toml,
+        &["constraints[0]", "face 0 is listed twice"],
+    );
     refused_with(
         &format!("{MESH}[[constraints]]\ntype = \"position\"\nvertices = [18446744073709551615]\n"),
         SceneFormat::Toml,
