@@ -107,6 +107,9 @@ pub struct SolveResult {
     /// its iterations ([`shapeup_core::solver::SolveReport::residual`]; each chunk starts where
     /// the last ended, so the request's is the product of its chunks'); `None` otherwise.
     pub residual: Option<f64>,
+    /// Groups whose weights the factorization cannot resolve
+    /// ([`shapeup_core::solver::SolveReport::lost_groups`]): how many, and the first described.
+    pub lost_groups: Option<(usize, String)>,
 }
 
 impl SolveResult {
@@ -146,6 +149,7 @@ impl SolveResult {
         self.error = next.error;
         self.touching = next.touching;
         self.residual = next.residual;
+        self.lost_groups = next.lost_groups;
     }
 }
 
@@ -167,10 +171,17 @@ impl fmt::Display for SolveResult {
         } else {
             write!(f, "solving… {n} {noun}")?;
         }
-        match self.last_energy() {
-            Some(e) => write!(f, ", E {e:.3e}"),
-            None => Ok(()),
+        if let Some(e) = self.last_energy() {
+            write!(f, ", E {e:.3e}")?;
         }
+        if let Some((count, first)) = &self.lost_groups {
+            // As the command line's `groups_lost_to_round_off` warning says it.
+            write!(
+                f,
+                "; {count} group(s) left to round-off, first {first}: bring the weights within 1e12 of each other"
+            )?;
+        }
+        Ok(())
     }
 }
 
@@ -529,6 +540,7 @@ impl Converger {
             error: None,
             touching: Vec::new(),
             residual: None,
+            lost_groups: None,
         };
         let outcome = self.chunk(job, interrupted);
         match outcome {
@@ -556,6 +568,7 @@ impl Converger {
                 result.finished = result.converged || job.done >= job.request.iterations;
                 job.residual = job.residual.zip(report.residual).map(|(so_far, chunk)| so_far * chunk);
                 result.residual = job.residual;
+                result.lost_groups = report.lost_groups.first().map(|g| (report.lost_groups.len(), g.describe()));
                 result.iterations = job.done;
                 result.local_ms = 1e3 * report.local_seconds;
                 result.global_ms = 1e3 * report.global_seconds;

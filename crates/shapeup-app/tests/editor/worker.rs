@@ -326,6 +326,37 @@ fn stops_at_the_iteration_cap() {
     assert!(worker.poll_all().is_empty());
 }
 
+/// A scene whose handles are 10¹⁶ times lighter than its springs (the editor's weights stay
+/// within 10⁸ of each other, a scene's need not): the status line names the group the
+/// factorization cannot resolve, as the command line's warning does.
+#[test]
+fn the_status_names_groups_left_to_round_off() {
+    let text = "[mesh]\ngenerate = { kind = \"cloth\", vertices = [6, 6], size = [1.0, 1.0] }\n\
+                [[constraints]]\ntype = \"edge_spring\"\nweight = 1e8\n\
+                [[constraints]]\ntype = \"position\"\nname = \"anchor\"\nvertices = [0]\n\
+                [[constraints]]\ntype = \"position\"\nname = \"pin\"\nvertices = [0, 5]\nweight = 1e-8\n";
+    let scene = shapeup_core::scene::Scene::parse(
+        text,
+        shapeup_core::scene::SceneFormat::Toml,
+        std::path::Path::new("l.toml"),
+        std::path::PathBuf::new(),
+    )
+    .unwrap();
+    let doc = Document::from_scene(&scene).unwrap();
+    let mut request = SolveRequest::from_document(&doc);
+    request.iterations = 3;
+    let mut worker = SolverWorker::spawn().unwrap();
+    let seq = worker.request(request);
+    let last = until_finished(&mut worker, seq).pop().unwrap();
+    assert_eq!(last.lost_groups.as_ref().map(|g| g.0), Some(1), "{}", last.status());
+    assert!(
+        last.status()
+            .contains("1 group(s) left to round-off, first \"pin\" (weight 1e-8) against \"edge_spring\" (weight 1e8)"),
+        "{}",
+        last.status()
+    );
+}
+
 #[test]
 fn the_first_chunk_after_a_request_is_small_then_chunks_grow() {
     let (mut doc, right) = bent_grid(8);
