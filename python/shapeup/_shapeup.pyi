@@ -7,6 +7,7 @@ import numpy.typing as npt
 
 __version__: str
 STATIC_RESIDUAL_LIMIT: float
+DYNAMIC_RESIDUAL_LIMIT: float
 
 class SolveFailed(Exception): ...
 

@@ -107,7 +107,10 @@ class Scene:
         off, stl, vtu, msh) when given, as the command line does: through a staging folder
         beside it, moved in when the run completes (an error or ``KeyboardInterrupt`` writes
         nothing), replacing an earlier run's frames there (warning ``earlier_frames_removed``);
-        the folder that ``output`` goes in must exist (``FileNotFoundError``)."""
+        the folder that ``output`` goes in must exist (``FileNotFoundError``). Time steps that
+        stop at their iteration cap short of the converged step warn once
+        (:class:`UnconvergedWarning`, as the command line's warning; ``report["residuals"]``
+        lists each checked step's share of its motion missed)."""
         frames = self._native.steps if frames is None else _count(frames, "frames")
         if frames < 1:
             raise ValueError("frames must be at least 1")
@@ -120,4 +123,5 @@ class Scene:
         )
         rep = json.loads(text)
         rep["frame_numbers"] = list(numbers)
+        _warn_unconverged(rep)
         return np.stack(arrays), rep

@@ -8,7 +8,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from . import _shapeup
-from ._checks import _count, _indices, _json, _vertices
+from ._checks import RoundOffWarning, UnconvergedWarning, _count, _indices, _json, _vertices
 from .contact import _Contact
 from .groups import _Groups
 from .mesh import Mesh, _mesh_of
@@ -72,8 +72,42 @@ class Simulation(_Groups, _Contact):
         the surface with itself), ``contact_candidates`` (detected), ``contact_vertices``
         (vertices touching), ``crossings_stopped`` (vertices whose motion the self-collision
         crossing check changed) and ``ended_inside`` (vertices left inside a collider:
-        squeezed between two, or held back where a moving collider came over them)."""
-        return json.loads(self._native.step(_count(n, "n")))
+        squeezed between two, or held back where a moving collider came over them).
+        Steps 1, 2, 4, …, 64 and every 64th after are checked for stopping short: ``residual``
+        is the share of the converged step's motion the step misses (None on steps not
+        checked, with contact, or when a tolerance ended the step), ``unconverged`` whether it
+        is above ``DYNAMIC_RESIDUAL_LIMIT`` (0.5), and ``check_s`` the check's seconds. A call
+        whose steps stopped short warns once (:class:`UnconvergedWarning`). ``lost_groups``
+        describes the groups whose weights the factorization cannot resolve (10¹³ and more below
+        the others where they act), which warns once too (:class:`RoundOffWarning`)."""
+        reports = json.loads(self._native.step(_count(n, "n")))
+        lost = next((r["lost_groups"] for r in reports if r["lost_groups"]), None)
+        if lost:
+            import warnings
+
+            warnings.warn(
+                f"{len(lost)} group(s) whose terms are below round-off of the others where they act: the factorization "
+                f"cannot resolve them, so what they hold is left to round-off; bring the weights within 1e12 of each other "
+                f"(first: {lost[0]})",
+                RoundOffWarning,
+                stacklevel=2,
+            )
+        short = [(k, r["residual"]) for k, r in enumerate(reports) if r["unconverged"]]
+        if short:
+            import warnings
+
+            checked = sum(r["residual"] is not None for r in reports)
+            k, worst = max(short, key=lambda s: s[1])
+            first = self.steps - len(reports) + short[0][0] + 1
+            warnings.warn(
+                f"{len(short)} of the {checked} time steps checked stopped at their iteration cap short of the "
+                f"converged step: the worst, step {self.steps - len(reports) + k + 1}, misses {worst:.3g} of its "
+                f"motion (the limit is {_shapeup.DYNAMIC_RESIDUAL_LIMIT}); raise `iterations`, or lower "
+                f"`stiffness` or `time_step` (first: step {first})",
+                UnconvergedWarning,
+                stacklevel=2,
+            )
+        return reports
 
     @property
     def positions(self) -> np.ndarray:

@@ -227,3 +227,58 @@ def test_override_errors_name_their_key_in_the_scenes_words(tmp_path):
     assert "usize" not in str(e.value)
     with pytest.raises(ValueError, match=r"mesh\.nope: unknown field `nope`"):
         shapeup.Scene.load(scene, {"mesh.nope": 1})
+
+
+PINNED_CLOTH = """[mesh]
+generate = {{ kind = "cloth", vertices = [9, 9], size = [1.0, 1.0] }}
+[solver]
+mode = "dynamic"
+stiffness = {stiffness}
+[[constraints]]
+type = "triangle_strain"
+weight = 10.0
+[[constraints]]
+type = "bending"
+weight = 10.0
+[[constraints]]
+type = "position"
+vertices = [0, 8]
+weight = 100.0
+"""
+
+
+def test_time_steps_stopped_short_warn_once(tmp_path):
+    # Stiffness 1e8: 10 iterations a step barely move the cloth, where converged steps swing it.
+    scene = tmp_path / "cloth.toml"
+    scene.write_text(PINNED_CLOTH.format(stiffness="1e8"))
+    with pytest.warns(shapeup.UnconvergedWarning, match=r"cloth.toml: \d+ of the 7 time steps checked") as caught:
+        _, report = shapeup.Scene.load(scene).simulate(frames=64)
+    assert len(caught) == 1
+    assert [r[0] for r in report["residuals"]] == [1, 2, 4, 8, 16, 32, 64]
+    assert report["unconverged_steps"] >= 5
+    assert [w["kind"] for w in report["warnings"]] == ["unconverged"]
+
+    # The same through Simulation.step: the reports' residuals, one warning for the call.
+    V = np.array([[x / 8 - 0.5, 0.0, z / 8 - 0.5] for x in range(9) for z in range(9)])
+    F = [[r * 9 + c, (r + 1) * 9 + c, r * 9 + c + 1] for r in range(8) for c in range(8)]
+    F += [[r * 9 + c + 1, (r + 1) * 9 + c, (r + 1) * 9 + c + 1] for r in range(8) for c in range(8)]
+    import warnings
+
+    for stiffness, short in [(1e8, True), (100.0, False)]:
+        sim = shapeup.Simulation(V, F, stiffness=stiffness, iterations=10)
+        sim.add("triangle_strain", weight=10.0)
+        sim.add("bending", weight=10.0)
+        sim.add("position", {"vertices": [0, 8]}, weight=100.0)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            reports = sim.step(16)
+        said = [w for w in caught if issubclass(w.category, shapeup.UnconvergedWarning)]
+        checked = [k + 1 for k, r in enumerate(reports) if r["residual"] is not None]
+        assert checked == [1, 2, 4, 8, 16]
+        flagged = sum(r["unconverged"] for r in reports)
+        assert all(r["unconverged"] == (r["residual"] is not None and r["residual"] > shapeup._shapeup.DYNAMIC_RESIDUAL_LIMIT) for r in reports)
+        if short:
+            assert flagged >= 3 and len(said) == 1, reports
+            assert f"{flagged} of the 5 time steps checked" in str(said[0].message)
+        else:
+            assert flagged == 0 and not said, [r["residual"] for r in reports]

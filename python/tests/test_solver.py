@@ -132,3 +132,13 @@ def test_groups_lost_to_round_off_are_said(recwarn):
     assert [w["kind"] for w in report["warnings"] if w["kind"] == "groups_lost_to_round_off"] == [
         "groups_lost_to_round_off"
     ]
+
+    # Time steps: the same, warned once per call of Simulation.step, with the step reports'
+    # lost_groups.
+    sim = shapeup.Simulation(V, F)
+    sim.add("edge_spring", weight=1e8)
+    sim.add("position", [0, 5], weight=1e-8, name="pin")
+    with pytest.warns(shapeup.RoundOffWarning, match=r'1 group\(s\) whose terms are below round-off.*"pin"') as caught:
+        reports = sim.step(3)
+    assert len([w for w in caught if issubclass(w.category, shapeup.RoundOffWarning)]) == 1
+    assert all(r["lost_groups"] == ['"pin" (weight 1e-8) against "edge_spring" (weight 1e8)'] for r in reports)

@@ -189,6 +189,12 @@ pub struct SimulationStats {
     pub contact_ms: f64,
     /// Vertices touching a collider or the surface itself at the end of the last step.
     pub contact_vertices: usize,
+    /// Steps checked for stopping short ([`shapeup_core::dynamics::is_checked_step`]).
+    pub checked_steps: u64,
+    /// Of those, steps that stopped at their iteration cap short of the converged step.
+    pub unconverged_steps: u64,
+    /// The largest share of a step's motion missed among those.
+    pub worst_residual: f64,
     /// The error that stopped the stepping, or that a setting or grab caused, if any.
     pub error: Option<RunnerError>,
 }
@@ -590,6 +596,13 @@ impl Stepper {
                 stats.global_ms = 1e3 * report.global_seconds;
                 stats.contact_ms = 1e3 * report.contact_seconds;
                 stats.contact_vertices = report.contact.vertices;
+                if let Some(r) = report.residual {
+                    stats.checked_steps += 1;
+                    if report.unconverged {
+                        stats.unconverged_steps += 1;
+                        stats.worst_residual = stats.worst_residual.max(r);
+                    }
+                }
                 if let Some(left) = state.steps_left.as_mut() {
                     *left -= 1;
                     if *left == 0 {

@@ -38,6 +38,7 @@ fn _shapeup(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(set_threads, m)?)?;
     // Above it a static solve stopped at its iteration cap short of its minimum.
     m.add("STATIC_RESIDUAL_LIMIT", shapeup_core::solver::STATIC_RESIDUAL_LIMIT)?;
+    m.add("DYNAMIC_RESIDUAL_LIMIT", shapeup_core::dynamics::DYNAMIC_RESIDUAL_LIMIT)?;
     m.add_class::<mesh::PyMesh>()?;
     m.add_class::<types::TypeInfo>()?;
     m.add_class::<solver::PySolver>()?;

@@ -134,6 +134,8 @@ impl PySimulation {
                     "contact_candidates": r.contact.candidates, "contact_vertices": r.contact.vertices,
                     "crossings_stopped": r.contact.stopped, "ended_inside": r.contact.inside,
                     "contact_s": r.contact_seconds,
+                    "residual": r.residual, "unconverged": r.unconverged, "check_s": r.check_seconds,
+                    "lost_groups": r.lost_groups.iter().map(|g| g.describe()).collect::<Vec<_>>(),
                 }));
                 if !simulation.kinetic_energy().is_finite() {
                     return Err(SolveError::NonFiniteEnergy);

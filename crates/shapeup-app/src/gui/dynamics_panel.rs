@@ -132,6 +132,19 @@ pub fn dynamics_panel(
             "{} steps, {:.0} steps/s, {:.1} ms per step (local {:.1} ms, global {:.1} ms{contact}){tets}",
             s.steps, s.steps_per_second, s.step_ms, s.local_ms, s.global_ms
         ));
+        if s.unconverged_steps > 0 {
+            // As the command line's `unconverged` warning says it.
+            ui.colored_label(
+                Color32::YELLOW,
+                format!(
+                    "{} of {} steps checked stopped at their iteration cap short of the converged step (the worst misses {:.2} of its motion): lower the stiffness or the time step (the editor runs {} iterations a step)",
+                    s.unconverged_steps,
+                    s.checked_steps,
+                    s.worst_residual,
+                    shapeup_core::scene::SolverSettings::default().iterations
+                ),
+            );
+        }
         if let Some(e) = s.error {
             ui.colored_label(Color32::RED, e.to_string());
         }

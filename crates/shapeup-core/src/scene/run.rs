@@ -167,22 +167,59 @@ pub struct StepTotals {
     pub first_inside: Option<(usize, usize)>,
     /// Seconds in contact detection and end-of-step projection.
     pub contact_seconds: f64,
+    /// Seconds checking steps for stopping short ([`StepReport::check_seconds`]).
+    pub check_seconds: f64,
+    /// Each checked step's residual, with its number ([`StepReport::residual`]).
+    pub residuals: Vec<(usize, f64)>,
+    /// Checked steps above [`crate::dynamics::DYNAMIC_RESIDUAL_LIMIT`]: stopped short.
+    pub unconverged: usize,
+    /// The iterations a step runs ([`crate::solver::SolverParams::iterations`]), for the warning.
+    pub iteration_cap: usize,
+    /// Groups the factorization could not resolve, as the first step that had any found them.
+    pub lost_groups: Vec<crate::solver::LostGroup>,
 }
 
 impl StepTotals {
     /// Adds one step's timings and rejections.
     pub fn add(&mut self, step: &StepReport) {
+        self.iteration_cap = self.iteration_cap.max(step.iterations);
         self.local_seconds += step.local_seconds;
         self.global_seconds += step.global_seconds;
         self.setup_seconds += step.setup_seconds;
         self.rejected += step.rejected;
         self.contact_seconds += step.contact_seconds;
+        self.check_seconds += step.check_seconds;
+        if self.lost_groups.is_empty() {
+            self.lost_groups.clone_from(&step.lost_groups);
+        }
     }
 }
 
 impl StepTotals {
-    /// What the run should say once: vertices that ended steps inside a collider.
+    /// Records step `k`'s residual, when it was checked.
+    pub fn add_residual(&mut self, k: usize, step: &StepReport) {
+        if let Some(r) = step.residual {
+            self.residuals.push((k, r));
+            self.unconverged += usize::from(step.unconverged);
+        }
+    }
+
+    /// What the run should say once: groups the factorization cannot resolve, time steps that
+    /// stopped short of their converged motion, vertices that ended steps inside a collider.
     pub fn add_warnings(&self, warnings: &mut Warnings) {
+        crate::solver::add_lost_groups_warning(warnings, &self.lost_groups);
+        let limit = crate::dynamics::DYNAMIC_RESIDUAL_LIMIT;
+        let worst = self.residuals.iter().filter(|r| r.1 > limit).max_by(|a, b| a.1.total_cmp(&b.1));
+        let first = self.residuals.iter().find(|r| r.1 > limit).map(|r| r.0);
+        if let (Some(&(step, residual)), Some(first)) = (worst, first) {
+            let message = format!(
+                "of the {} time steps checked (steps 1, 2, 4, …, 64, then every 64th) stopped at their {}-iteration cap short of the converged step: the worst, step {step}, misses {} of its motion (the limit is {limit}); raise `iterations`, or lower `stiffness` or `time_step`",
+                self.residuals.len(),
+                self.iteration_cap,
+                crate::text::three_digits(residual),
+            );
+            warnings.add_many("unconverged", &message, self.unconverged, || format!("step {first}"));
+        }
         if let Some((step, count)) = self.first_inside {
             warnings.add_many(
                 "inside_collider",
@@ -235,6 +272,9 @@ impl LoadedScene {
             "crossings_stopped": totals.crossings_stopped,
             "ended_inside": totals.ended_inside,
             "rejected": totals.rejected,
+            // Checked steps: [step, share of the converged step's motion missed].
+            "residuals": totals.residuals,
+            "unconverged_steps": totals.unconverged,
             "warnings": warnings.to_json(),
             "timings": {
                 "load_s": self.load_seconds,
@@ -243,6 +283,7 @@ impl LoadedScene {
                 "global_s": totals.global_seconds,
                 "energy_s": totals.energy_seconds,
                 "contact_s": totals.contact_seconds,
+                "check_s": totals.check_seconds,
                 "total_s": total_seconds,
             },
         })
@@ -351,6 +392,7 @@ impl SceneSimulation {
                 totals.energies.push(energy);
             }
             totals.add(&step);
+            totals.add_residual(k, &step);
             if self.simulation.contact().is_some() {
                 totals.contacts.push(step.contact.touching);
                 totals.self_contacts.push(step.contact.self_touching);

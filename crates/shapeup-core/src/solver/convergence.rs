@@ -111,15 +111,7 @@ impl SolveReport {
             );
             found.add("unconverged", &message, String::new);
         }
-        found.add_many(
-            "groups_lost_to_round_off",
-            &format!(
-                "group(s) whose terms are below round-off of the others where they act (at most {:e} of the matrix's diagonal): the factorization cannot resolve them, so what they hold is left to round-off (the shape may ignore them, or the system read as singular); bring the weights within 1e12 of each other",
-                super::ROUND_OFF_SHARE
-            ),
-            self.lost_groups.len(),
-            || self.lost_groups.first().map(super::LostGroup::describe).unwrap_or_default(),
-        );
+        super::round_off::add_lost_groups_warning(&mut found, &self.lost_groups);
         found
     }
 }

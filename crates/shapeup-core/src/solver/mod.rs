@@ -29,6 +29,7 @@ mod lbfgs;
 mod local;
 mod ordering;
 mod params;
+mod remaining;
 mod rhs;
 mod round_off;
 mod triangular;
@@ -43,7 +44,7 @@ pub use error::SolveError;
 pub use params::{
     Acceleration, DEFAULT_ANDERSON_WINDOW, DEFAULT_LBFGS_MEMORY, MAX_ANDERSON_WINDOW, MAX_LBFGS_MEMORY, SolverParams,
 };
-pub use round_off::{LostGroup, ROUND_OFF_SHARE};
+pub use round_off::{LostGroup, ROUND_OFF_SHARE, add_lost_groups_warning};
 
 use crate::constraints::Constraint;
 use anderson::Anderson;

@@ -40,6 +40,19 @@ impl LostGroup {
     }
 }
 
+/// The `groups_lost_to_round_off` warning for `lost` (none when empty): every door, static
+/// solves and time steps, says it in these words.
+pub fn add_lost_groups_warning(found: &mut crate::warnings::Warnings, lost: &[LostGroup]) {
+    found.add_many(
+        "groups_lost_to_round_off",
+        &format!(
+            "group(s) whose terms are below round-off of the others where they act (at most {ROUND_OFF_SHARE:e} of the matrix's diagonal): the factorization cannot resolve them, so what they hold is left to round-off (the shape may ignore them, or the system read as singular); bring the weights within 1e12 of each other"
+        ),
+        lost.len(),
+        || lost.first().map(LostGroup::describe).unwrap_or_default(),
+    );
+}
+
 impl System {
     /// The groups of positive weight lost to round-off in the matrix whose values (lower
     /// triangle, as factored) are `values`, with multipliers `g` per group in assembly order.

@@ -123,10 +123,115 @@ fn groups_lost_to_round_off_are_named() {
         (2, "\"pin\" (weight 1e-8) against \"edge_spring\" (weight 1e8)")
     );
 
+    // Time steps: the same groups, said once for the run.
+    let dynamic = lopsided(1e8, 1e-8, true) + "[solver]\nmode = \"dynamic\"\n";
+    let (_, warnings, _) = simulate(&dynamic, 3);
+    let warning = warnings.iter().find(|w| w.kind == "groups_lost_to_round_off").unwrap();
+    assert_eq!(
+        (warning.count, warning.first.as_str()),
+        (2, "\"pin\" (weight 1e-8) against \"edge_spring\" (weight 1e8)")
+    );
+    let (_, warnings, _) = simulate(&(lopsided(10.0, 1.0, true) + "[solver]\nmode = \"dynamic\"\n"), 3);
+    assert_eq!(warnings.count("groups_lost_to_round_off"), 0);
+
     for (springs, handles) in [(1e4, 1e-4), (10.0, 1.0), (1.0, 1e3)] {
         let mut loaded = load(&lopsided(springs, handles, false));
         let (_, report) = loaded.solve_static(Some(5)).unwrap();
         assert!(report.lost_groups.is_empty(), "{springs} vs {handles}: {:?}", report.lost_groups);
         assert!(loaded.warnings.iter().all(|w| w.kind != "groups_lost_to_round_off"));
     }
+}
+
+/// A 9 × 9 cloth 1 m across (triangle strain and bending of weight 10) pinned at two corners
+/// of one edge, under gravity, of stiffness `stiffness`; `solver` adds lines to [solver].
+fn pinned_cloth(stiffness: f64, solver: &str) -> String {
+    format!(
+        "[mesh]\ngenerate = {{ kind = \"cloth\", vertices = [9, 9], size = [1.0, 1.0] }}\n\
+         [solver]\nmode = \"dynamic\"\nstiffness = {stiffness:e}\ndamping = 0.02\n{solver}\n\
+         [[constraints]]\ntype = \"triangle_strain\"\nweight = 10.0\n\
+         [[constraints]]\ntype = \"bending\"\nweight = 10.0\n\
+         [[constraints]]\ntype = \"position\"\nvertices = [0, 8]\nweight = 100.0\n"
+    )
+}
+
+/// Runs `steps` time steps of `text`; the totals and the warnings the run says.
+fn simulate(
+    text: &str,
+    steps: usize,
+) -> (shapeup_core::scene::StepTotals, shapeup_core::warnings::Warnings, Vec<glam::DVec3>) {
+    let mut loaded = load(text);
+    let mut sim = loaded.start_scene_simulation().unwrap();
+    let totals = sim.run(steps, 1, false, |_, _, _| Ok::<(), ()>(())).unwrap();
+    let mut warnings = shapeup_core::warnings::Warnings::new();
+    totals.add_warnings(&mut warnings);
+    (totals, warnings, sim.simulation.positions().to_vec())
+}
+
+#[test]
+fn a_time_step_stopped_short_of_its_converged_motion_says_so_once() {
+    use shapeup_core::dynamics::{DYNAMIC_RESIDUAL_LIMIT, is_checked_step};
+    // Stiffness 1e8: the global matrix models the cloth's swing 10⁶ times too stiff, so 10
+    // iterations a step barely move it (the issue's case: lowest point −0.015 after 30 steps
+    // where a converged run swings to −0.98).
+    let (totals, warnings, stuck) = simulate(&pinned_cloth(1e8, "iterations = 10"), 64);
+    let checked: Vec<usize> = totals.residuals.iter().map(|r| r.0).collect();
+    assert_eq!(checked, [1, 2, 4, 8, 16, 32, 64]);
+    assert!(checked.iter().all(|&k| is_checked_step(k as u64)));
+    assert!(totals.unconverged >= 5, "{:?}", totals.residuals);
+    assert_eq!(warnings.count("unconverged"), totals.unconverged, "{:?}", warnings.to_json());
+    let line = warnings.iter().find(|w| w.kind == "unconverged").unwrap().to_string();
+    assert!(
+        line.contains("of the 7 time steps checked")
+            && line.contains("10-iteration cap")
+            && line.contains("raise `iterations`"),
+        "{line}"
+    );
+    // It is short indeed: the same steps converged swing the cloth down.
+    let (converged_totals, converged_warnings, swung) =
+        simulate(&pinned_cloth(1e8, "iterations = 3000\ntolerance = 1e-12"), 64);
+    let lowest = |q: &[glam::DVec3]| q.iter().map(|p| p.y).fold(f64::INFINITY, f64::min);
+    assert!(lowest(&stuck) > -0.1 && lowest(&swung) < -0.5, "{} {}", lowest(&stuck), lowest(&swung));
+    // Those long steps, checked, are within a tenth of their motion: nothing said.
+    assert_eq!(converged_totals.residuals.len(), 7);
+    assert!(converged_totals.residuals.iter().all(|r| r.1 < 0.1), "{:?}", converged_totals.residuals);
+    assert_eq!(converged_warnings.count("unconverged"), 0);
+    const { assert!(DYNAMIC_RESIDUAL_LIMIT > 0.1) };
+
+    // Steps that met their tolerance are not measured.
+    let (met, _, _) = simulate(&pinned_cloth(100.0, "iterations = 1000\ntolerance = 1e-6"), 8);
+    assert!(met.residuals.is_empty(), "{:?}", met.residuals);
+
+    // The default stiffness: each step within a few % of its motion, nothing said.
+    let (soft, soft_warnings, _) = simulate(&pinned_cloth(100.0, "iterations = 10"), 64);
+    assert_eq!(soft.residuals.len(), 7);
+    assert!(soft.residuals.iter().all(|r| r.1 < 0.2), "{:?}", soft.residuals);
+    assert_eq!(soft_warnings.count("unconverged"), 0);
+}
+
+/// The Newton–CG estimate of the step left (`System::remaining_step`) is what a long solve
+/// from the same point still moves: after 3 iterations of a soft cloth's step, within 10 %.
+#[test]
+fn the_remaining_step_estimates_what_a_long_solve_still_moves() {
+    let mut loaded = load(&pinned_cloth(100.0, "iterations = 3"));
+    let mut sim = loaded.start_scene_simulation().unwrap();
+    for _ in 0..5 {
+        sim.step().unwrap();
+    }
+    // The state after step 5 and the step-6 system: take step 6 with 3 iterations by hand.
+    let simulation = &mut sim.simulation;
+    let before = simulation.positions().to_vec();
+    simulation.step().unwrap();
+    let short = simulation.positions().to_vec();
+    let system = simulation.system_mut();
+    let delta = system.remaining_step(&short, 16).unwrap();
+    let mut long = short.clone();
+    system.solve(&mut long, 5000, 1e-15).unwrap();
+    let (mut err, mut off, mut moved) = (0.0, 0.0, 0.0);
+    for ((d, l), (s, b)) in delta.iter().zip(&long).zip(short.iter().zip(&before)) {
+        err += (*l - *s).length_squared();
+        off += (*s + *d - *l).length_squared();
+        moved += (*s - *b).length_squared();
+    }
+    assert!(err.sqrt() > 1e-3 * moved.sqrt(), "the 3-iteration step should still be short: {err:e} of {moved:e}");
+    assert!(off.sqrt() < 0.1 * err.sqrt(), "estimate off by {:e} of {:e}", off.sqrt(), err.sqrt());
 }

@@ -2215,6 +2215,53 @@ fn a_solve_stopped_short_of_its_minimum_says_so_once() {
     assert!(report["residual"].as_f64().unwrap() > 0.01, "{report}");
     let kinds: Vec<&str> = report["warnings"].as_array().unwrap().iter().filter_map(|w| w["kind"].as_str()).collect();
     assert_eq!(kinds, ["unconverged"]);
+
+    // Time steps: a cloth of stiffness 1e8 barely moves in 10 iterations a step. One line for
+    // the run, the checked steps' residuals in the report; the default stiffness says nothing.
+    let cloth = |stiffness: &str| {
+        format!(
+            "[mesh]\ngenerate = {{ kind = \"cloth\", vertices = [9, 9], size = [1.0, 1.0] }}\n\
+             [solver]\nmode = \"dynamic\"\nstiffness = {stiffness}\n\
+             [[constraints]]\ntype = \"triangle_strain\"\nweight = 10.0\n\
+             [[constraints]]\ntype = \"bending\"\nweight = 10.0\n\
+             [[constraints]]\ntype = \"position\"\nvertices = [0, 8]\nweight = 100.0\n"
+        )
+    };
+    for (stiffness, short) in [("1e8", true), ("100.0", false)] {
+        let scene = ws.scene("cloth.toml", &cloth(stiffness));
+        let report = ws.out("steps.json");
+        let out = shapeup([
+            OsStr::new("simulate"),
+            scene.as_os_str(),
+            "--frames".as_ref(),
+            "70".as_ref(),
+            "--every".as_ref(),
+            "70".as_ref(),
+            "-o".as_ref(),
+            ws.out(&format!("frames-{stiffness}")).as_os_str(),
+            "--report".as_ref(),
+            report.as_os_str(),
+        ]);
+        assert_eq!(out.code, Some(0), "{}", out.describe());
+        let lines: Vec<&str> = out.stderr.lines().filter(|l| l.contains("short of the converged step")).collect();
+        let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(report).unwrap()).unwrap();
+        let checked: Vec<u64> =
+            report["residuals"].as_array().unwrap().iter().map(|r| r[0].as_u64().unwrap()).collect();
+        assert_eq!(checked, [1, 2, 4, 8, 16, 32, 64], "{report}");
+        let unconverged = report["unconverged_steps"].as_u64().unwrap();
+        if short {
+            assert_eq!(lines.len(), 1, "{}", out.describe());
+            assert!(
+                lines[0].contains(&format!("cloth.toml: {unconverged} of the 7 time steps checked"))
+                    && lines[0].contains("raise `iterations`"),
+                "{}",
+                lines[0]
+            );
+            assert!(unconverged >= 5, "{report}");
+        } else {
+            assert!(lines.is_empty() && unconverged == 0, "{}", out.describe());
+        }
+    }
 }
 
 /// Handles built in Gmsh: `physical = "NAME"` selects the vertices of a `.msh` file's physical
