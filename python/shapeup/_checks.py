@@ -39,7 +39,7 @@ _ARRAY_WARNINGS = ("duplicate_faces", "faces_not_triangulated", "polygons_fanned
 
 def _warn_of_arrays(native: Any) -> None:
     """One :class:`MeshWarning` per warning of ``_ARRAY_WARNINGS`` that building a mesh from
-    arrays gave."""
+    arrays, or reading it from a file, gave."""
     import warnings
 
     for kind, text in zip(native.warning_kinds, native.warnings):

@@ -115,8 +115,13 @@ def read_mesh(path: PathLike) -> Mesh:
     command line does: every vertex in file order, polygons kept, attributes kept.
 
     ``V, F = m.V, m.F`` gives the arrays. FileNotFoundError / OSError when the file cannot be
-    opened; ValueError (naming the file and line) when it is malformed."""
-    return Mesh(_shapeup.read_mesh(os.fspath(path)))
+    opened; ValueError (naming the file and line) when it is malformed. Faces the solver takes
+    otherwise than the file gives them (duplicates, faces it cannot triangulate, polygons
+    fanned) are kept and said once each as a :class:`MeshWarning`, as the command line says
+    them; every warning of reading is in :attr:`Mesh.warnings`."""
+    native = _shapeup.read_mesh(os.fspath(path))
+    _warn_of_arrays(native)
+    return Mesh(native)
 
 
 def write_mesh(path: PathLike, V: Any, F: Any = None, T: Any = None, *, like: Mesh | None = None) -> list[str]:

@@ -104,6 +104,21 @@ def test_duplicate_faces_are_kept_and_said_once():
     assert np.isfinite(X).all()
 
 
+def test_read_mesh_says_duplicate_faces_as_arrays_do(tmp_path):
+    # A file's duplicate faces are said as a MeshWarning too (the command line's line), and a
+    # file's quads are not.
+    path = tmp_path / "twice.obj"
+    path.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 3\nf 2 4 3\nf 3 2 1\n")
+    with pytest.warns(shapeup.MeshWarning, match=r"1 face\(s\) on the same vertices"):
+        mesh = shapeup.read_mesh(path)
+    assert len(mesh.F) == 3
+    quad = tmp_path / "quad.obj"
+    quad.write_text("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        shapeup.read_mesh(quad)
+
+
 def test_gmsh_physical_groups_select_and_come_back(tmp_path):
     # A .msh file's physical groups select vertices, as `physical = "fixed"` in scenes, and
     # write_mesh(like=mesh) gives the file back with only its coordinates changed.
