@@ -60,6 +60,41 @@ impl DynamicsModel {
 /// closely while the rest of the body still pulls back a little.
 pub const DEFAULT_GRAB_STRENGTH: f64 = 0.95;
 
+/// How fast the simulation plays: simulated seconds per wall-clock second.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Speed {
+    /// One simulated second per second (default): a fall is seen at its real speed.
+    #[default]
+    RealTime,
+    /// A quarter of real time.
+    SlowMotion,
+    /// Each step as soon as the last is done.
+    AsFastAsPossible,
+}
+
+impl Speed {
+    /// Every speed, in the panel's order.
+    pub const ALL: [Speed; 3] = [Speed::RealTime, Speed::SlowMotion, Speed::AsFastAsPossible];
+
+    /// The panel's label.
+    pub fn label(self) -> &'static str {
+        match self {
+            Speed::RealTime => "Real time",
+            Speed::SlowMotion => "Slow motion (¼)",
+            Speed::AsFastAsPossible => "As fast as possible",
+        }
+    }
+
+    /// Simulated seconds per wall-clock second; `None`: not paced.
+    pub fn factor(self) -> Option<f64> {
+        match self {
+            Speed::RealTime => Some(1.0),
+            Speed::SlowMotion => Some(0.25),
+            Speed::AsFastAsPossible => None,
+        }
+    }
+}
+
 /// What the simulation adds to the document's constraints, and how it steps.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SimulationSettings {
@@ -82,6 +117,8 @@ pub struct SimulationSettings {
     /// How firmly a grab holds the grabbed vertices at the cursor, in (0, 1] (default
     /// [`DEFAULT_GRAB_STRENGTH`]; 1 pins them to it).
     pub grab_strength: f64,
+    /// How fast steps are taken (default [`Speed::RealTime`]: a step of h every h seconds).
+    pub speed: Speed,
 }
 
 impl Default for SimulationSettings {
@@ -96,6 +133,7 @@ impl Default for SimulationSettings {
             time_step: scene.time_step,
             damping: 0.02,
             grab_strength: DEFAULT_GRAB_STRENGTH,
+            speed: Speed::default(),
         }
     }
 }
@@ -468,12 +506,18 @@ impl Stepper {
         Ok(Stepper { simulation, rest, frame, floor, initial: (start, zero), surface_vertices, num_tetrahedra })
     }
 
-    /// The thread's loop: waits for work, applies it, steps while running.
+    /// The thread's loop: waits for work, applies it, steps while running, at the settings'
+    /// speed.
     fn run(mut self, channel: &Channel, notify: impl Fn()) {
+        // When the step just taken was due (None: the next one is due at once).
+        let mut due = None;
         loop {
             match self.wait(channel) {
                 Work::Shutdown => return,
-                Work::Reset => notify(),
+                Work::Reset => {
+                    due = None;
+                    notify();
+                }
                 Work::Changes { grab, settings, strength, contact } => {
                     let new_contact = contact.is_some();
                     let problem = self.apply(grab, settings, strength, contact);
@@ -485,6 +529,7 @@ impl Stepper {
                         state.running
                     };
                     if !running {
+                        due = None;
                         // Only settings changed while paused; new colliders may have pushed
                         // vertices out: show them.
                         if new_contact {
@@ -496,9 +541,30 @@ impl Stepper {
                     let outcome = self.step();
                     self.publish(channel, outcome);
                     notify();
+                    due = self.pace(channel, due);
                 }
             }
         }
+    }
+
+    /// After a step: waits until the next one is due at the settings' speed (h / factor after
+    /// the last was due, or now when the steps fall behind, so that a slow step is not made up
+    /// by a burst), unless the run is paused, reset or shut down meanwhile. Returns when the
+    /// next step is due.
+    fn pace(&self, channel: &Channel, due: Option<Instant>) -> Option<Instant> {
+        let mut state = channel.state.lock().unwrap_or_else(PoisonError::into_inner);
+        let factor = state.settings.speed.factor()?;
+        let interval = Duration::from_secs_f64(self.simulation.params().time_step / factor);
+        let now = Instant::now();
+        let next = due.map_or(now + interval, |d| (d + interval).max(now));
+        while !state.shutdown && !state.reset && state.running {
+            let now = Instant::now();
+            if now >= next {
+                break;
+            }
+            state = channel.wake.wait_timeout(state, next - now).unwrap_or_else(PoisonError::into_inner).0;
+        }
+        Some(next)
     }
 
     /// Waits until there is something to do; a restart is done here, under the lock.

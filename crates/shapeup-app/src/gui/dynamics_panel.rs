@@ -1,11 +1,11 @@
 //! The Dynamics panel: run, pause, restart and stop the simulation, and its settings (gravity,
-//! floor, tetrahedra, model, stiffness, time step, damping, grab strength) and timings.
+//! floor, tetrahedra, model, speed, stiffness, time step, damping, grab strength) and timings.
 //!
 //! The panel edits [`SimulationSettings`] in place and says what the user asked for; the editor
 //! acts on it (starting, pausing, dropping runners, [`SimulationRunner::update_settings`]).
 
 use crate::error::TetrahedraError;
-use crate::simulation::{DynamicsModel, SimulationRunner, SimulationSettings};
+use crate::simulation::{DynamicsModel, SimulationRunner, SimulationSettings, Speed};
 use eframe::egui;
 use egui::Color32;
 
@@ -37,7 +37,8 @@ const TIME_STEP_MS_RANGE: std::ops::RangeInclusive<f64> = 1.0..=50.0;
 /// [`crate::simulation::tetrahedralize_available`]). Returns what the user did, if anything.
 ///
 /// Buttons: "Run" / "Pause" (one toggle), "Restart", "Stop". Checkboxes: "Gravity", "Floor",
-/// "Tetrahedralize". Model radio buttons: "Document's shape model", "Tet strain". Sliders:
+/// "Tetrahedralize". Model radio buttons: "Document's shape model", "Tet strain". Speed radio
+/// buttons: "Real time", "Slow motion (¼)", "As fast as possible". Sliders:
 /// "stiffness", "time step (ms)", "damping", "grab strength".
 pub fn dynamics_panel(
     ui: &mut egui::Ui,
@@ -102,6 +103,18 @@ pub fn dynamics_panel(
                 .on_hover_text("every tetrahedron keeps its rest shape: the body keeps its volume")
                 .on_disabled_hover_text("needs tetrahedra: tick Tetrahedralize");
         });
+    });
+
+    ui.horizontal_wrapped(|ui| {
+        ui.label("Speed:");
+        for speed in Speed::ALL {
+            let hint = match speed {
+                Speed::RealTime => "a step of h every h seconds: motion at its real speed",
+                Speed::SlowMotion => "a step of h every 4 h seconds",
+                Speed::AsFastAsPossible => "each step as soon as the last is done",
+            };
+            ui.radio_value(&mut settings.speed, speed, speed.label()).on_hover_text(hint);
+        }
     });
 
     ui.add(egui::Slider::new(&mut settings.stiffness, STIFFNESS_RANGE).logarithmic(true).text("stiffness"))

@@ -12,7 +12,7 @@ use shapeup_app::document::GroupRole;
 use shapeup_app::gui::app::EditorApp;
 use shapeup_app::gui::files::sample_path;
 use shapeup_app::picking::{box_select, visible_vertices};
-use shapeup_app::simulation::tetrahedralize_available;
+use shapeup_app::simulation::{Speed, tetrahedralize_available};
 use shapeup_app::{Command, Document, SelectMode, ShapeModel};
 use shapeup_core::mesh::Mesh;
 use std::path::{Path, PathBuf};
@@ -562,9 +562,17 @@ fn the_dynamics_panel_controls_settings_run_and_undo() {
     for label in ["Gravity", "Floor", "Tetrahedralize"] {
         harness.get_by_role_and_label(Role::CheckBox, label);
     }
-    for label in ["Document's shape model", "Tet strain"] {
+    for label in ["Document's shape model", "Tet strain", "Real time", "Slow motion (¼)", "As fast as possible"] {
         harness.get_by_role_and_label(Role::RadioButton, label);
     }
+    // Real time by default; the speed buttons edit the settings.
+    assert_eq!(harness.state().dynamics_settings().speed, Speed::RealTime);
+    harness.get_by_role_and_label(Role::RadioButton, "Slow motion (¼)").click();
+    settle(&mut harness);
+    assert_eq!(harness.state().dynamics_settings().speed, Speed::SlowMotion);
+    harness.get_by_role_and_label(Role::RadioButton, "Real time").click();
+    settle(&mut harness);
+    assert_eq!(harness.state().dynamics_settings().speed, Speed::RealTime);
     for label in ["stiffness", "time step (ms)", "damping", "grab strength"] {
         harness.get_by_role_and_label(Role::Slider, label);
     }

@@ -3,7 +3,7 @@
 
 use glam::DVec3;
 use shapeup_app::simulation::{
-    DynamicsModel, SimulationRunner, SimulationSettings, SimulationStats, tetrahedralize_available,
+    DynamicsModel, SimulationRunner, SimulationSettings, SimulationStats, Speed, tetrahedralize_available,
 };
 use shapeup_app::{Command, Document, SelectMode, ShapeModel};
 use shapeup_core::scene::{Mode, SolverSettings};
@@ -437,4 +437,44 @@ fn the_stats_count_steps_that_stopped_short() {
             assert!(stats.unconverged_steps == 0 && stats.worst_residual == 0.0, "{stats:?}");
         }
     }
+}
+
+/// Real time by default: a step of h every h seconds, so a fall is seen at its speed; slow
+/// motion takes four times as long; pausing stops the wait at once. (A lower bound on wall time
+/// is what pacing promises; how fast unpaced steps are is for the benchmarks.)
+#[test]
+fn steps_are_paced_to_real_time_or_slow_motion() {
+    let doc = Document::open(Path::new(SPOT), ShapeModel::EdgeSprings).unwrap();
+    assert_eq!(SimulationSettings::default().speed, Speed::RealTime);
+    for (speed, steps, h) in [(Speed::RealTime, 13, 1.0 / 60.0), (Speed::SlowMotion, 4, 1.0 / 60.0)] {
+        let settings = SimulationSettings { speed, time_step: h, floor: false, ..SimulationSettings::default() };
+        let runner = SimulationRunner::start(&doc, settings, || {}).unwrap();
+        let started = Instant::now();
+        runner.run_for(steps);
+        let deadline = started + Duration::from_secs(60);
+        while runner.is_running() {
+            assert!(Instant::now() < deadline, "only {} steps", runner.stats().steps);
+            std::thread::sleep(Duration::from_millis(1));
+        }
+        let elapsed = started.elapsed().as_secs_f64();
+        // The first step is taken at once, each later one h / factor after the one before.
+        let paced = (steps - 1) as f64 * h / speed.factor().unwrap();
+        assert!(elapsed >= paced * 0.99, "{speed:?}: {steps} steps in {elapsed} s, paced at {paced} s");
+        assert_eq!(runner.stats().steps, steps);
+    }
+    // Slow motion with a long step: a pause comes through without waiting out the interval.
+    let settings =
+        SimulationSettings { speed: Speed::SlowMotion, time_step: 0.5, floor: false, ..SimulationSettings::default() };
+    let runner = SimulationRunner::start(&doc, settings, || {}).unwrap();
+    runner.set_running(true);
+    let deadline = Instant::now() + Duration::from_secs(60);
+    while runner.stats().steps < 1 {
+        assert!(Instant::now() < deadline);
+        std::thread::sleep(Duration::from_millis(1));
+    }
+    let paused = Instant::now();
+    runner.set_running(false);
+    drop(runner);
+    // Dropping joins the thread: it left its 2 s wait when paused.
+    assert!(paused.elapsed() < Duration::from_secs(1), "{:?}", paused.elapsed());
 }
