@@ -83,8 +83,8 @@ impl ContactSetup {
         rest: &RestGeometry,
     ) -> PyResult<(ColliderSpec, Option<ContactModel>)> {
         let i = self.colliders.len();
-        let map: Map<String, Value> =
-            serde_json::from_str(entry).map_err(|e| value_error(format!("colliders[{i}]: bad entry: {e}")))?;
+        let map: Map<String, Value> = shapeup_core::scene::from_json_entry(entry)
+            .map_err(|e| value_error(format!("colliders[{i}]: bad entry: {e}")))?;
         let mut spec = ColliderSpec::from_entry(map).map_err(|e| value_error(format!("colliders[{i}]: {e}")))?;
         if let ShapeSpec::Mesh { path, .. } = &mut spec.shape
             && path.is_relative()
@@ -115,8 +115,8 @@ impl ContactSetup {
         mesh: &CoreMesh,
         rest: &RestGeometry,
     ) -> PyResult<(ContactSettings, Option<ContactModel>)> {
-        let settings: ContactSettings =
-            serde_json::from_str(text).map_err(|e| value_error(format!("contact: bad settings: {e}")))?;
+        let settings: ContactSettings = shapeup_core::scene::from_json_entry(text)
+            .map_err(|e| value_error(format!("contact: bad settings: {e}")))?;
         settings.validate().map_err(|e| value_error(format!("contact: {e}")))?;
         let model = Self::model(&self.colliders, &settings, mesh, rest)?;
         Ok((settings, model))

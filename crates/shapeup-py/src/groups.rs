@@ -33,9 +33,9 @@ pub(crate) fn add_entry(
     selection: &str,
 ) -> PyResult<(u32, String, String, usize)> {
     let mut map: Map<String, Value> =
-        serde_json::from_str(entry).map_err(|e| value_error(format!("bad group entry: {e}")))?;
-    let selection: Map<String, Value> =
-        serde_json::from_str(selection).map_err(|e| value_error(format!("bad group selection: {e}")))?;
+        shapeup_core::scene::from_json_entry(entry).map_err(|e| value_error(format!("bad group entry: {e}")))?;
+    let selection: Map<String, Value> = shapeup_core::scene::from_json_entry(selection)
+        .map_err(|e| value_error(format!("bad group selection: {e}")))?;
     for (key, value) in selection {
         if !SelectionSpec::KEYS.contains(&key.as_str()) {
             let keys = SelectionSpec::KEYS.join(", ");

@@ -256,6 +256,21 @@ fn apply_override(tree: &mut Value, key: &str, value: Value) -> Result<(), Scene
     Ok(())
 }
 
+/// JSON `text` (the Python package's settings and entries, written by the package) as a `T`,
+/// with a message that names the key it is about in the scene's words: `iterations: invalid
+/// value: integer `-1`, expected a whole number ≥ 0`, not serde's Rust type and position in
+/// the internal text.
+///
+/// # Errors
+/// That message.
+pub fn from_json_entry<T: serde::de::DeserializeOwned>(text: &str) -> Result<T, String> {
+    let value: Value = serde_json::from_str(text).map_err(|e| e.to_string())?;
+    serde_path_to_error::deserialize(value).map_err(|e| {
+        let (path, words) = (e.path().to_string(), plain_words(&e.inner().to_string()));
+        if path == "." { words } else { format!("{path}: {words}") }
+    })
+}
+
 /// serde's words for Rust types in a message, in the scene's words: `expected usize` is
 /// "expected a whole number ≥ 0", `expected f64` "expected a number", `expected struct
 /// MeshSettings` "expected a [mesh] table".
