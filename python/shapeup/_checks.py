@@ -21,7 +21,10 @@ PathLike = Union[str, "os.PathLike[str]"]
 class UnconvergedWarning(UserWarning):
     """A static solve stopped at its iteration cap short of its minimum (its relative residual,
     the report's ``residual``, above ``STATIC_RESIDUAL_LIMIT``): raise ``iterations``, with a
-    ``tolerance`` to stop once converged."""
+    ``tolerance`` to stop once converged. Or time steps stopped short of the converged step
+    (the share of its motion a checked step misses above ``DYNAMIC_RESIDUAL_LIMIT``: the
+    simulate report's ``residuals``, the step reports' ``residual``): raise ``iterations``, or
+    lower ``stiffness`` or ``time_step``."""
 
 
 class MeshWarning(UserWarning):

@@ -108,7 +108,7 @@ class Scene:
         beside it, moved in when the run completes (an error or ``KeyboardInterrupt`` writes
         nothing), replacing an earlier run's frames there (warning ``earlier_frames_removed``);
         the folder that ``output`` goes in must exist (``FileNotFoundError``). Time steps that
-        stop at their iteration cap short of the converged step warn once
+        stop short of the converged step warn once
         (:class:`UnconvergedWarning`, as the command line's warning; ``report["residuals"]``
         lists each checked step's share of its motion missed)."""
         frames = self._native.steps if frames is None else _count(frames, "frames")

@@ -75,8 +75,10 @@ class Simulation(_Groups, _Contact):
         squeezed between two, or held back where a moving collider came over them).
         Steps 1, 2, 4, …, 64 and every 64th after are checked for stopping short: ``residual``
         is the share of the converged step's motion the step misses (None on steps not
-        checked, with contact, or when a tolerance ended the step), ``unconverged`` whether it
-        is above ``DYNAMIC_RESIDUAL_LIMIT`` (0.5), and ``check_s`` the check's seconds. A call
+        checked, and in a simulation with colliders or self-collision), ``unconverged`` whether it
+        is above ``shapeup._shapeup.DYNAMIC_RESIDUAL_LIMIT`` (0.5), and ``check_s`` the check's
+        seconds (steps that a ``tolerance`` ended are checked too: a stiff step's energy stalls
+        long before it is converged). A call
         whose steps stopped short warns once (:class:`UnconvergedWarning`). ``lost_groups``
         describes the groups whose weights the factorization cannot resolve (10¹³ and more below
         the others where they act), which warns once too (:class:`RoundOffWarning`)."""
@@ -99,11 +101,12 @@ class Simulation(_Groups, _Contact):
             checked = sum(r["residual"] is not None for r in reports)
             k, worst = max(short, key=lambda s: s[1])
             first = self.steps - len(reports) + short[0][0] + 1
+            limit = 100 * _shapeup.DYNAMIC_RESIDUAL_LIMIT
             warnings.warn(
-                f"{len(short)} of the {checked} time steps checked stopped at their iteration cap short of the "
-                f"converged step: the worst, step {self.steps - len(reports) + k + 1}, misses {worst:.3g} of its "
-                f"motion (the limit is {_shapeup.DYNAMIC_RESIDUAL_LIMIT}); raise `iterations`, or lower "
-                f"`stiffness` or `time_step` (first: step {first})",
+                f"{len(short)} of the {checked} time steps checked stopped short of the converged step: the worst, "
+                f"step {self.steps - len(reports) + k + 1}, misses {100 * worst:#.3g} % of its motion (the limit is "
+                f"{limit:g} %); raise `iterations` (and lower `tolerance`, if set), or lower `stiffness` or "
+                f"`time_step` (first: step {first})",
                 UnconvergedWarning,
                 stacklevel=2,
             )

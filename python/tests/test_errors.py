@@ -167,3 +167,14 @@ def test_the_energy_of_huge_coordinates_is_an_error_not_inf():
     assert np.isfinite(s.energy(V * 2.0)["total"])
     with pytest.raises(shapeup.SolveFailed, match="not a finite number"):
         s.energy(V * 1e200)
+
+
+def test_simulation_settings_errors_name_the_key_in_plain_words():
+    # Not serde's Rust type and a position in the package's internal JSON.
+    V = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0]])
+    with pytest.raises(ValueError, match=r"iterations: .*expected a whole number ≥ 0") as caught:
+        shapeup.Simulation(V, [[0, 1, 2]], iterations=-1)
+    assert "usize" not in str(caught.value) and "column" not in str(caught.value)
+    # A time step and stiffness whose inertia scale f64 cannot hold: said as such.
+    with pytest.raises(ValueError, match=r"time_step 1e-300 and stiffness 1e2 are too far apart"):
+        shapeup.Simulation(V, [[0, 1, 2]], time_step=1e-300)

@@ -31,8 +31,8 @@ impl PySimulation {
     /// tolerance, acceleration (each optional; defaults as in scene files).
     #[new]
     fn new(mesh: &PyMesh, params: &str) -> PyResult<Self> {
-        let settings: shapeup_core::scene::SolverSettings =
-            serde_json::from_str(params).map_err(|e| value_error(format!("bad simulation settings: {e}")))?;
+        let settings: shapeup_core::scene::SolverSettings = shapeup_core::scene::from_json_entry(params)
+            .map_err(|e| value_error(format!("bad simulation settings: {e}")))?;
         let rest = RestGeometry::of_mesh(mesh.mesh.positions.clone(), &mesh.mesh);
         // As a scene's `[solver]` table starts a simulation, in the mesh's own units (scale 1).
         let dynamics = settings.checked_dynamics_params(1.0).map_err(value_error)?;

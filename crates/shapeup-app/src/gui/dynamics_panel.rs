@@ -150,10 +150,10 @@ pub fn dynamics_panel(
             ui.colored_label(
                 Color32::YELLOW,
                 format!(
-                    "{} of {} steps checked stopped at their iteration cap short of the converged step (the worst misses {:.2} of its motion): lower the stiffness or the time step (the editor runs {} iterations a step)",
+                    "{} of {} steps checked stopped short of the converged step (the worst misses {:.0} % of its motion): lower the stiffness or the time step (the editor runs {} iterations a step)",
                     s.unconverged_steps,
                     s.checked_steps,
-                    s.worst_residual,
+                    100.0 * s.worst_residual,
                     shapeup_core::scene::SolverSettings::default().iterations
                 ),
             );

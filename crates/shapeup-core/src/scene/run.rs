@@ -173,8 +173,11 @@ pub struct StepTotals {
     pub residuals: Vec<(usize, f64)>,
     /// Checked steps above [`crate::dynamics::DYNAMIC_RESIDUAL_LIMIT`]: stopped short.
     pub unconverged: usize,
-    /// The iterations a step runs ([`crate::solver::SolverParams::iterations`]), for the warning.
+    /// The iterations a step may run and the tolerance that ends it sooner
+    /// ([`crate::solver::SolverParams`]), for the warning.
     pub iteration_cap: usize,
+    /// See `iteration_cap`.
+    pub tolerance: f64,
     /// Groups the factorization could not resolve, as the first step that had any found them.
     pub lost_groups: Vec<crate::solver::LostGroup>,
 }
@@ -182,7 +185,6 @@ pub struct StepTotals {
 impl StepTotals {
     /// Adds one step's timings and rejections.
     pub fn add(&mut self, step: &StepReport) {
-        self.iteration_cap = self.iteration_cap.max(step.iterations);
         self.local_seconds += step.local_seconds;
         self.global_seconds += step.global_seconds;
         self.setup_seconds += step.setup_seconds;
@@ -212,11 +214,20 @@ impl StepTotals {
         let worst = self.residuals.iter().filter(|r| r.1 > limit).max_by(|a, b| a.1.total_cmp(&b.1));
         let first = self.residuals.iter().find(|r| r.1 > limit).map(|r| r.0);
         if let (Some(&(step, residual)), Some(first)) = (worst, first) {
+            let (cap, tolerance) = (self.iteration_cap, self.tolerance);
+            let (settings, advice) = if tolerance > 0.0 {
+                (
+                    format!("{cap} iterations a step at most, tolerance {tolerance:e}"),
+                    "raise `iterations` and lower `tolerance`",
+                )
+            } else {
+                (format!("{cap} iterations a step"), "raise `iterations`")
+            };
             let message = format!(
-                "of the {} time steps checked (steps 1, 2, 4, …, 64, then every 64th) stopped at their {}-iteration cap short of the converged step: the worst, step {step}, misses {} of its motion (the limit is {limit}); raise `iterations`, or lower `stiffness` or `time_step`",
+                "of the {} time steps checked (steps 1, 2, 4, …, 64, then every 64th) stopped short of the converged step ({settings}): the worst, step {step}, misses {} % of its motion (the limit is {} %); {advice}, or lower `stiffness` or `time_step`",
                 self.residuals.len(),
-                self.iteration_cap,
-                crate::text::three_digits(residual),
+                crate::text::three_digits(100.0 * residual),
+                100.0 * limit,
             );
             warnings.add_many("unconverged", &message, self.unconverged, || format!("step {first}"));
         }
@@ -374,7 +385,13 @@ impl SceneSimulation {
         mut on_step: impl FnMut(usize, &Simulation, bool) -> Result<(), E>,
     ) -> Result<StepTotals, RunError<E>> {
         let capacity = if energies { frames.min(1 << 20) } else { 0 };
-        let mut totals = StepTotals { energies: Vec::with_capacity(capacity), ..StepTotals::default() };
+        let solver = *self.simulation.system().params();
+        let mut totals = StepTotals {
+            energies: Vec::with_capacity(capacity),
+            iteration_cap: solver.iterations,
+            tolerance: solver.tolerance,
+            ..StepTotals::default()
+        };
         on_step(0, &self.simulation, true).map_err(RunError::Stopped)?;
         for k in 1..=frames {
             // Overflowing velocities fail the step whether or not E is recorded (StepError::Diverged).

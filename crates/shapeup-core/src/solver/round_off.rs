@@ -27,16 +27,28 @@ pub struct LostGroup {
     pub dominant: String,
     /// That group's multiplier.
     pub dominant_weight: f64,
+    /// What is lost is the inertia m / (k h²) of a time step (`name` and `weight` then say
+    /// "inertia" and its largest value): the stiffness is too high for the time step.
+    pub is_inertia: bool,
+    /// What dwarfs it is the inertia (`dominant_weight` its value there), not a group: the
+    /// time step too short or the stiffness too low for the group.
+    pub dominant_is_inertia: bool,
 }
 
 impl LostGroup {
     /// `"NAME" (weight W), below round-off of "OTHER" (weight W')`: the warning's and the
     /// error's words.
     pub fn describe(&self) -> String {
-        format!(
-            "\"{}\" (weight {:e}) against \"{}\" (weight {:e})",
-            self.name, self.weight, self.dominant, self.dominant_weight
-        )
+        let lost = if self.is_inertia {
+            format!("the inertia m / (stiffness · time_step²) (at most {:e})", self.weight)
+        } else {
+            format!("\"{}\" (weight {:e})", self.name, self.weight)
+        };
+        if self.dominant_is_inertia {
+            format!("{lost} against the inertia m / (stiffness · time_step²) ({:e} there)", self.dominant_weight)
+        } else {
+            format!("{lost} against \"{}\" (weight {:e})", self.dominant, self.dominant_weight)
+        }
     }
 }
 
@@ -46,7 +58,7 @@ pub fn add_lost_groups_warning(found: &mut crate::warnings::Warnings, lost: &[Lo
     found.add_many(
         "groups_lost_to_round_off",
         &format!(
-            "group(s) whose terms are below round-off of the others where they act (at most {ROUND_OFF_SHARE:e} of the matrix's diagonal): the factorization cannot resolve them, so what they hold is left to round-off (the shape may ignore them, or the system read as singular); bring the weights within 1e12 of each other"
+            "group(s) whose terms are below round-off of the others where they act (at most {ROUND_OFF_SHARE:e} of the matrix's diagonal): the factorization cannot resolve them, so what they hold is left to round-off (the shape may ignore them, or the system read as singular); bring the weights within 1e12 of each other (where the inertia of a time step is one of them: change `stiffness` or `time_step`)"
         ),
         lost.len(),
         || lost.first().map(LostGroup::describe).unwrap_or_default(),
@@ -94,13 +106,44 @@ impl System {
                 }
             }
             let dominant = (0..g.len()).max_by(|&i, &j| per_group[i].total_cmp(&per_group[j])).unwrap_or(group);
+            // What the groups leave of the diagonal is the inertia (and contact's rows).
+            let inertia = self.inertia.as_ref().map_or(0.0, |mu| mu[a.solved[s] as usize]);
+            let dominant_is_inertia = inertia > per_group[dominant];
             lost.push(LostGroup {
                 name: name(group),
                 weight: g[group],
                 share,
-                dominant: name(dominant),
-                dominant_weight: g[dominant],
+                dominant: if dominant_is_inertia { String::new() } else { name(dominant) },
+                dominant_weight: if dominant_is_inertia { inertia } else { g[dominant] },
+                is_inertia: false,
+                dominant_is_inertia,
             });
+        }
+        // A time step whose inertia is below round-off everywhere: gravity and momentum are
+        // lost, and the body stays where the constraints hold it.
+        if let Some(mu) = &self.inertia {
+            let share = |s: usize| if diagonal[s] > 0.0 { mu[a.solved[s] as usize] / diagonal[s] } else { 1.0 };
+            let largest = (0..a.num_solved()).max_by(|&i, &j| share(i).total_cmp(&share(j)));
+            if let Some(s) = largest.filter(|&s| mu[a.solved[s] as usize] > 0.0 && share(s) <= ROUND_OFF_SHARE) {
+                let mut per_group = vec![0.0_f64; g.len()];
+                for r in 0..a.num_rows() {
+                    for (t, term) in terms(r) {
+                        if t == s {
+                            per_group[a.row_group[r] as usize] += term;
+                        }
+                    }
+                }
+                let dominant = (0..g.len()).max_by(|&i, &j| per_group[i].total_cmp(&per_group[j])).unwrap_or(0);
+                lost.push(LostGroup {
+                    name: "inertia".into(),
+                    weight: mu.iter().copied().fold(0.0, f64::max),
+                    share: share(s),
+                    dominant: name(dominant),
+                    dominant_weight: g.get(dominant).copied().unwrap_or(0.0),
+                    is_inertia: true,
+                    dominant_is_inertia: false,
+                });
+            }
         }
         lost
     }
