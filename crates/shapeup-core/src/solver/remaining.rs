@@ -90,11 +90,9 @@ impl System {
                 }
             }
         }
+        // Only the solved vertices are written: the held ones and those outside stay 0.
         if !global::scatter(&self.assembly, &forward, &delta, &mut out) {
             return Err(SolveError::NonFinite);
-        }
-        for &(v, _) in &self.held {
-            out[v as usize] = DVec3::ZERO;
         }
         Ok(out)
     }

@@ -89,14 +89,9 @@ impl System {
                 }
             }
         }
-        let name = |group: usize| self.slots[self.order[group]].as_ref().map_or(String::new(), |g| g.name.clone());
-        let mut lost = Vec::new();
-        for (group, found) in best.iter().enumerate() {
-            let Some((share, s)) = *found else { continue };
-            if g[group] <= 0.0 || share > ROUND_OFF_SHARE {
-                continue;
-            }
-            // The group with the largest term where this one holds the most.
+        // Each group's terms on the diagonal entry of solved vertex s (one pass over the rows:
+        // only when something is lost).
+        let terms_at = |s: usize| {
             let mut per_group = vec![0.0_f64; g.len()];
             for r in 0..a.num_rows() {
                 for (t, term) in terms(r) {
@@ -105,6 +100,17 @@ impl System {
                     }
                 }
             }
+            per_group
+        };
+        let name = |group: usize| self.slots[self.order[group]].as_ref().map_or(String::new(), |g| g.name.clone());
+        let mut lost = Vec::new();
+        for (group, found) in best.iter().enumerate() {
+            let Some((share, s)) = *found else { continue };
+            if g[group] <= 0.0 || share > ROUND_OFF_SHARE {
+                continue;
+            }
+            // The group with the largest term where this one holds the most.
+            let per_group = terms_at(s);
             let dominant = (0..g.len()).max_by(|&i, &j| per_group[i].total_cmp(&per_group[j])).unwrap_or(group);
             // What the groups leave of the diagonal is the inertia (and contact's rows).
             let inertia = self.inertia.as_ref().map_or(0.0, |mu| mu[a.solved[s] as usize]);
@@ -125,14 +131,7 @@ impl System {
             let share = |s: usize| if diagonal[s] > 0.0 { mu[a.solved[s] as usize] / diagonal[s] } else { 1.0 };
             let largest = (0..a.num_solved()).max_by(|&i, &j| share(i).total_cmp(&share(j)));
             if let Some(s) = largest.filter(|&s| mu[a.solved[s] as usize] > 0.0 && share(s) <= ROUND_OFF_SHARE) {
-                let mut per_group = vec![0.0_f64; g.len()];
-                for r in 0..a.num_rows() {
-                    for (t, term) in terms(r) {
-                        if t == s {
-                            per_group[a.row_group[r] as usize] += term;
-                        }
-                    }
-                }
+                let per_group = terms_at(s);
                 let dominant = (0..g.len()).max_by(|&i, &j| per_group[i].total_cmp(&per_group[j])).unwrap_or(0);
                 lost.push(LostGroup {
                     name: "inertia".into(),
