@@ -54,7 +54,9 @@ class RoundOffWarning(UserWarning):
     """Groups whose weights are so far below the others' where they act (10¹³ and more) that
     the factorization cannot resolve them: what they hold is left to round-off
     (``groups_lost_to_round_off``);
-    bring the weights within 1e12 of each other."""
+    bring the weights within 1e12 of each other. In a time step the inertia m / (stiffness ·
+    time_step²) may be the term lost, or the one that dwarfs a group: change ``stiffness`` or
+    ``time_step``."""
 
 
 # The kinds of a solve report's warnings raised in Python, and as what.

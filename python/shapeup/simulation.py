@@ -87,10 +87,12 @@ class Simulation(_Groups, _Contact):
         if lost:
             import warnings
 
+            inertia = any("the inertia" in g for g in lost)
+            advice = " (where the inertia of a time step is one of them: change `stiffness` or `time_step`)" if inertia else ""
             warnings.warn(
                 f"{len(lost)} group(s) whose terms are below round-off of the others where they act: the factorization "
-                f"cannot resolve them, so what they hold is left to round-off; bring the weights within 1e12 of each other "
-                f"(first: {lost[0]})",
+                f"cannot resolve them, so what they hold is left to round-off; bring the weights within 1e12 of each "
+                f"other{advice} (first: {lost[0]})",
                 RoundOffWarning,
                 stacklevel=2,
             )
@@ -104,7 +106,7 @@ class Simulation(_Groups, _Contact):
             limit = 100 * _shapeup.DYNAMIC_RESIDUAL_LIMIT
             warnings.warn(
                 f"{len(short)} of the {checked} time steps checked stopped short of the converged step: the worst, "
-                f"step {self.steps - len(reports) + k + 1}, misses {100 * worst:#.3g} % of its motion (the limit is "
+                f"step {self.steps - len(reports) + k + 1}, misses {100 * worst:.3g} % of its motion (the limit is "
                 f"{limit:g} %); raise `iterations` (and lower `tolerance`, if set), or lower `stiffness` or "
                 f"`time_step` (first: step {first})",
                 UnconvergedWarning,

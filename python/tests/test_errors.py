@@ -176,5 +176,12 @@ def test_simulation_settings_errors_name_the_key_in_plain_words():
         shapeup.Simulation(V, [[0, 1, 2]], iterations=-1)
     assert "usize" not in str(caught.value) and "column" not in str(caught.value)
     # A time step and stiffness whose inertia scale f64 cannot hold: said as such.
-    with pytest.raises(ValueError, match=r"time_step 1e-300 and stiffness 1e2 are too far apart"):
+    with pytest.raises(ValueError, match=r"time_step 1.00e-300 and stiffness 100 put stiffness · time_step² at"):
         shapeup.Simulation(V, [[0, 1, 2]], time_step=1e-300)
+    # A collider's and a rotation's fields: the field inside, in plain words.
+    sim = shapeup.Simulation(V, [[0, 1, 2]])
+    with pytest.raises(ValueError, match=r"radius.*expected a number") as caught:
+        sim.add_collider("sphere", center=[0, 0, 0], radius="1")
+    assert "f64" not in str(caught.value)
+    with pytest.raises(ValueError, match=r"angle_deg: invalid type: string \"x\", expected a number"):
+        sim.add("position", [0], rotate={"axis": [0, 1, 0], "angle_deg": "x"})

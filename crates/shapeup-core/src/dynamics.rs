@@ -56,9 +56,10 @@ impl DynamicsParams {
         if !gravity.is_finite() {
             return Err(ParamError::Gravity(gravity));
         }
-        // The inertia weights m / (k h²) scale by this: it must be a number > 0.
-        let scale = 1.0 / (stiffness * time_step * time_step);
-        if !(scale.is_finite() && scale > 0.0) {
+        // The inertia weights m / (k h²) scale by 1 / (k h²): far from f64's ends, so that the
+        // matrix, the right-hand side and the energies stay finite (k h² of 1e-250 overflowed
+        // them mid-run).
+        if !(INERTIA_SCALE_RANGE.contains(&(stiffness * time_step * time_step))) {
             return Err(ParamError::InertiaScale { time_step, stiffness });
         }
         Ok(())
@@ -86,6 +87,9 @@ impl DynamicsParams {
     }
 }
 
+/// The range of k h² ([`DynamicsParams::validate`]): the inertia weights are m / (k h²).
+pub const INERTIA_SCALE_RANGE: std::ops::RangeInclusive<f64> = 1e-100..=1e100;
+
 /// A time-stepping setting out of range ([`DynamicsParams::validate`]).
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
 pub enum ParamError {
@@ -101,9 +105,12 @@ pub enum ParamError {
     /// Gravity has a non-finite component.
     #[error("gravity must be finite, found {0:?}")]
     Gravity(DVec3),
-    /// 1 / (k h²), the inertia's scale, overflows or vanishes.
+    /// k h² outside [`INERTIA_SCALE_RANGE`].
     #[error(
-        "time_step {time_step:e} and stiffness {stiffness:e} are too far apart: the inertia m / (stiffness · time_step²) is not a number f64 holds; bring stiffness · time_step² within about 1e-300 to 1e300"
+        "time_step {} and stiffness {} put stiffness · time_step² at {}, outside 1e-100 to 1e100: the inertia m / (stiffness · time_step²) would overflow or vanish",
+        crate::text::three_digits(*time_step),
+        crate::text::three_digits(*stiffness),
+        crate::text::three_digits(stiffness * time_step * time_step)
     )]
     InertiaScale {
         /// h.
@@ -184,8 +191,9 @@ pub const DYNAMIC_RESIDUAL_LIMIT: f64 = 0.5;
 pub const CHECK_ITERATIONS: usize = 16;
 
 /// A missing motion whose root mean square is at most this share of the bounding box's
-/// diagonal is not measured (residual 0): invisible, and at the round-off of a settled state.
-pub const MISSING_MOTION_FLOOR: f64 = 1e-6;
+/// diagonal is not measured (residual 0): the round-off of a settled or free-falling state.
+/// Not larger: steps of a short time step move little, and 1e-6 hid a cloth they froze.
+pub const MISSING_MOTION_FLOOR: f64 = 1e-12;
 
 /// Whether time step `k` (from 1) is checked for stopping short: 1, 2, 4, …, 64, then every
 /// 64th. A check costs about 1.6 steps of 10 iterations, so a long run pays about 2.5 %.
@@ -264,7 +272,15 @@ impl Simulation {
         if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
             return Err(DynamicsError::BadState(format!("vertex {i} has a non-finite position")));
         }
-        system.set_inertia(Some(params.inertia(&masses)))?;
+        let inertia = params.inertia(&masses);
+        if let Some(i) = inertia.iter().position(|mu| !mu.is_finite()) {
+            // A density so high that m / (k h²) overflows: said in the settings' words.
+            return Err(DynamicsError::BadState(format!(
+                "vertex {i}'s inertia m / (stiffness · time_step²) is not a finite number (mass {}): lower `density`, or raise `stiffness` or `time_step`",
+                crate::text::three_digits(masses[i])
+            )));
+        }
+        system.set_inertia(Some(inertia))?;
         system.set_load_scale(1.0 / params.stiffness)?;
         Ok(Simulation {
             system,

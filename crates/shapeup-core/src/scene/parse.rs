@@ -271,6 +271,15 @@ pub fn from_json_entry<T: serde::de::DeserializeOwned>(text: &str) -> Result<T, 
     })
 }
 
+/// A value of an entry as a `T`, the error in the scene's words with the key inside it that is
+/// wrong (`angle_deg: invalid type: string "x", expected a number`).
+pub(crate) fn value_as<T: serde::de::DeserializeOwned>(value: Value) -> Result<T, String> {
+    serde_path_to_error::deserialize(value).map_err(|e| {
+        let (path, words) = (e.path().to_string(), plain_words(&e.inner().to_string()));
+        if path == "." { words } else { format!("{path}: {words}") }
+    })
+}
+
 /// serde's words for Rust types in a message, in the scene's words: `expected usize` is
 /// "expected a whole number ≥ 0", `expected f64` "expected a number", `expected struct
 /// MeshSettings` "expected a [mesh] table".

@@ -39,13 +39,14 @@ impl LostGroup {
     /// `"NAME" (weight W), below round-off of "OTHER" (weight W')`: the warning's and the
     /// error's words.
     pub fn describe(&self) -> String {
+        let three = crate::text::three_digits;
         let lost = if self.is_inertia {
-            format!("the inertia m / (stiffness · time_step²) (at most {:e})", self.weight)
+            format!("the inertia m / (stiffness · time_step²) (of every vertex, the largest {})", three(self.weight))
         } else {
             format!("\"{}\" (weight {:e})", self.name, self.weight)
         };
         if self.dominant_is_inertia {
-            format!("{lost} against the inertia m / (stiffness · time_step²) ({:e} there)", self.dominant_weight)
+            format!("{lost} against the inertia m / (stiffness · time_step²) ({} there)", three(self.dominant_weight))
         } else {
             format!("{lost} against \"{}\" (weight {:e})", self.dominant, self.dominant_weight)
         }
@@ -55,10 +56,15 @@ impl LostGroup {
 /// The `groups_lost_to_round_off` warning for `lost` (none when empty): every door, static
 /// solves and time steps, says it in these words.
 pub fn add_lost_groups_warning(found: &mut crate::warnings::Warnings, lost: &[LostGroup]) {
+    let inertia = if lost.iter().any(|l| l.is_inertia || l.dominant_is_inertia) {
+        " (where the inertia of a time step is one of them: change `stiffness` or `time_step`)"
+    } else {
+        ""
+    };
     found.add_many(
         "groups_lost_to_round_off",
         &format!(
-            "group(s) whose terms are below round-off of the others where they act (at most {ROUND_OFF_SHARE:e} of the matrix's diagonal): the factorization cannot resolve them, so what they hold is left to round-off (the shape may ignore them, or the system read as singular); bring the weights within 1e12 of each other (where the inertia of a time step is one of them: change `stiffness` or `time_step`)"
+            "group(s) whose terms are below round-off of the others where they act (at most {ROUND_OFF_SHARE:e} of the matrix's diagonal): the factorization cannot resolve them, so what they hold is left to round-off (the shape may ignore them, or the system read as singular); bring the weights within 1e12 of each other{inertia}"
         ),
         lost.len(),
         || lost.first().map(LostGroup::describe).unwrap_or_default(),
