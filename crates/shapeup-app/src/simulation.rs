@@ -229,7 +229,7 @@ pub struct SimulationStats {
     pub contact_vertices: usize,
     /// Steps checked for stopping short ([`shapeup_core::dynamics::is_checked_step`]).
     pub checked_steps: u64,
-    /// Of those, steps that stopped at their iteration cap short of the converged step.
+    /// Of those, steps that stopped short of the converged step.
     pub unconverged_steps: u64,
     /// The largest share of a step's motion missed among those.
     pub worst_residual: f64,
@@ -554,9 +554,10 @@ impl Stepper {
     fn pace(&self, channel: &Channel, due: Option<Instant>) -> Option<Instant> {
         let mut state = channel.state.lock().unwrap_or_else(PoisonError::into_inner);
         let factor = state.settings.speed.factor()?;
-        let interval = Duration::from_secs_f64(self.simulation.params().time_step / factor);
+        // A time step beyond what a Duration holds (a scene's 1e30 s) is not paced.
+        let interval = Duration::try_from_secs_f64(self.simulation.params().time_step / factor).ok()?;
         let now = Instant::now();
-        let next = due.map_or(now + interval, |d| (d + interval).max(now));
+        let next = due.unwrap_or(now).checked_add(interval)?.max(now);
         while !state.shutdown && !state.reset && state.running {
             let now = Instant::now();
             if now >= next {
