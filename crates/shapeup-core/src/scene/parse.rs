@@ -264,11 +264,7 @@ fn apply_override(tree: &mut Value, key: &str, value: Value) -> Result<(), Scene
 /// # Errors
 /// That message.
 pub fn from_json_entry<T: serde::de::DeserializeOwned>(text: &str) -> Result<T, String> {
-    let value: Value = serde_json::from_str(text).map_err(|e| e.to_string())?;
-    serde_path_to_error::deserialize(value).map_err(|e| {
-        let (path, words) = (e.path().to_string(), plain_words(&e.inner().to_string()));
-        if path == "." { words } else { format!("{path}: {words}") }
-    })
+    value_as(serde_json::from_str(text).map_err(|e| e.to_string())?)
 }
 
 /// A value of an entry as a `T`, the error in the scene's words with the key inside it that is
