@@ -2039,14 +2039,7 @@ fn frame_warnings_name_the_output_folder() {
          [solver]\nmode = \"dynamic\"\n[[constraints]]\ntype = \"tet_strain\"\n",
     );
     let dir = ws.out("frames");
-    let out = shapeup([
-        OsStr::new("simulate"),
-        scene.as_os_str(),
-        "--frames".as_ref(),
-        "1".as_ref(),
-        "-o".as_ref(),
-        dir.as_os_str(),
-    ]);
+    let out = simulate_in(None, &scene, &dir, &["--frames", "1"]);
     assert_eq!(out.code, Some(0), "{}", out.describe());
     let line = out.stderr.lines().find(|l| l.contains("tetrahedra not written")).unwrap_or_default();
     assert!(
@@ -2230,18 +2223,16 @@ fn a_solve_stopped_short_of_its_minimum_says_so_once() {
     for (stiffness, short) in [("1e8", true), ("100.0", false)] {
         let scene = ws.scene("cloth.toml", &cloth(stiffness));
         let report = ws.out("steps.json");
-        let out = shapeup([
-            OsStr::new("simulate"),
-            scene.as_os_str(),
-            "--frames".as_ref(),
+        let dir = ws.out(&format!("frames-{stiffness}"));
+        let extra = [
+            OsStr::new("--frames"),
             "70".as_ref(),
             "--every".as_ref(),
             "70".as_ref(),
-            "-o".as_ref(),
-            ws.out(&format!("frames-{stiffness}")).as_os_str(),
             "--report".as_ref(),
             report.as_os_str(),
-        ]);
+        ];
+        let out = simulate_in(None, &scene, &dir, &extra);
         assert_eq!(out.code, Some(0), "{}", out.describe());
         let lines: Vec<&str> = out.stderr.lines().filter(|l| l.contains("short of the converged step")).collect();
         let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(report).unwrap()).unwrap();
