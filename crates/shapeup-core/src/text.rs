@@ -1,5 +1,6 @@
-//! Text as messages show it: one line, control characters escaped, long quotes cut. Every
-//! error message that quotes a file, a path or a scene key goes through here.
+//! Text as messages show it: one line, control characters escaped, long quotes cut, serde's
+//! Rust type names in plain words. Every error message that quotes a file, a path or a scene
+//! key goes through here.
 
 /// `text` as an error message quotes it: its first 40 characters and `…` when longer (a
 /// megabyte-long token must not make a megabyte-long message), control characters escaped as
@@ -63,6 +64,55 @@ fn push_escaped(out: &mut String, text: &str) {
             out.push(c);
         }
     }
+}
+
+/// A value of an entry as a `T`, the error in the scene's words with the key inside it that is
+/// wrong (`angle_deg: invalid type: string "x", expected a number`).
+pub(crate) fn value_as<T: serde::de::DeserializeOwned>(value: serde_json::Value) -> Result<T, String> {
+    serde_path_to_error::deserialize(value).map_err(|e| {
+        let (path, words) = (e.path().to_string(), plain_words(&e.inner().to_string()));
+        if path == "." { words } else { format!("{path}: {words}") }
+    })
+}
+
+/// serde's words for Rust types in a message, in the scene's words: `expected usize` is
+/// "expected a whole number ≥ 0", `expected f64` "expected a number", `expected struct
+/// MeshSettings` "expected a [mesh] table".
+pub(crate) fn plain_words(message: &str) -> String {
+    const WORDS: [(&str, &str); 19] = [
+        ("` as i128", "` (too large)"),
+        (
+            "expected internally tagged enum GeneratedMesh",
+            "expected a table such as { kind = \"cloth\", vertices = [41, 41], size = [1.0, 1.0] }",
+        ),
+        ("expected variant identifier", "expected a name (a string)"),
+        ("wanted string or table", "expected a name (a string)"),
+        ("expected usize", "expected a whole number ≥ 0"),
+        ("expected u64", "expected a whole number ≥ 0"),
+        ("expected u32", "expected a whole number ≥ 0"),
+        ("expected u8", "expected a whole number ≥ 0"),
+        ("expected i64", "expected a whole number"),
+        ("expected i32", "expected a whole number"),
+        ("expected f64", "expected a number"),
+        ("expected f32", "expected a number"),
+        ("expected struct MeshSettings", "expected a [mesh] table"),
+        ("expected struct SolverSettings", "expected a [solver] table"),
+        ("expected struct OutputSettings", "expected an [output] table"),
+        ("expected struct ContactSettings", "expected a [contact] table"),
+        ("expected struct RawScene", "expected a scene (tables [mesh], [solver], …)"),
+        ("expected a sequence", "expected a list"),
+        ("expected a map", "expected a table"),
+    ];
+    let mut out = message.to_owned();
+    for (rust, words) in WORDS {
+        out = out.replace(rust, words);
+    }
+    // Any other struct's name: a table.
+    while let Some(at) = out.find("expected struct ") {
+        let end = out[at + 16..].find(|c: char| !c.is_alphanumeric()).map_or(out.len(), |e| at + 16 + e);
+        out.replace_range(at..end, "expected a table");
+    }
+    out
 }
 
 #[cfg(test)]

@@ -256,7 +256,7 @@ fn take<T: serde::de::DeserializeOwned>(entry: &mut Map<String, Value>, key: &st
         Some(v) if contains_null(&v) => {
             Err(invalid(format!("`{key}` must hold finite numbers only (not nan, inf or null)")))
         }
-        Some(v) => crate::scene::value_as(v).map(Some).map_err(|e| invalid(format!("`{key}`: {e}"))),
+        Some(v) => crate::text::value_as(v).map(Some).map_err(|e| invalid(format!("`{key}`: {e}"))),
     }
 }
 

@@ -20,7 +20,6 @@ mod write;
 pub use build::{DynamicSettingsError, LoadedScene, SpinningHandle, lumped_masses, solve_static_with_contact};
 pub use error::SceneError;
 pub use generated::{GeneratedMesh, MAX_GENERATED_BYTES};
-pub(crate) use parse::value_as;
 pub use parse::{SceneFormat, from_json_entry};
 pub use run::{RunError, SceneSimulation, StepError, StepTotals, relative_changes};
 pub use settings::{MeshSettings, Mode, OutputSettings, SolverSettings};

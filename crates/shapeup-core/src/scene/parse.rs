@@ -3,6 +3,7 @@
 use super::strict::{Entry, EntryList, OneTable, StrictValue, spelled};
 use super::{GroupSpec, MeshSettings, OutputSettings, Scene, SceneError, SolverSettings};
 use crate::solver::{MAX_ANDERSON_WINDOW, MAX_LBFGS_MEMORY};
+use crate::text::{plain_words, value_as};
 use serde::Deserialize;
 use serde_json::{Map, Value};
 use std::path::{Path, PathBuf};
@@ -265,55 +266,6 @@ fn apply_override(tree: &mut Value, key: &str, value: Value) -> Result<(), Scene
 /// That message.
 pub fn from_json_entry<T: serde::de::DeserializeOwned>(text: &str) -> Result<T, String> {
     value_as(serde_json::from_str(text).map_err(|e| e.to_string())?)
-}
-
-/// A value of an entry as a `T`, the error in the scene's words with the key inside it that is
-/// wrong (`angle_deg: invalid type: string "x", expected a number`).
-pub(crate) fn value_as<T: serde::de::DeserializeOwned>(value: Value) -> Result<T, String> {
-    serde_path_to_error::deserialize(value).map_err(|e| {
-        let (path, words) = (e.path().to_string(), plain_words(&e.inner().to_string()));
-        if path == "." { words } else { format!("{path}: {words}") }
-    })
-}
-
-/// serde's words for Rust types in a message, in the scene's words: `expected usize` is
-/// "expected a whole number ≥ 0", `expected f64` "expected a number", `expected struct
-/// MeshSettings` "expected a [mesh] table".
-fn plain_words(message: &str) -> String {
-    const WORDS: [(&str, &str); 19] = [
-        ("` as i128", "` (too large)"),
-        (
-            "expected internally tagged enum GeneratedMesh",
-            "expected a table such as { kind = \"cloth\", vertices = [41, 41], size = [1.0, 1.0] }",
-        ),
-        ("expected variant identifier", "expected a name (a string)"),
-        ("wanted string or table", "expected a name (a string)"),
-        ("expected usize", "expected a whole number ≥ 0"),
-        ("expected u64", "expected a whole number ≥ 0"),
-        ("expected u32", "expected a whole number ≥ 0"),
-        ("expected u8", "expected a whole number ≥ 0"),
-        ("expected i64", "expected a whole number"),
-        ("expected i32", "expected a whole number"),
-        ("expected f64", "expected a number"),
-        ("expected f32", "expected a number"),
-        ("expected struct MeshSettings", "expected a [mesh] table"),
-        ("expected struct SolverSettings", "expected a [solver] table"),
-        ("expected struct OutputSettings", "expected an [output] table"),
-        ("expected struct ContactSettings", "expected a [contact] table"),
-        ("expected struct RawScene", "expected a scene (tables [mesh], [solver], …)"),
-        ("expected a sequence", "expected a list"),
-        ("expected a map", "expected a table"),
-    ];
-    let mut out = message.to_owned();
-    for (rust, words) in WORDS {
-        out = out.replace(rust, words);
-    }
-    // Any other struct's name: a table.
-    while let Some(at) = out.find("expected struct ") {
-        let end = out[at + 16..].find(|c: char| !c.is_alphanumeric()).map_or(out.len(), |e| at + 16 + e);
-        out.replace_range(at..end, "expected a table");
-    }
-    out
 }
 
 /// One line from a TOML error: its message with the line and column of its span.

@@ -409,8 +409,8 @@ fn parse_group(mut entry: Map<String, Value>) -> Result<GroupSpec, SpecError> {
             min: [f64; 3],
             max: [f64; 3],
         }
-        let b: B =
-            super::value_as(v).map_err(|e| format!("\"box\": {e} (expected {{ min = [x,y,z], max = [x,y,z] }})"))?;
+        let b: B = crate::text::value_as(v)
+            .map_err(|e| format!("\"box\": {e} (expected {{ min = [x,y,z], max = [x,y,z] }})"))?;
         // A box with min > max selects nothing: said as what it is, not as an empty group.
         if let Some(axis) = (0..3).find(|&k| b.min[k] > b.max[k]) {
             let name = ["x", "y", "z"][axis];
@@ -438,8 +438,8 @@ fn parse_group(mut entry: Map<String, Value>) -> Result<GroupSpec, SpecError> {
             center: [f64; 3],
             radius: f64,
         }
-        let s: S =
-            super::value_as(v).map_err(|e| format!("\"sphere\": {e} (expected {{ center = [x,y,z], radius = r }})"))?;
+        let s: S = crate::text::value_as(v)
+            .map_err(|e| format!("\"sphere\": {e} (expected {{ center = [x,y,z], radius = r }})"))?;
         if !(s.radius.is_finite() && s.radius >= 0.0) {
             return Err(SpecError::Invalid(format!("sphere radius must be ≥ 0, found {}", s.radius)));
         }
@@ -457,7 +457,7 @@ fn parse_targets(entry: &mut Map<String, Value>) -> Result<Targets, SpecError> {
         t.translate = serde_json::from_value(v).map_err(|_| "\"translate\" must be [x, y, z]")?;
     }
     if let Some(v) = entry.remove("rotate") {
-        let r: Rotate = super::value_as(v)
+        let r: Rotate = crate::text::value_as(v)
             .map_err(|e| format!("\"rotate\": {e} (expected {{ axis = [x,y,z], angle_deg = a, center = [x,y,z] }})"))?;
         if r.axis.iter().map(|a| a * a).sum::<f64>() <= 0.0 || !r.angle_deg.is_finite() {
             return Err("\"rotate\" needs a non-zero axis and a finite angle_deg".into());
@@ -465,7 +465,7 @@ fn parse_targets(entry: &mut Map<String, Value>) -> Result<Targets, SpecError> {
         t.rotate = Some(r);
     }
     if let Some(v) = entry.remove("spin") {
-        let spin: Spin = super::value_as(v)
+        let spin: Spin = crate::text::value_as(v)
             .map_err(|e| format!("\"spin\": {e} (expected {{ axis = [x,y,z], deg_per_s = w, center = [x,y,z] }})"))?;
         if spin.axis.iter().map(|a| a * a).sum::<f64>() <= 0.0 || !spin.deg_per_s.is_finite() {
             return Err("\"spin\" needs a non-zero axis and a finite deg_per_s".into());
