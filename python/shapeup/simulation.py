@@ -8,7 +8,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from . import _shapeup
-from ._checks import RoundOffWarning, UnconvergedWarning, _count, _indices, _json, _vertices
+from ._checks import _count, _indices, _json, _vertices, _warn_unconverged
 from .contact import _Contact
 from .groups import _Groups
 from .mesh import Mesh, _mesh_of
@@ -82,37 +82,9 @@ class Simulation(_Groups, _Contact):
         whose steps stopped short warns once (:class:`UnconvergedWarning`). ``lost_groups``
         describes the groups whose weights the factorization cannot resolve (10¹³ and more below
         the others where they act), which warns once too (:class:`RoundOffWarning`)."""
-        reports = json.loads(self._native.step(_count(n, "n")))
-        lost = next((r["lost_groups"] for r in reports if r["lost_groups"]), None)
-        if lost:
-            import warnings
-
-            inertia = any("the inertia" in g for g in lost)
-            advice = " (where the inertia of a time step is one of them: change `stiffness` or `time_step`)" if inertia else ""
-            warnings.warn(
-                f"{len(lost)} group(s) whose terms are below round-off of the others where they act: the factorization "
-                f"cannot resolve them, so what they hold is left to round-off; bring the weights within 1e12 of each "
-                f"other{advice} (first: {lost[0]})",
-                RoundOffWarning,
-                stacklevel=2,
-            )
-        short = [(k, r["residual"]) for k, r in enumerate(reports) if r["unconverged"]]
-        if short:
-            import warnings
-
-            checked = sum(r["residual"] is not None for r in reports)
-            k, worst = max(short, key=lambda s: s[1])
-            first = self.steps - len(reports) + short[0][0] + 1
-            limit = 100 * _shapeup.DYNAMIC_RESIDUAL_LIMIT
-            warnings.warn(
-                f"{len(short)} of the {checked} time steps checked stopped short of the converged step: the worst, "
-                f"step {self.steps - len(reports) + k + 1}, misses {100 * worst:.3g} % of its motion (the limit is "
-                f"{limit:g} %); raise `iterations` (and lower `tolerance`, if set), or lower `stiffness` or "
-                f"`time_step` (first: step {first})",
-                UnconvergedWarning,
-                stacklevel=2,
-            )
-        return reports
+        out = json.loads(self._native.step(_count(n, "n")))
+        _warn_unconverged(out)
+        return out["reports"]
 
     @property
     def positions(self) -> np.ndarray:

@@ -279,6 +279,8 @@ def test_time_steps_stopped_short_warn_once(tmp_path):
         assert all(r["unconverged"] == (r["residual"] is not None and r["residual"] > shapeup._shapeup.DYNAMIC_RESIDUAL_LIMIT) for r in reports)
         if short:
             assert flagged >= 3 and len(said) == 1, reports
-            assert f"{flagged} of the 5 time steps checked" in str(said[0].message)
+            # The command line's words: the settings and the schedule named.
+            assert f"{flagged} of the 5 time steps checked (steps 1, 2, 4, …, 64, then every 64th)" in str(said[0].message)
+            assert "(10 iterations a step)" in str(said[0].message)
         else:
             assert flagged == 0 and not said, [r["residual"] for r in reports]

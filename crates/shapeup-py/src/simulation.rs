@@ -11,8 +11,9 @@ use pyo3::prelude::*;
 use shapeup_core::dynamics::Simulation as CoreSimulation;
 use shapeup_core::geometry::RestGeometry;
 use shapeup_core::mesh::Mesh as CoreMesh;
-use shapeup_core::scene::lumped_masses;
+use shapeup_core::scene::{StepTotals, lumped_masses};
 use shapeup_core::solver::{SolveError, System};
+use shapeup_core::warnings::Warnings;
 
 /// A Projective Dynamics simulation on one mesh (user coordinates and units).
 #[pyclass(name = "_Simulation", module = "shapeup._shapeup")]
@@ -117,15 +118,22 @@ impl PySimulation {
         self.simulation.system().factorizations()
     }
 
-    /// `n` time steps without the GIL (Ctrl+C stops between steps); returns the steps' reports
-    /// as JSON text.
+    /// `n` time steps without the GIL (Ctrl+C stops between steps); returns JSON text
+    /// `{"reports": [each step's report], "warnings": [...]}`, the warnings those steps should
+    /// say once (time steps that stopped short, groups lost to round-off), in the command
+    /// line's words ([`StepTotals::add_warnings`]).
     fn step(&mut self, py: Python<'_>, n: usize) -> PyResult<String> {
         let mut interrupt = Interrupt::new();
         let simulation = &mut self.simulation;
+        let params = simulation.system().params();
+        let mut totals =
+            StepTotals { iteration_cap: params.iterations, tolerance: params.tolerance, ..StepTotals::default() };
         let reports = py.detach(|| {
             let mut reports = Vec::with_capacity(n.min(1 << 16));
             for _ in 0..n {
                 let r = simulation.step()?;
+                totals.add(&r);
+                totals.add_residual(usize::try_from(simulation.steps()).unwrap_or(usize::MAX), &r);
                 reports.push(serde_json::json!({
                     "energy": r.energy, "iterations": r.iterations, "rejected": r.rejected,
                     "local_s": r.local_seconds, "global_s": r.global_seconds,
@@ -149,7 +157,10 @@ impl PySimulation {
         if let Some(e) = interrupt.error {
             return Err(e);
         }
-        Ok(serde_json::Value::from(reports.map_err(solve_error)?).to_string())
+        let reports = reports.map_err(solve_error)?;
+        let mut warnings = Warnings::new();
+        totals.add_warnings(&mut warnings);
+        Ok(serde_json::json!({ "reports": reports, "warnings": warnings.to_json() }).to_string())
     }
 
     #[getter]
