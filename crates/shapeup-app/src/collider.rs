@@ -264,17 +264,7 @@ pub fn outline(spec: &ColliderSpec, mesh: Option<&Mesh>, extent: f64) -> Vec<[DV
                 }
             }
         }
-        ShapeSpec::Plane { point, normal } => {
-            let p = DVec3::from(*point);
-            let (u, v) = perpendiculars(DVec3::from(*normal).normalize_or(DVec3::Y));
-            let h = 0.5 * extent;
-            let lines = 8;
-            for k in 0..=lines {
-                let t = -h + extent * k as f64 / lines as f64;
-                out.push([p + t * u - h * v, p + t * u + h * v]);
-                out.push([p - h * u + t * v, p + h * u + t * v]);
-            }
-        }
+        ShapeSpec::Plane { point, normal } => out = plane_grid(DVec3::from(*point), DVec3::from(*normal), extent),
         ShapeSpec::Mesh { translate, rotate, .. } => {
             if let Some(mesh) = mesh {
                 let (edges, _) = shapeup_core::topology::unique_edges(&mesh.triangles);
@@ -284,6 +274,21 @@ pub fn outline(spec: &ColliderSpec, mesh: Option<&Mesh>, extent: f64) -> Vec<[DV
                 out.extend(edges.iter().step_by(stride).map(|&[a, b]| [place(p[a as usize]), place(p[b as usize])]));
             }
         }
+    }
+    out
+}
+
+/// A square grid of 9 × 9 lines, `extent` across, centred on `point` in the plane of normal
+/// `normal` (Y when zero): how a plane collider and the floor are drawn.
+pub fn plane_grid(point: DVec3, normal: DVec3, extent: f64) -> Vec<[DVec3; 2]> {
+    let (u, v) = perpendiculars(normal.normalize_or(DVec3::Y));
+    let h = 0.5 * extent;
+    let lines = 8;
+    let mut out = Vec::with_capacity(2 * (lines + 1));
+    for k in 0..=lines {
+        let t = -h + extent * k as f64 / lines as f64;
+        out.push([point + t * u - h * v, point + t * u + h * v]);
+        out.push([point - h * u + t * v, point + h * u + t * v]);
     }
     out
 }

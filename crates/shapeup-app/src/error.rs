@@ -172,6 +172,11 @@ pub enum SimulationError {
     /// The tet strain model on a mesh without tetrahedra.
     #[error("the tet strain model needs tetrahedra: tick Tetrahedralize")]
     NeedsTetrahedra,
+    /// Tetrahedralize asked of a simulation that starts from a shape on screen other than the
+    /// rest shape: TetGen fills the rest shape, and its inner points cannot follow a deformed surface (a collapsed one
+    /// turns them inside out and the body explodes).
+    #[error("Tetrahedralize fills the rest shape: start the solid with Run from rest")]
+    TetrahedraFromRestOnly,
     /// A constraint type the dynamic scene needs is unknown.
     #[error(transparent)]
     Constraint(ConstraintError),

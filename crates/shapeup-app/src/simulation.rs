@@ -95,6 +95,17 @@ impl Speed {
     }
 }
 
+/// Where a new simulation starts (the panel's Run from rest and Continue).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum StartShape {
+    /// The document's rest shape, at rest (Run from rest).
+    Rest,
+    /// The shape on screen, at rest (Continue without a paused simulation): the static solve's
+    /// result, or where a stopped simulation left the body.
+    #[default]
+    OnScreen,
+}
+
 /// What the simulation adds to the document's constraints, and how it steps.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SimulationSettings {
@@ -276,6 +287,9 @@ pub struct SimulationRunner {
     thread: Option<JoinHandle<()>>,
     /// Tetrahedra of the simulated mesh (0 for a surface).
     pub num_tetrahedra: usize,
+    /// The floor's height y (input frame), when the settings have a floor: just below the
+    /// shape the simulation started from (the viewport draws it).
+    pub floor_height: Option<f64>,
 }
 
 impl std::fmt::Debug for SimulationRunner {
@@ -297,19 +311,44 @@ impl SimulationRunner {
         settings: SimulationSettings,
         notify: impl Fn() + Send + 'static,
     ) -> Result<SimulationRunner, EditorError> {
-        Self::try_start(document, settings, notify).map_err(EditorError::Simulation)
+        Self::start_from(document, settings, StartShape::OnScreen, notify)
     }
 
-    /// [`SimulationRunner::start`]: the mesh, its start shape, the simulated groups, the
+    /// [`SimulationRunner::start`] from `from`: the shape on screen or the rest shape.
+    ///
+    /// # Errors
+    /// As [`SimulationRunner::start`]; also Tetrahedralize from the shape on screen
+    /// ([`SimulationError::TetrahedraFromRestOnly`]).
+    pub fn start_from(
+        document: &Document,
+        settings: SimulationSettings,
+        from: StartShape,
+        notify: impl Fn() + Send + 'static,
+    ) -> Result<SimulationRunner, EditorError> {
+        Self::try_start(document, settings, from, notify).map_err(EditorError::Simulation)
+    }
+
+    /// [`SimulationRunner::start_from`]: the mesh, its start shape, the simulated groups, the
     /// simulation at that shape, then its thread.
     fn try_start(
         document: &Document,
         settings: SimulationSettings,
+        from: StartShape,
         notify: impl Fn() + Send + 'static,
     ) -> Result<SimulationRunner, SimulationError> {
         settings.validate()?;
+        if settings.tetrahedralize
+            && from == StartShape::OnScreen
+            && document.rest_mesh().num_tetrahedra() == 0
+            && !same_shape(document.positions(), &document.rest_mesh().positions)
+        {
+            return Err(SimulationError::TetrahedraFromRestOnly);
+        }
         let mesh = simulated_mesh(document, &settings)?;
-        let start = start_shape(document, &mesh);
+        let start = match from {
+            StartShape::Rest => mesh.positions.clone(),
+            StartShape::OnScreen => start_shape(document, &mesh),
+        };
         let (groups, floor) = dynamic_groups(document, &settings, &mesh, &start)?;
         let solver = dynamic_solver_settings(document, &settings);
         let rest = Rest::new(mesh, document.state().rest.normalize);
@@ -323,7 +362,7 @@ impl SimulationRunner {
             .name("shapeup-simulation".into())
             .spawn(move || stepper.run(&thread_channel, notify))
             .map_err(|e| SimulationError::Thread(Cause::new(e)))?;
-        Ok(SimulationRunner { channel, thread: Some(thread), num_tetrahedra })
+        Ok(SimulationRunner { channel, thread: Some(thread), num_tetrahedra, floor_height: floor })
     }
 
     fn with_state<T>(&self, f: impl FnOnce(&mut Shared) -> T) -> T {
@@ -433,6 +472,14 @@ impl SimulationRunner {
             true
         })
     }
+}
+
+/// Whether `a` and `b` are one shape: no vertex apart by more than 1e-9 of `b`'s bounding-box
+/// diagonal.
+fn same_shape(a: &[DVec3], b: &[DVec3]) -> bool {
+    let (lo, hi) = b.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
+    let limit = 1e-9 * (hi - lo).length();
+    a.len() == b.len() && a.iter().zip(b).all(|(p, q)| p.distance(*q) <= limit)
 }
 
 /// The current shape on `mesh` (input frame); points TetGen added follow it.

@@ -26,7 +26,7 @@ use super::viewport::ViewportState;
 use crate::command::Command;
 use crate::document::{Document, GroupKey};
 use crate::error::TetrahedraError;
-use crate::simulation::{SimulationRunner, SimulationSettings, tetrahedralize_available};
+use crate::simulation::{SimulationRunner, SimulationSettings, StartShape, tetrahedralize_available};
 use crate::worker::{SolveRequest, SolveResult, SolverWorker};
 use eframe::egui;
 use std::collections::VecDeque;
@@ -432,17 +432,13 @@ impl EditorApp {
         let available = self.view.tetrahedralize.clone();
         let action = dynamics_panel(ui, &mut self.dynamics, self.simulation.as_ref(), available);
         match action {
-            Some(DynamicsAction::Run) => {
+            Some(DynamicsAction::RunFromRest) => {
+                self.simulation = None;
+                self.start_simulation(ui, StartShape::Rest);
+            }
+            Some(DynamicsAction::Continue) => {
                 if self.simulation.is_none() {
-                    let ctx = ui.ctx().clone();
-                    match SimulationRunner::start(&self.document, self.dynamics, move || ctx.request_repaint()) {
-                        Ok(runner) => {
-                            // The run is undoable: undo brings back the shape it started from.
-                            self.document.checkpoint();
-                            self.simulation = Some(runner);
-                        }
-                        Err(e) => self.view.banner = Some(e.to_string()),
-                    }
+                    self.start_simulation(ui, StartShape::OnScreen);
                 }
                 if let Some(runner) = &self.simulation {
                     runner.set_running(true);
@@ -465,13 +461,27 @@ impl EditorApp {
                 {
                     // A new model, floor or tetrahedralization: a new simulation on Run.
                     self.simulation = None;
-                    self.view.status = "dynamics settings changed: Run starts a new simulation".into();
+                    self.view.status =
+                        "dynamics settings changed: Run from rest or Continue starts a new simulation".into();
                 }
             }
             None => {}
         }
         if let Some(error) = self.simulation.as_ref().and_then(|r| r.stats().error) {
             self.view.banner = Some(format!("simulation: {error}"));
+        }
+    }
+
+    /// A new simulation from `from`, running; undo brings back the shape from before it.
+    fn start_simulation(&mut self, ui: &egui::Ui, from: StartShape) {
+        let ctx = ui.ctx().clone();
+        match SimulationRunner::start_from(&self.document, self.dynamics, from, move || ctx.request_repaint()) {
+            Ok(runner) => {
+                self.document.checkpoint();
+                runner.set_running(true);
+                self.simulation = Some(runner);
+            }
+            Err(e) => self.view.banner = Some(e.to_string()),
         }
     }
 

@@ -12,9 +12,10 @@ use egui::Color32;
 /// What the user did in the panel this frame.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum DynamicsAction {
-    /// Start stepping: start a runner from the current shape if there is none, then
-    /// `set_running(true)`.
-    Run,
+    /// Start a new simulation from the rest shape, at rest (dropping any runner), and step.
+    RunFromRest,
+    /// Step on: resume the paused runner, or start one from the shape on screen, at rest.
+    Continue,
     /// Stop stepping, keeping the runner (`set_running(false)`).
     Pause,
     /// Back to the shape the runner started from (`reset`).
@@ -36,7 +37,8 @@ const TIME_STEP_MS_RANGE: std::ops::RangeInclusive<f64> = 1.0..=50.0;
 /// Tetrahedralize can be ticked (the reason why not, from
 /// [`crate::simulation::tetrahedralize_available`]). Returns what the user did, if anything.
 ///
-/// Buttons: "Run" / "Pause" (one toggle), "Restart", "Stop". Checkboxes: "Gravity", "Floor",
+/// Buttons: "Run from rest", "Continue" / "Pause" (one toggle; Continue is disabled without a
+/// runner while Tetrahedralize is ticked), "Restart", "Stop". Checkboxes: "Gravity", "Floor",
 /// "Tetrahedralize". Model radio buttons: "Document's shape model", "Tet strain". Speed radio
 /// buttons: "Real time", "Slow motion (¼)", "As fast as possible". Sliders:
 /// "stiffness", "time step (ms)", "damping", "grab strength".
@@ -50,13 +52,31 @@ pub fn dynamics_panel(
     let mut action = None;
     let running = runner.is_some_and(SimulationRunner::is_running);
     ui.horizontal_wrapped(|ui| {
-        let (label, toggled, hint) = if running {
-            ("Pause", DynamicsAction::Pause, "stop stepping; the shape stays")
+        if ui.button("Run from rest").on_hover_text("a new simulation from the rest shape, at rest").clicked() {
+            action = Some(DynamicsAction::RunFromRest);
+        }
+        // One button in one place: Continue while stopped or paused, Pause while running.
+        if running {
+            if ui.button("Pause").on_hover_text("stop stepping; the shape stays").clicked() {
+                action = Some(DynamicsAction::Pause);
+            }
         } else {
-            ("Run", DynamicsAction::Run, "simulate from the current shape (or go on)")
-        };
-        if ui.button(label).on_hover_text(hint).clicked() {
-            action = Some(toggled);
+            // Tetrahedra are made on the rest shape: a new solid starts there (the runner
+            // would refuse a deformed shape on screen).
+            let solid_at_rest = runner.is_none() && settings.tetrahedralize;
+            let hint = if runner.is_some() {
+                "step on from where the simulation was paused"
+            } else {
+                "simulate from the shape on screen, at rest"
+            };
+            if ui
+                .add_enabled(!solid_at_rest, egui::Button::new("Continue"))
+                .on_hover_text(hint)
+                .on_disabled_hover_text("Tetrahedralize fills the rest shape: use Run from rest")
+                .clicked()
+            {
+                action = Some(DynamicsAction::Continue);
+            }
         }
         if ui
             .add_enabled(runner.is_some(), egui::Button::new("Restart"))

@@ -62,6 +62,8 @@ pub const HOVER_COLOR: [f32; 3] = [0.95, 0.55, 0.10];
 pub const CONTACT_COLOR: [f32; 3] = [0.85, 0.15, 0.20];
 /// Colour of colliders' outlines.
 pub(super) const COLLIDER_COLOR: Color32 = Color32::from_rgb(70, 80, 95);
+/// Colour of the simulation's floor grid.
+pub(super) const FLOOR_COLOR: Color32 = Color32::from_rgb(110, 120, 100);
 /// Colour of the selected collider's outline.
 pub(super) const SELECTED_COLLIDER_COLOR: Color32 = Color32::from_rgb(235, 130, 20);
 

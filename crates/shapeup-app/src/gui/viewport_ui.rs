@@ -1,6 +1,6 @@
 //! The 3D view in the frame: camera gestures, picking and selection boxes, handle drags and
 //! the gizmo (on the active handle, or on the collider picked in the Contact panel), grabs in
-//! dynamic mode, the colliders' outlines, the error banner, and drawing the mesh (vertices
+//! dynamic mode, the colliders' outlines and the simulation's floor, the error banner, and drawing the mesh (vertices
 //! touching something in red). The view's state
 //! ([`ViewportState`]) lives in [`super::viewport`], beneath the app shell, so that no import
 //! runs back up from the shell's fields to the code that works on them.
@@ -8,7 +8,7 @@
 use super::app::EditorApp;
 use super::renderer::{BASE_COLOR, FrameParams};
 use super::viewport::{
-    COLLIDER_COLOR, CONTACT_COLOR, Gesture, HANDLE_COLOR, HOVER_COLOR, RenderKey, SELECTED_COLLIDER_COLOR,
+    COLLIDER_COLOR, CONTACT_COLOR, FLOOR_COLOR, Gesture, HANDLE_COLOR, HOVER_COLOR, RenderKey, SELECTED_COLLIDER_COLOR,
     SELECTED_COLOR, SELECTED_FACE_COLOR, ViewportSlot, render_scale,
 };
 use crate::command::{Command, SelectMode};
@@ -230,24 +230,19 @@ impl EditorApp {
         colors
     }
 
-    /// The colliders' outlines over the mesh (the selected one highlighted).
+    /// The colliders' outlines over the mesh (the selected one highlighted), and the
+    /// simulation's floor while one runs with a floor.
     fn paint_colliders(&mut self, ui: &egui::Ui, rect: Rect) {
-        if self.document.colliders().is_empty() {
+        let floor = self.simulation.as_ref().and_then(|r| r.floor_height);
+        if self.document.colliders().is_empty() && floor.is_none() {
             return;
         }
         let viewport = Vec2::new(rect.width().max(1.0), rect.height().max(1.0));
         let (lo, hi) = self.document.rest_mesh().bounding_box();
         let extent = 3.0 * (hi - lo).length();
         let painter = ui.painter_at(rect);
-        let selected = self.contact.selected;
         let camera = self.viewport.camera;
-        let outlines = self.viewport.collider_outlines(self.document.colliders(), extent);
-        for (i, (_, lines)) in outlines.iter().enumerate() {
-            let stroke = if selected == Some(i) {
-                Stroke::new(1.5, SELECTED_COLLIDER_COLOR)
-            } else {
-                Stroke::new(1.0, COLLIDER_COLOR)
-            };
+        let segments = |lines: &[[glam::DVec3; 2]], stroke: Stroke| {
             for [a, b] in lines {
                 // Segments with an end behind the camera are left out.
                 if let (Some((a, _)), Some((b, _))) =
@@ -257,6 +252,21 @@ impl EditorApp {
                     painter.line_segment([at(a), at(b)], stroke);
                 }
             }
+        };
+        if let Some(y) = floor {
+            let centre = 0.5 * (lo + hi);
+            let grid = crate::collider::plane_grid(glam::DVec3::new(centre.x, y, centre.z), glam::DVec3::Y, extent);
+            segments(&grid, Stroke::new(1.0, FLOOR_COLOR));
+        }
+        let selected = self.contact.selected;
+        let outlines = self.viewport.collider_outlines(self.document.colliders(), extent);
+        for (i, (_, lines)) in outlines.iter().enumerate() {
+            let stroke = if selected == Some(i) {
+                Stroke::new(1.5, SELECTED_COLLIDER_COLOR)
+            } else {
+                Stroke::new(1.0, COLLIDER_COLOR)
+            };
+            segments(lines, stroke);
         }
     }
 

@@ -1,6 +1,7 @@
 //! The editor model driven by commands, as the GUI will: select → fix → drag → solve, undo,
 //! and the scene round trip through `shapeup deform`'s code path.
 
+use crate::max_distance;
 use glam::DVec3;
 use shapeup_app::document::{GroupRole, WEIGHT_RANGE};
 use shapeup_app::{Command, Document, EditorError, SelectMode, ShapeModel};
@@ -41,11 +42,6 @@ fn replay(scene_path: &Path) -> (Vec<DVec3>, f64) {
 fn diagonal(doc: &Document) -> f64 {
     let (lo, hi) = doc.rest_mesh().bounding_box();
     (hi - lo).length()
-}
-
-fn max_distance(a: &[DVec3], b: &[DVec3]) -> f64 {
-    assert_eq!(a.len(), b.len());
-    a.iter().zip(b).map(|(p, q)| (*p - *q).length()).fold(0.0, f64::max)
 }
 
 /// A flat (n+1)×(n+1) grid in the XY plane, offset by `origin` (z up to `bump` so that bending

@@ -1,6 +1,7 @@
 //! The editor's UI driven without a window (egui_kittest, rendering on any wgpu adapter,
 //! lavapipe included): buttons, sliders, radio buttons and shortcuts reach the document.
 
+use crate::max_distance;
 use eframe::egui;
 use egui::accesskit::Role;
 use egui_kittest::Harness;
@@ -175,7 +176,7 @@ fn run_simulates_the_shape_under_gravity_and_pause_stops_it() {
     let mut harness = editor(spot_with_selection());
     let rest = harness.state().document().positions().to_vec();
     assert!(!harness.state().is_simulating());
-    harness.get_by_label("Run").click();
+    harness.get_by_label("Run from rest").click();
     harness.run_steps(2);
     assert!(harness.state().is_simulating());
     // Gravity pulls every vertex down; wait until it shows.
@@ -299,11 +300,6 @@ fn is_orange([r, g, b]: [u8; 3]) -> bool {
 /// The banner's fill, rgb(180, 30, 30).
 fn is_banner_red([r, g, b]: [u8; 3]) -> bool {
     r.abs_diff(180) <= 12 && g.abs_diff(30) <= 12 && b.abs_diff(30) <= 12
-}
-
-fn max_distance(a: &[DVec3], b: &[DVec3]) -> f64 {
-    assert_eq!(a.len(), b.len());
-    a.iter().zip(b).map(|(p, q)| (*p - *q).length()).fold(0.0, f64::max)
 }
 
 /// Replaces the text of the Open row's path field (labelled by the "Open…" button) and presses
@@ -556,7 +552,7 @@ fn the_dynamics_panel_controls_settings_run_and_undo() {
     // Tall enough that the whole Dynamics section is on screen.
     let size = egui::vec2(1100.0, 1200.0);
     let mut harness = editor_at(spot_with_selection(), Path::new(SPOT), size);
-    for label in ["Run", "Restart", "Stop"] {
+    for label in ["Run from rest", "Continue", "Restart", "Stop"] {
         harness.get_by_role_and_label(Role::Button, label);
     }
     for label in ["Gravity", "Floor", "Tetrahedralize"] {
@@ -604,7 +600,7 @@ fn the_dynamics_panel_controls_settings_run_and_undo() {
     // Run: the timings line appears, Restart and Stop are enabled.
     let before_run = harness.state().document().positions().to_vec();
     assert!(harness.query_by_label_contains("steps/s").is_none());
-    harness.get_by_role_and_label(Role::Button, "Run").click();
+    harness.get_by_role_and_label(Role::Button, "Continue").click();
     harness.run_steps(2);
     assert!(harness.state().is_running());
     harness.get_by_label_contains("steps/s");

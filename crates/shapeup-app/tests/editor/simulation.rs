@@ -1,9 +1,10 @@
 //! Dynamic mode of the editor: the document falls, lands on a floor, stands as a tet-strain
 //! solid, follows a grab, pauses and resets, all on the simulation thread.
 
+use crate::max_distance;
 use glam::DVec3;
 use shapeup_app::simulation::{
-    DynamicsModel, SimulationRunner, SimulationSettings, SimulationStats, Speed, tetrahedralize_available,
+    DynamicsModel, SimulationRunner, SimulationSettings, SimulationStats, Speed, StartShape, tetrahedralize_available,
 };
 use shapeup_app::{Command, Document, SelectMode, ShapeModel};
 use shapeup_core::scene::{Mode, SolverSettings};
@@ -77,6 +78,48 @@ fn the_shape_falls_onto_the_floor_and_stays_above_it() {
     let floor = start_low - 0.01 * (hi - lo).length();
     assert!(lowest(&fallen) > floor - 1e-9, "{} below the floor {floor}", lowest(&fallen));
     assert!(!runner.is_running());
+}
+
+#[test]
+fn run_from_rest_starts_at_the_rest_shape_continue_at_the_shape_on_screen() {
+    let mut doc = Document::open(Path::new(SPOT), ShapeModel::EdgeSprings).unwrap();
+    let rest = doc.rest_positions().to_vec();
+    let (lo, hi) = doc.rest_mesh().bounding_box();
+    let diagonal = (hi - lo).length();
+    // What a stopped simulation leaves on screen: the body squashed to half its height.
+    let squashed: Vec<DVec3> = rest.iter().map(|p| DVec3::new(p.x, lo.y + 0.5 * (p.y - lo.y), p.z)).collect();
+    assert!(doc.accept_positions(doc.epoch(), &squashed));
+    let settings = SimulationSettings { gravity: false, ..SimulationSettings::default() };
+
+    // From rest: nothing pulls at the rest shape, so a step stays there; the floor lies
+    // 1 % of the diagonal below it.
+    let from_rest = SimulationRunner::start_from(&doc, settings, StartShape::Rest, || {}).unwrap();
+    from_rest.run_for(1);
+    let p = run_steps(&from_rest, 1);
+    assert!(max_distance(&p, &rest) < 1e-6 * diagonal, "{} from rest", max_distance(&p, &rest));
+    let floor = from_rest.floor_height.unwrap();
+    assert!((floor - (lowest(&rest) - 0.01 * diagonal)).abs() < 1e-12 * diagonal, "floor at {floor}");
+
+    // From the shape on screen: the squashed body springs back from there.
+    let on_screen = SimulationRunner::start(&doc, settings, || {}).unwrap();
+    on_screen.run_for(1);
+    let p = run_steps(&on_screen, 1);
+    assert!(max_distance(&p, &squashed) < 0.5 * max_distance(&p, &rest), "it started from the squashed shape");
+    assert!(max_distance(&p, &squashed) > 1e-6 * diagonal, "and springs back");
+
+    // No floor, none drawn.
+    let bare = SimulationRunner::start(&doc, SimulationSettings { floor: false, ..settings }, || {}).unwrap();
+    assert_eq!(bare.floor_height, None);
+
+    // TetGen fills the rest shape: a solid from a deformed shape on screen is refused in one
+    // line that says what to do; from rest it starts.
+    let solid = SimulationSettings { tetrahedralize: true, ..settings };
+    let e = SimulationRunner::start(&doc, solid, || {}).unwrap_err().to_string();
+    assert_eq!(e, "simulation: Tetrahedralize fills the rest shape: start the solid with Run from rest");
+    if cfg!(feature = "tetgen") {
+        let runner = SimulationRunner::start_from(&doc, solid, StartShape::Rest, || {}).unwrap();
+        assert!(runner.num_tetrahedra > 0);
+    }
 }
 
 #[test]
@@ -335,15 +378,17 @@ mod panel {
     }
 
     #[test]
-    fn without_a_runner_it_offers_run_and_the_settings() {
+    fn without_a_runner_it_offers_run_from_rest_continue_and_the_settings() {
         let mut h = harness(None, Ok(()));
         assert!(h.get_by_label("Restart").accesskit_node().is_disabled());
         assert!(h.get_by_label("Stop").accesskit_node().is_disabled());
         assert!(h.get_by_label("Tet strain").accesskit_node().is_disabled(), "no tetrahedra yet");
         assert!(h.query_by_label("Pause").is_none());
-        h.get_by_label("Run").click();
+        h.get_by_label("Run from rest").click();
         h.run();
-        assert_eq!(h.state().actions, [DynamicsAction::Run]);
+        h.get_by_label("Continue").click();
+        h.run();
+        assert_eq!(h.state().actions, [DynamicsAction::RunFromRest, DynamicsAction::Continue]);
         h.get_by_label("Gravity").click();
         h.run();
         assert!(!h.state().settings.gravity);
@@ -353,6 +398,9 @@ mod panel {
         h.run();
         assert!(h.state().settings.tetrahedralize);
         assert_eq!(h.state().settings.model, DynamicsModel::TetStrain);
+        // A solid is made on the rest shape: Continue (from the shape on screen) is disabled.
+        assert!(h.get_by_label("Continue").accesskit_node().is_disabled());
+        assert!(!h.get_by_label("Run from rest").accesskit_node().is_disabled());
         assert!(!h.get_by_label("Tet strain").accesskit_node().is_disabled());
         h.get_by_label(DynamicsModel::Document.label()).click();
         h.run();

@@ -1,6 +1,7 @@
 //! The background solver: it converges each request in chunks and then stops, the newest
 //! request wins, a failure keeps the last good shape, results never block, drop joins.
 
+use crate::max_distance;
 use glam::DVec3;
 use shapeup_app::worker::{SolveRequest, WorkerParams};
 use shapeup_app::{Command, Document, EditorError, GroupKey, SelectMode, ShapeModel, SolveResult, SolverWorker};
@@ -149,11 +150,6 @@ fn diagonal(positions: &[DVec3]) -> f64 {
     let lo = positions.iter().fold(DVec3::INFINITY, |a, &p| a.min(p));
     let hi = positions.iter().fold(DVec3::NEG_INFINITY, |a, &p| a.max(p));
     (hi - lo).length()
-}
-
-fn max_distance(a: &[DVec3], b: &[DVec3]) -> f64 {
-    assert_eq!(a.len(), b.len());
-    a.iter().zip(b).map(|(p, q)| (*p - *q).length()).fold(0.0, f64::max)
 }
 
 fn relative_change(previous: f64, energy: f64) -> f64 {
