@@ -754,6 +754,108 @@ fn dragging_a_weight_slider_is_one_undo_step() {
     assert!(!harness.state().document().can_undo(), "each drag was a single undo step");
 }
 
+#[test]
+fn a_typed_weight_that_is_no_weight_is_said_under_its_row() {
+    let mut harness = editor(spot_with_selection());
+    let weight = |h: &Harness<'_, EditorApp>| h.state().document().groups()[0].spec.weight;
+    for (typed, said) in [
+        ("-3", "weight \"-3\" refused: type a number from 1e-4 to 1e4"),
+        ("NaN", "weight \"NaN\" refused: type a number from 1e-4 to 1e4"),
+        ("abc", "weight \"abc\" refused: type a number from 1e-4 to 1e4"),
+        ("1e9", "weight \"1e9\" refused: type a number from 1e-4 to 1e4"),
+        (
+            "0",
+            "weight \"0\" refused: a weight of 0 turns the group off; remove the group instead (weights go from 1e-4 to 1e4)",
+        ),
+    ] {
+        type_weight(&mut harness, typed);
+        assert_eq!(weight(&harness), 10.0, "{typed} left the weight");
+        harness.get_by_label(said);
+    }
+    // A good one is taken, and the message goes.
+    type_weight(&mut harness, "250");
+    assert_eq!(weight(&harness), 250.0);
+    assert!(harness.query_by_label_contains("refused").is_none());
+}
+
+/// Types `text` into the first group's weight field and presses Enter.
+fn type_weight(harness: &mut Harness<'_, EditorApp>, text: &str) {
+    let at = harness.get_all_by_role(Role::SpinButton).next().expect("the weight's number field").rect().center();
+    let button = |pressed| egui::Event::PointerButton {
+        pos: at,
+        button: egui::PointerButton::Primary,
+        pressed,
+        modifiers: egui::Modifiers::NONE,
+    };
+    harness.event(egui::Event::PointerMoved(at));
+    harness.step();
+    harness.event(button(true));
+    harness.step();
+    harness.event(button(false));
+    harness.step();
+    harness.step();
+    harness.key_combination_modifiers(egui::Modifiers::COMMAND, &[egui::Key::A]);
+    // In edit the field keeps its role.
+    let field = harness.get_all_by_role(Role::SpinButton).find(|n| n.accesskit_node().is_focused());
+    field.expect("the weight's field, in edit").type_text(text);
+    settle(harness);
+    harness.key_press(egui::Key::Enter);
+    settle(harness);
+}
+
+/// Presses at `from` holding `modifiers`, moves through `from + steps` one frame each, and
+/// releases: a drag as a hand makes it, frame by frame.
+fn drag_in_frames(
+    harness: &mut Harness<'_, EditorApp>,
+    from: egui::Pos2,
+    steps: &[egui::Vec2],
+    modifiers: egui::Modifiers,
+) {
+    let button =
+        |pos, pressed| egui::Event::PointerButton { pos, button: egui::PointerButton::Primary, pressed, modifiers };
+    harness.event(egui::Event::ModifiersChanged(modifiers));
+    harness.event(egui::Event::PointerMoved(from));
+    harness.step();
+    harness.event(button(from, true));
+    harness.step();
+    let mut end = from;
+    for &step in steps {
+        end = from + step;
+        harness.event(egui::Event::PointerMoved(end));
+        harness.step();
+    }
+    harness.event(button(end, false));
+    harness.step();
+    harness.event(egui::Event::ModifiersChanged(egui::Modifiers::NONE));
+    settle(harness);
+}
+
+#[test]
+fn a_shift_drag_moves_a_weight_ten_times_finer() {
+    let mut harness = editor(spot_with_selection());
+    let log_weight = |h: &Harness<'_, EditorApp>| h.state().document().groups()[0].spec.weight.log10();
+    assert_eq!(log_weight(&harness), 1.0);
+    let rail = harness.get_by_role_and_label(Role::Slider, "weight").rect();
+    // The knob: log10 10 = 1 on [-4, 4].
+    let knob = egui::pos2(rail.left() + rail.width() * 5.0 / 8.0, rail.center().y);
+    let right: Vec<egui::Vec2> = [4.0, 8.0, 12.0, 16.0, 20.0].map(|dx| egui::vec2(dx, 0.0)).to_vec();
+    // The press puts the knob under the pointer; the motion after it is compared.
+    drag_in_frames(&mut harness, knob, &[], egui::Modifiers::NONE);
+    let pressed = log_weight(&harness);
+    harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+    settle(&mut harness);
+    drag_in_frames(&mut harness, knob, &right, egui::Modifiers::NONE);
+    let coarse = log_weight(&harness) - pressed;
+    assert!(coarse > 0.1, "a plain 20 px drag moves {coarse} decades");
+    harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+    settle(&mut harness);
+    assert_eq!(log_weight(&harness), 1.0);
+
+    drag_in_frames(&mut harness, knob, &right, egui::Modifiers::SHIFT);
+    let fine = log_weight(&harness) - 1.0;
+    assert!((fine / coarse - 0.1).abs() < 0.01, "shift: {fine} decades where a plain drag moved {coarse}");
+}
+
 // ---- Contact ----
 
 #[test]

@@ -16,6 +16,9 @@ pub struct GroupsPanel {
     pub active_handle: Option<GroupKey>,
     /// The handle being renamed and the name typed so far.
     renaming: Option<(GroupKey, String)>,
+    /// A typed weight that was refused, and why, shown under its row until the row's weight
+    /// next changes.
+    weight_error: Option<(GroupKey, String)>,
 }
 
 /// "Shape constraints": one radio button per shape model; returns the model chosen.
@@ -57,8 +60,16 @@ pub fn groups_panel(ui: &mut egui::Ui, document: &Document, state: &mut GroupsPa
                     out.commands.push(Command::RemoveGroup(group.key));
                 }
             });
-            if let Some(weight) = weight_control(ui, group.spec.weight, &mut out) {
-                out.commands.push(Command::SetWeight { group: group.key, weight });
+            match weight_control(ui, group.spec.weight, &mut out) {
+                Ok(Some(weight)) => {
+                    out.commands.push(Command::SetWeight { group: group.key, weight });
+                    state.weight_error = None;
+                }
+                Ok(None) => {}
+                Err(why) => state.weight_error = Some((group.key, why)),
+            }
+            if let Some((_, why)) = state.weight_error.as_ref().filter(|(key, _)| *key == group.key) {
+                ui.colored_label(egui::Color32::RED, why);
             }
         });
         // The whole row, children included (they cover the row's own response).
@@ -87,25 +98,63 @@ pub fn groups_panel(ui: &mut egui::Ui, document: &Document, state: &mut GroupsPa
 }
 
 /// A weight slider over log10(w) from [`WEIGHT_RANGE`], with text entry (the number field:
-/// type any weight) and fine steps while shift is held. Returns the new weight when it
-/// changed. One undo step per slider drag (noted in `out`).
-fn weight_control(ui: &mut egui::Ui, weight: f64, out: &mut PanelOutput) -> Option<f64> {
+/// type any weight in the range) and fine steps while shift is held. Returns the new weight
+/// when it changed. One undo step per slider drag (noted in `out`).
+///
+/// # Errors
+/// Typed text that is no weight ([`typed_weight`]): why, in one line for the row.
+fn weight_control(ui: &mut egui::Ui, weight: f64, out: &mut PanelOutput) -> Result<Option<f64>, String> {
     let (lo, hi) = (WEIGHT_RANGE.0.log10(), WEIGHT_RANGE.1.log10());
     let before = weight.max(WEIGHT_RANGE.0).log10();
     let mut exponent = before;
+    let (refused, typed) = (std::cell::RefCell::new(None), std::cell::Cell::new(None));
     let slider = egui::Slider::new(&mut exponent, lo..=hi)
         .text("weight")
         .custom_formatter(|x, _| format_weight(10f64.powf(x)))
-        .custom_parser(|text| text.trim().parse::<f64>().ok().filter(|w| *w > 0.0).map(f64::log10));
+        .custom_parser(|text| match typed_weight(text) {
+            Ok(w) => {
+                typed.set(Some(w));
+                Some(w.log10())
+            }
+            Err(why) => {
+                *refused.borrow_mut() = Some(why);
+                None
+            }
+        });
     let response = ui.add(slider);
     out.track_drag(&response);
-    if response.dragged() && ui.input(|i| i.modifiers.shift) {
-        // Fine: a tenth of the pointer's motion.
-        let per_px = (hi - lo) / f64::from(ui.spacing().slider_width.max(1.0));
-        exponent = (before + 0.1 * per_px * f64::from(response.drag_delta().x)).clamp(lo, hi);
+    if let Some(why) = refused.into_inner() {
+        return Err(why);
     }
-    let weight = 10f64.powf(exponent);
-    (exponent != before && response.changed()).then_some(weight)
+    if response.interact_pointer_pos().is_some() && ui.input(|i| i.modifiers.shift) {
+        // Fine: a tenth of the pointer's motion, from the press to the release (every frame
+        // in which the slider itself puts the value under the pointer).
+        // egui's rail: slider_width less a handle radius (thickness / 2.5) at each end.
+        let thickness = ui.text_style_height(&egui::TextStyle::Body).max(ui.spacing().interact_size.y);
+        let rail = ui.spacing().slider_width - 2.0 * thickness / 2.5;
+        let per_px = (hi - lo) / f64::from(rail.max(1.0));
+        exponent = (before + 0.1 * per_px * f64::from(ui.input(|i| i.pointer.delta().x))).clamp(lo, hi);
+    }
+    // What was typed, exactly (250, not 10^log10(250) = 249.99999999999994).
+    let weight = typed.get().filter(|w| w.log10() == exponent).unwrap_or_else(|| 10f64.powf(exponent));
+    Ok((exponent != before).then_some(weight))
+}
+
+/// A typed weight: a number in [`WEIGHT_RANGE`] (the slider's).
+///
+/// # Errors
+/// Why not, naming what was typed: not a number, NaN, infinite, negative or out of range (0
+/// would turn the group off: the row's remove does that).
+fn typed_weight(text: &str) -> Result<f64, String> {
+    let text = text.trim();
+    let (lo, hi) = WEIGHT_RANGE;
+    match text.parse::<f64>() {
+        Ok(w) if (lo..=hi).contains(&w) => Ok(w),
+        Ok(w) if w == 0.0 => Err(format!(
+            "weight \"{text}\" refused: a weight of 0 turns the group off; remove the group instead (weights go from {lo:e} to {hi:e})"
+        )),
+        _ => Err(format!("weight \"{text}\" refused: type a number from {lo:e} to {hi:e}")),
+    }
 }
 
 /// A weight as the slider shows it: 3 significant digits, scientific outside [0.01, 1000).
