@@ -76,11 +76,18 @@ impl OrbitCamera {
     /// viewport at least as wide as it is high), with a 10 % margin. Keeps yaw and pitch; the
     /// result becomes the view [`OrbitCamera::reset`] returns to.
     pub fn frame(&mut self, min: Vec3, max: Vec3) {
+        self.look_at(min, max);
+        self.scene_radius = (0.5 * (max - min).length()).max(1e-6);
+        self.home = Home { target: self.target, distance: self.distance, yaw: self.yaw, pitch: self.pitch };
+    }
+
+    /// Looks at the box `[min, max]` as [`OrbitCamera::frame`] does (centre, distance), keeping
+    /// the angles, the view [`OrbitCamera::reset`] returns to, and the scene's size (the clip
+    /// planes): the editor's F on a selection.
+    pub fn look_at(&mut self, min: Vec3, max: Vec3) {
         let radius = (0.5 * (max - min).length()).max(1e-6);
         self.target = 0.5 * (min + max);
-        self.scene_radius = radius;
         self.distance = 1.1 * radius / (0.5 * self.fov_y).sin();
-        self.home = Home { target: self.target, distance: self.distance, yaw: self.yaw, pitch: self.pitch };
     }
 
     /// Frames a mesh from its front (see [`FrontView`]): turns to [`FrontView::of`] the mesh and

@@ -136,6 +136,16 @@ impl EditorApp {
         app
     }
 
+    /// The view.
+    pub fn camera(&self) -> &crate::camera::OrbitCamera {
+        &self.viewport.camera
+    }
+
+    /// The status line's message.
+    pub fn status(&self) -> &str {
+        &self.view.status
+    }
+
     /// The document being edited.
     pub fn document(&self) -> &Document {
         &self.document
@@ -472,6 +482,48 @@ impl EditorApp {
         }
     }
 
+    /// Ctrl+S saves the scene to the Save row's path, Ctrl+O opens the Open dialog; outside a
+    /// text field, F frames the selection (else the gizmo's handle, else the shape) and Esc
+    /// clears the selection (returned as a command).
+    fn shortcuts(&mut self, ctx: &egui::Context) -> Option<Command> {
+        let typing = ctx.memory(|m| m.focused().is_some());
+        let (save, open, frame, clear) = ctx.input_mut(|i| {
+            let save = i.consume_key(egui::Modifiers::COMMAND, egui::Key::S);
+            let open = i.consume_key(egui::Modifiers::COMMAND, egui::Key::O);
+            let frame = !typing && i.consume_key(egui::Modifiers::NONE, egui::Key::F);
+            let clear = !typing && i.consume_key(egui::Modifiers::NONE, egui::Key::Escape);
+            (save, open, frame, clear)
+        });
+        if save {
+            let path = PathBuf::from(self.files.scene_input.trim());
+            self.act_on_path(DialogPurpose::SaveScene, path);
+        }
+        if open && !self.files.dialogs.is_open() {
+            self.show_dialog(ctx, DialogPurpose::Open);
+        }
+        if frame {
+            self.frame_selection();
+        }
+        (clear && self.document.num_selected() > 0).then_some(Command::ClearSelection)
+    }
+
+    /// Turns the view onto the selected vertices, else the gizmo's handle, else the whole
+    /// shape (as it is now), keeping the view Reset view returns to.
+    fn frame_selection(&mut self) {
+        let selected = self.document.selected_vertices();
+        let handle = self.groups.active_handle.and_then(|key| self.document.group(key)).and_then(|g| g.vertices());
+        let vertices: Vec<usize> = match (selected.is_empty(), handle) {
+            (false, _) => selected.iter().map(|&v| v as usize).collect(),
+            (true, Some(list)) => list.to_vec(),
+            (true, None) => (0..self.document.num_vertices()).collect(),
+        };
+        let positions = self.document.positions();
+        let mut points = vertices.iter().filter_map(|&v| positions.get(v));
+        let Some(first) = points.next() else { return };
+        let (lo, hi) = points.fold((*first, *first), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
+        self.viewport.camera.look_at(lo.as_vec3(), hi.as_vec3());
+    }
+
     /// A new simulation from `from`, running; undo brings back the shape from before it.
     fn start_simulation(&mut self, ui: &egui::Ui, from: StartShape) {
         let ctx = ui.ctx().clone();
@@ -499,13 +551,14 @@ impl EditorApp {
 
     /// The bottom line: the convergence and the last message, always in view.
     fn status_bar(&self, ui: &mut egui::Ui) {
-        ui.horizontal(|ui| {
+        // Wrapped, never cut at the window's edge.
+        ui.horizontal_wrapped(|ui| {
             let p = &self.view.progress;
             if !p.line.is_empty() {
-                ui.label(&p.line);
+                ui.add(egui::Label::new(&p.line).wrap());
                 ui.separator();
             }
-            ui.label(&self.view.status);
+            ui.add(egui::Label::new(&self.view.status).wrap());
         });
     }
 }
@@ -548,6 +601,7 @@ impl eframe::App for EditorApp {
         } else if undo {
             commands.push(Command::Undo);
         }
+        commands.extend(self.shortcuts(ui.ctx()));
         egui::Panel::bottom("status").show(ui, |ui| self.status_bar(ui));
         let panel = egui::Panel::left("controls").default_size(330.0).show(ui, |ui| self.side_panel(ui));
         commands.extend(panel.inner);

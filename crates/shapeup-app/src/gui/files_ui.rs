@@ -89,7 +89,7 @@ impl EditorApp {
     }
 
     /// Opens a native dialog (on its own thread) starting next to the current file.
-    fn show_dialog(&mut self, ctx: &egui::Context, purpose: DialogPurpose) {
+    pub(super) fn show_dialog(&mut self, ctx: &egui::Context, purpose: DialogPurpose) {
         let directory = std::fs::canonicalize(&self.mesh_path).ok().and_then(|p| p.parent().map(PathBuf::from));
         let proposed = match purpose {
             DialogPurpose::Open | DialogPurpose::ColliderMesh => String::new(),
@@ -101,7 +101,7 @@ impl EditorApp {
     }
 
     /// Opens, exports or saves to `path`, whether it came from a dialog or was typed.
-    fn act_on_path(&mut self, purpose: DialogPurpose, path: PathBuf) {
+    pub(super) fn act_on_path(&mut self, purpose: DialogPurpose, path: PathBuf) {
         match purpose {
             DialogPurpose::Open => self.request_open(path),
             DialogPurpose::ExportMesh => self.export_mesh(path),

@@ -803,6 +803,61 @@ fn type_weight(harness: &mut Harness<'_, EditorApp>, text: &str) {
     settle(harness);
 }
 
+#[test]
+fn f_frames_the_selection_esc_clears_it_ctrl_s_saves_ctrl_o_opens() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut harness = editor(spot_with_selection());
+    let whole = *harness.state().camera();
+    // F: the view turns onto the selection's box (the 20 lowest vertices), from nearer.
+    harness.key_press(egui::Key::F);
+    settle(&mut harness);
+    let doc = harness.state().document();
+    let selected: Vec<glam::DVec3> = doc.selected_vertices().iter().map(|&v| doc.positions()[v as usize]).collect();
+    let (lo, hi) = selected.iter().fold((selected[0], selected[0]), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
+    let camera = *harness.state().camera();
+    assert!((camera.target - (0.5 * (lo + hi)).as_vec3()).length() < 1e-5, "{:?}", camera.target);
+    assert!(camera.distance < 0.5 * whole.distance, "{} vs {}", camera.distance, whole.distance);
+    // Esc clears the selection; F then frames the whole shape.
+    harness.key_press(egui::Key::Escape);
+    settle(&mut harness);
+    assert_eq!(harness.state().document().num_selected(), 0);
+    harness.key_press(egui::Key::F);
+    settle(&mut harness);
+    assert!((harness.state().camera().distance - whole.distance).abs() < 1e-3 * whole.distance);
+
+    // Ctrl+S saves to the Save row's path, also while typing it.
+    let scene = dir.path().join("saved.toml");
+    harness.get_by_role_and_label(Role::TextInput, "Save…").click();
+    settle(&mut harness);
+    harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::A);
+    harness.get_by_role_and_label(Role::TextInput, "Save…").type_text(&scene.display().to_string());
+    settle(&mut harness);
+    assert!(!scene.exists());
+    harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::S);
+    settle(&mut harness);
+    assert!(scene.exists(), "{}", harness.state().status());
+    // F typed into a text field is text, not a shortcut.
+    let framed = *harness.state().camera();
+    harness.get_by_role_and_label(Role::TextInput, "Save…").type_text("f");
+    settle(&mut harness);
+    assert_eq!(*harness.state().camera(), framed);
+
+    // Ctrl+O asks for a file as Open… does: its button is disabled while the dialog is up, or
+    // (no dialog service here) the status says none was chosen.
+    harness.key_press(egui::Key::Escape);
+    harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::O);
+    let deadline = Instant::now() + Duration::from_secs(30);
+    loop {
+        harness.step();
+        let asked = harness.get_by_role_and_label(Role::Button, "Open…").accesskit_node().is_disabled()
+            || harness.state().status().contains("no file chosen");
+        if asked {
+            break;
+        }
+        assert!(Instant::now() < deadline, "Ctrl+O did nothing: {}", harness.state().status());
+    }
+}
+
 /// Presses at `from` holding `modifiers`, moves through `from + steps` one frame each, and
 /// releases: a drag as a hand makes it, frame by frame.
 fn drag_in_frames(
