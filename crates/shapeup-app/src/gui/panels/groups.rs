@@ -150,7 +150,7 @@ fn typed_weight(text: &str) -> Result<f64, String> {
     let (lo, hi) = WEIGHT_RANGE;
     match text.parse::<f64>() {
         Ok(w) if (lo..=hi).contains(&w) => Ok(w),
-        Ok(w) if w == 0.0 => Err(format!(
+        Ok(0.0) => Err(format!(
             "weight \"{text}\" refused: a weight of 0 turns the group off; remove the group instead (weights go from {lo:e} to {hi:e})"
         )),
         _ => Err(format!("weight \"{text}\" refused: type a number from {lo:e} to {hi:e}")),
