@@ -817,10 +817,14 @@ fn f_frames_the_selection_esc_clears_it_ctrl_s_saves_ctrl_o_opens() {
     let camera = *harness.state().camera();
     assert!((camera.target - (0.5 * (lo + hi)).as_vec3()).length() < 1e-5, "{:?}", camera.target);
     assert!(camera.distance < 0.5 * whole.distance, "{} vs {}", camera.distance, whole.distance);
-    // Esc clears the selection; F then frames the whole shape.
+    // Esc clears the selection; F then frames the whole shape. The panel keeps its rows
+    // (nothing below the selection section moves).
+    let below = harness.get_by_role_and_label(Role::Button, "Clear handles").rect();
     harness.key_press(egui::Key::Escape);
     settle(&mut harness);
     assert_eq!(harness.state().document().num_selected(), 0);
+    assert_eq!(harness.get_by_role_and_label(Role::Button, "Clear handles").rect(), below, "the panel moved");
+    assert!(harness.get_by_role_and_label(Role::Button, "Add constraint to selection").accesskit_node().is_disabled());
     harness.key_press(egui::Key::F);
     settle(&mut harness);
     assert!((harness.state().camera().distance - whole.distance).abs() < 1e-3 * whole.distance);

@@ -7,7 +7,7 @@ use crate::document::Document;
 use eframe::egui;
 use egui::Color32;
 use serde_json::{Map, Value};
-use shapeup_core::constraints::{OptionKind, OptionSpec};
+use shapeup_core::constraints::{ConstraintType, OptionKind, OptionSpec, registry};
 
 /// The section's own state.
 #[derive(Debug, Default)]
@@ -83,21 +83,35 @@ pub fn selection_panel(ui: &mut egui::Ui, document: &Document, state: &mut Selec
 /// options as widgets generated from its option descriptions, and the button.
 fn add_constraint_row(ui: &mut egui::Ui, document: &Document, state: &mut SelectionPanel, commands: &mut Vec<Command>) {
     let fitting = document.fitting_types();
-    if fitting.is_empty() {
-        ui.label("select vertices or faces to add a constraint");
-        return;
-    }
-    let chosen = state.add_kind.and_then(|k| fitting.iter().copied().find(|t| t.name() == k));
-    let ty = chosen.unwrap_or(fitting[0]);
+    // With nothing selected the same rows stay, disabled (the type last chosen, else the
+    // first), so the panel does not jump as the selection empties or fills.
+    let enabled = !fitting.is_empty();
+    let shown = if enabled { fitting } else { registry().to_vec() };
+    let Some(&first) = shown.first() else { return };
+    let chosen = state.add_kind.and_then(|k| shown.iter().copied().find(|t| t.name() == k));
+    let ty = chosen.unwrap_or(first);
     if chosen.is_none() {
         state.add_kind = Some(ty.name());
         state.add_options.clear();
     }
+    ui.add_enabled_ui(enabled, |ui| add_constraint_widgets(ui, ty, &shown, state, commands))
+        .response
+        .on_disabled_hover_text("select vertices or faces to add a constraint");
+}
+
+/// The type's menu (of `types`), the button and the type's options.
+fn add_constraint_widgets(
+    ui: &mut egui::Ui,
+    ty: &'static dyn ConstraintType,
+    types: &[&'static dyn ConstraintType],
+    state: &mut SelectionPanel,
+    commands: &mut Vec<Command>,
+) {
     ui.horizontal(|ui| {
         egui::ComboBox::from_id_salt("add constraint type")
             .selected_text(ty.name())
             .show_ui(ui, |ui| {
-                for t in &fitting {
+                for t in types {
                     if ui.selectable_label(t.name() == ty.name(), t.name()).on_hover_text(t.summary()).clicked()
                         && t.name() != ty.name()
                     {
