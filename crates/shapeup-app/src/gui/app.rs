@@ -424,6 +424,13 @@ impl EditorApp {
                 if ui.button("Reset view").clicked() {
                     self.viewport.camera.reset();
                 }
+                if ui
+                    .button("Screenshot")
+                    .on_hover_text("save the 3D view as a PNG beside the Save row's scene (NAME-view-N.png)")
+                    .clicked()
+                {
+                    self.request_screenshot(ui.ctx());
+                }
             });
             self.viewport.gizmo.tool_selector(ui);
             ui.separator();
@@ -586,6 +593,7 @@ impl eframe::App for EditorApp {
         self.poll_worker();
         self.poll_simulation();
         self.poll_dialogs();
+        self.poll_screenshot();
         let dropped: Vec<PathBuf> = ui.input(|i| i.raw.dropped_files.iter().map(|f| f.path().to_path_buf()).collect());
         if let Some(path) = dropped.into_iter().next() {
             self.request_open(path);

@@ -10,6 +10,7 @@ pub mod headless;
 mod metrics;
 mod panels;
 pub mod renderer;
+mod screenshot;
 pub mod viewport;
 mod viewport_ui;
 

@@ -92,6 +92,9 @@ pub(super) enum Gesture {
     },
 }
 
+/// Where a screenshot's answer waits for the next frame: the file written, or why not.
+pub(super) type ScreenshotSlot = Arc<std::sync::Mutex<Option<Result<PathBuf, String>>>>;
+
 /// The 3D view's state: camera, gesture, gizmo, grab, and what was last drawn.
 pub(super) struct ViewportState {
     pub(super) camera: OrbitCamera,
@@ -113,6 +116,10 @@ pub(super) struct ViewportState {
     pub(super) outlines: Vec<(ColliderSpec, Vec<[DVec3; 2]>)>,
     /// Mesh colliders' files as read for drawing (`None`: unreadable).
     pub(super) collider_meshes: HashMap<PathBuf, Option<Arc<Mesh>>>,
+    /// Where the 3D view was last laid out (points), for screenshots.
+    pub(super) rect: egui::Rect,
+    /// The answer of a screenshot under way.
+    pub(super) screenshot: ScreenshotSlot,
 }
 
 impl ViewportState {
@@ -135,6 +142,8 @@ impl ViewportState {
             last_render: None,
             outlines: Vec::new(),
             collider_meshes: HashMap::new(),
+            rect: egui::Rect::NOTHING,
+            screenshot: Arc::default(),
         }
     }
 

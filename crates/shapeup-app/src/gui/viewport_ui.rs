@@ -25,6 +25,7 @@ impl EditorApp {
     pub(super) fn show_viewport(&mut self, ui: &mut egui::Ui) -> (Vec<Command>, ViewportSlot) {
         let mut commands = Vec::new();
         let (rect, response) = ui.allocate_exact_size(ui.available_size(), Sense::click_and_drag());
+        self.viewport.rect = rect;
         let slot = ViewportSlot { painter: ui.painter().clone(), shape: ui.painter().add(egui::Shape::Noop), rect };
         let viewport = Vec2::new(rect.width().max(1.0), rect.height().max(1.0));
         let to_local = |p: Pos2| Vec2::new(p.x - rect.left(), p.y - rect.top());

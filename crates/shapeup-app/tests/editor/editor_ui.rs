@@ -862,6 +862,37 @@ fn f_frames_the_selection_esc_clears_it_ctrl_s_saves_ctrl_o_opens() {
     }
 }
 
+#[test]
+fn the_screenshot_button_saves_the_3d_view_beside_the_scene() {
+    let dir = tempfile::tempdir().unwrap();
+    // Tall enough that the view settings row is on screen.
+    let mut harness = editor_at(spot_with_selection(), Path::new(SPOT), egui::vec2(1100.0, 1500.0));
+    harness.get_by_role_and_label(Role::TextInput, "Save…").click();
+    settle(&mut harness);
+    harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::A);
+    harness.get_by_role_and_label(Role::TextInput, "Save…").type_text(&dir.path().join("s.toml").display().to_string());
+    harness.key_press(egui::Key::Escape);
+    settle(&mut harness);
+    for n in 1..=2 {
+        harness.get_by_role_and_label(Role::Button, "Screenshot").click();
+        let png = dir.path().join(format!("spot-view-{n}.png"));
+        let said = format!("saved the view to {}", png.display());
+        step_until(&mut harness, |app| app.status() == said || app.status().contains("not saved"));
+        assert_eq!(harness.state().status(), said);
+        // The view's pixels only (the panels left out), with the mesh on them.
+        let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&png).unwrap()));
+        let mut reader = decoder.read_info().unwrap();
+        let mut pixels = vec![0; reader.output_buffer_size()];
+        let info = reader.next_frame(&mut pixels).unwrap();
+        let window = harness.ctx.content_rect().size() * harness.ctx.pixels_per_point();
+        assert!(info.width > 300 && (info.width as f32) < 0.8 * window.x, "{} of {}", info.width, window.x);
+        assert!(info.height > 300 && info.height as f32 <= window.y, "{} of {}", info.height, window.y);
+        let mesh = pixels.chunks(4).filter(|p| p[0] < 200 && p[2] > p[0]).count();
+        assert!(mesh > 1000, "only {mesh} mesh-coloured pixels");
+        harness.run_steps(2);
+    }
+}
+
 /// Presses at `from` holding `modifiers`, moves through `from + steps` one frame each, and
 /// releases: a drag as a hand makes it, frame by frame.
 fn drag_in_frames(
