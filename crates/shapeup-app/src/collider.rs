@@ -310,7 +310,13 @@ pub fn contact_model(
 ) -> Result<Option<ContactModel>, EditorError> {
     settings.validate().map_err(|e| EditorError::Collider(format!("[contact]: {e}")))?;
     let scene = Scene {
-        mesh: MeshSettings { path: PathBuf::new(), generate: None, normalize: true, tetrahedralize: false },
+        mesh: MeshSettings {
+            path: PathBuf::new(),
+            generate: None,
+            normalize: true,
+            tetrahedralize: false,
+            start: None,
+        },
         solver: SolverSettings::default(),
         groups: Vec::new(),
         colliders: colliders.to_vec(),

@@ -83,7 +83,13 @@ pub fn scenario_scene(scenario: Scenario, mesh: &Mesh, mesh_path: PathBuf) -> Sc
         });
     }
     Scene {
-        mesh: MeshSettings { path: mesh_path.clone(), generate: None, normalize: true, tetrahedralize: false },
+        mesh: MeshSettings {
+            path: mesh_path.clone(),
+            generate: None,
+            normalize: true,
+            tetrahedralize: false,
+            start: None,
+        },
         solver: SolverSettings::default(),
         groups,
         colliders: Vec::new(),

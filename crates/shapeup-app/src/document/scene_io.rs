@@ -15,6 +15,9 @@ use std::sync::Arc;
 pub struct SavedScene {
     /// The rest mesh written beside the scene, if the rest shape had to be saved.
     pub rest_mesh: Option<PathBuf>,
+    /// The shape on screen written beside the scene as its `[mesh] start`, unless it was the
+    /// rest shape.
+    pub start_mesh: Option<PathBuf>,
     /// What the rest mesh's format could not keep, said once each.
     pub warnings: Vec<String>,
 }
@@ -45,9 +48,17 @@ impl Document {
     /// tetrahedralized scene; [`EditorError::Constraint`] for a group that cannot be built.
     pub fn from_scene(scene: &Scene) -> Result<Document, EditorError> {
         let loaded = scene.read_mesh().map_err(|e| EditorError::Load(LoadError::Scene(Cause::new(e))))?;
+        let n = loaded.mesh.num_vertices();
+        let start =
+            scene.read_start(&loaded.mesh, n).map_err(|e| EditorError::Load(LoadError::Scene(Cause::new(e))))?;
         let mut document = Document::from_scene_with_mesh(scene, loaded.mesh)?;
         document.source = scene.mesh.generate.is_none().then(|| scene.mesh_path());
         document.attributes = loaded.attributes;
+        // The shape the scene was saved with is where the editor converges from, as
+        // `shapeup deform` does.
+        if let Some(start) = start {
+            document.set_shape(start);
+        }
         Ok(document)
     }
 
@@ -103,6 +114,7 @@ impl Document {
                 generate: None,
                 normalize: self.state.rest.normalize,
                 tetrahedralize: false,
+                start: None,
             },
             solver: self.solver_settings(),
             groups,
@@ -127,8 +139,9 @@ impl Document {
     /// Saves what replays the shape on screen: a scene at `scene_path` whose mesh is the file
     /// the document was opened from (absolute path) or, when the rest shape changed (Make rest
     /// shape) or the mesh has no file, the rest mesh written beside the scene as
-    /// `STEM.rest.EXT` (the opened format when it is OBJ, PLY or OFF, else OBJ). Clears
-    /// [`Document::is_modified`].
+    /// `STEM.rest.EXT` (the opened format when it is OBJ, PLY or OFF, else OBJ); and whose
+    /// `[mesh] start` is the shape on screen, `STEM.start.obj`, so that the replay converges
+    /// from it into the same minimum. Clears [`Document::is_modified`].
     ///
     /// # Errors
     /// [`EditorError::Save`] naming the file that cannot be written.
@@ -153,9 +166,32 @@ impl Document {
                 (PathBuf::from(name), Some(rest_path), warnings.iter().map(ToString::to_string).collect())
             }
         };
-        self.save_scene(scene_path, mesh_path)?;
+        let mut scene = self.to_scene(mesh_path);
+        let start_mesh = self.save_start_shape(scene_path, &mut scene)?;
+        let text = scene.to_toml_string();
+        shapeup_core::io::write_atomic(scene_path, |w| w.write_all(text.as_bytes()))
+            .map_err(|e| EditorError::Save(Cause::new(e)))?;
         self.modified = false;
-        Ok(SavedScene { rest_mesh, warnings })
+        Ok(SavedScene { rest_mesh, start_mesh, warnings })
+    }
+
+    /// The shape on screen as `[mesh] start` of `scene`: `STEM.start.obj` beside the scene
+    /// (positions only matter; OBJ keeps every vertex in order), unless it is the rest shape.
+    /// These energies have several minima: a replay from rest may settle in another one.
+    ///
+    /// # Errors
+    /// [`EditorError::Save`] naming the file that cannot be written.
+    fn save_start_shape(&self, scene_path: &Path, scene: &mut Scene) -> Result<Option<PathBuf>, EditorError> {
+        if self.positions == self.state.rest.mesh.positions {
+            return Ok(None);
+        }
+        let stem = scene_path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+        let name = format!("{stem}.start.obj");
+        let path = scene_path.with_file_name(&name);
+        shapeup_core::io::write_mesh(&path, &self.current_mesh(), &shapeup_core::io::Attributes::None)
+            .map_err(|e| EditorError::Save(Cause::new(e)))?;
+        scene.mesh.start = Some(PathBuf::from(name));
+        Ok(Some(path))
     }
 }
 

@@ -75,6 +75,9 @@ impl EditorApp {
                 if let Some(rest) = &saved.rest_mesh {
                     line.push_str(&format!(" and its rest mesh {}", rest.display()));
                 }
+                if let Some(start) = &saved.start_mesh {
+                    line.push_str(&format!(" with the shape on screen as its start, {}", start.display()));
+                }
                 for warning in &saved.warnings {
                     line.push_str(&format!("; {warning}"));
                 }

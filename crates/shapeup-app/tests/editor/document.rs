@@ -129,27 +129,36 @@ fn saved_scenes_replay_what_the_editor_converged_to() {
         let d = diagonal(&doc);
         let (replayed, replay_energy) = replay(&scene_path);
         let worst = max_distance(&replayed, doc.positions());
-        if session == 0 {
-            // Strain + bending on a nearly flat sheet has nearby local minima (bending's energy
-            // has a kink where the mean curvature vanishes): L-BFGS's editing path settles in
-            // one, the replay from rest in one at least as low, close by.
-            assert!(replay_energy <= editor_energy * (1.0 + 1e-9), "session 0: E {replay_energy} vs {editor_energy}");
-            assert!(worst < 1e-2 * d, "session 0: replay differs by {:.3e} of the diagonal", worst / d);
-        } else {
-            assert!(worst < 1e-6 * d, "session {session}: replay differs by {:.3e} of the diagonal", worst / d);
-        }
+        // Strain + bending on a nearly flat sheet has nearby local minima (bending's energy has
+        // a kink where the mean curvature vanishes): the replay starts from the shape on screen
+        // (`[mesh] start`), so it stays in the editor's.
+        assert!(saved.start_mesh.is_some(), "the shape on screen is saved as the start");
+        assert!(
+            replay_energy <= editor_energy * (1.0 + 1e-9),
+            "session {session}: E {replay_energy} vs {editor_energy}"
+        );
+        assert!(worst < 1e-6 * d, "session {session}: replay differs by {:.3e} of the diagonal", worst / d);
 
         // Make rest shape, drag again: the saved scene carries the new rest mesh.
         doc.apply(Command::MakeRest).unwrap();
         doc.apply(Command::MoveHandle { handle: pulled, delta: DVec3::new(0.0, 0.1, -0.05) }).unwrap();
-        doc.converge().unwrap();
+        let after = doc.converge().unwrap();
         let scene_path = dir.path().join(format!("rest-{session}.toml"));
         let saved = doc.save_scene_with_mesh(&scene_path).unwrap();
         let rest_file = saved.rest_mesh.expect("the new rest mesh is written beside the scene");
         assert_eq!(rest_file, dir.path().join(format!("rest-{session}.rest.obj")));
         assert_eq!(read_mesh(&rest_file).unwrap().mesh.positions, doc.rest_positions());
-        let worst = max_distance(&replay(&scene_path).0, doc.positions());
-        assert!(worst < 1e-6 * d, "session {session} after Make rest: replay differs by {:.3e}", worst / d);
+        let start = read_mesh(&saved.start_mesh.clone().unwrap()).unwrap().mesh.positions;
+        assert_eq!(start, doc.positions(), "the start shape is the shape on screen, bit for bit");
+        let (replayed, replay_energy) = replay(&scene_path);
+        let worst = max_distance(&replayed, doc.positions());
+        if after.energies.len() < doc.iterations() {
+            assert!(worst < 1e-6 * d, "session {session} after Make rest: replay differs by {:.3e}", worst / d);
+        } else {
+            // Plain iterations stopped at the cap, still converging: the replay goes on from
+            // there (as the editor says when such a shape is saved), never to a higher energy.
+            assert!(replay_energy <= *after.energies.last().unwrap(), "session {session}: E rose in the replay");
+        }
         assert!(!doc.is_modified(), "saving clears the modified flag");
     }
 }
@@ -623,4 +632,44 @@ fn undo_steps_restore_what_was_seen() {
     let back = doc.group(head).unwrap().targets();
     assert!((targets[0].y - back[0].y - 0.1).abs() < 1e-12, "one step undid all ten moves");
     assert_eq!(doc.positions(), &at_rest[..]);
+}
+
+/// The sessions on a real mesh: Spot with each shape model, its lowest vertices and its
+/// head fixed, the head dragged a modest way in steps with partial solves (as the worker does),
+/// converged, saved, replayed by the library from the saved start shape.
+#[test]
+fn a_saved_scene_replays_the_converged_shape_of_each_shape_model() {
+    const SPOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/spot.obj");
+    let dir = tempfile::tempdir().unwrap();
+    for model in ShapeModel::ALL {
+        let mut doc = Document::open(Path::new(SPOT), model).unwrap();
+        let mut order: Vec<u32> = (0..doc.num_vertices() as u32).collect();
+        order.sort_by(|&a, &b| doc.positions()[a as usize].y.total_cmp(&doc.positions()[b as usize].y));
+        fix(&mut doc, &order[..40]);
+        let head = fix(&mut doc, &order[order.len() - 40..]);
+        doc.begin_drag();
+        for k in 0..8 {
+            doc.apply(Command::MoveHandle { handle: head, delta: DVec3::new(0.02, -0.03, 0.01) }).unwrap();
+            doc.solve(1 + k % 3).unwrap();
+        }
+        doc.end_drag();
+        let converged = doc.converge().unwrap();
+        assert!(converged.energies.len() < doc.iterations(), "{model:?} converged within the cap");
+        let scene_path = dir.path().join(format!("{model:?}.toml"));
+        doc.save_scene_with_mesh(&scene_path).unwrap();
+        let (replayed, replay_energy) = replay(&scene_path);
+        let d = diagonal(&doc);
+        let worst = max_distance(&replayed, doc.positions()) / d;
+        let energy = *converged.energies.last().unwrap();
+        eprintln!("{model:?}: replay {worst:.3e} of the diagonal away, E {replay_energy:e} vs {energy:e}");
+        // Measured: springs 5e-8, strain + bending 1.8e-6, one-rings 2.3e-6 (the replay's
+        // L-BFGS, restarted without history, takes a few more iterations from a shape the
+        // editor stopped at by the same tolerance: it goes on towards the minimum). From rest
+        // these replays landed in other minima, up to 5 % of the diagonal away.
+        assert!(worst < 5e-6, "{model:?}: the replay is {worst:.3e} of the diagonal away");
+        assert!(replay_energy <= energy * (1.0 + 1e-9), "{model:?}: E {replay_energy} vs {energy}");
+        // Reopened, the editor starts from the saved shape.
+        let reopened = Document::from_scene(&Scene::from_file(&scene_path).unwrap()).unwrap();
+        assert_eq!(reopened.positions(), doc.positions());
+    }
 }

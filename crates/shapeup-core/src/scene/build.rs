@@ -43,6 +43,10 @@ pub struct LoadedScene {
     pub build_seconds: f64,
     /// The colliders and self-collision (`None` when the scene has neither).
     pub contact: Option<ContactModel>,
+    /// `[mesh] start`'s positions (input frame), which solves start from instead of the rest
+    /// shape ([`LoadedScene::start_positions`]); `None` without the key, or for a scene
+    /// [`Scene::build`] was given a mesh for.
+    pub start: Option<Vec<DVec3>>,
 }
 
 impl Scene {
@@ -57,7 +61,35 @@ impl Scene {
         let scene = self.with_physical_groups(loaded.attributes.physical_groups())?;
         let mut built = scene.build(loaded.mesh, loaded.warnings, load_seconds)?;
         built.attributes = loaded.attributes;
+        built.start = self.read_start(&built.mesh, built.input_vertices)?;
         Ok(built)
+    }
+
+    /// The positions of `[mesh] start` (input frame), checked against the scene's `mesh` of
+    /// `input_vertices` vertices (before tetrahedralization); `None` without the key.
+    ///
+    /// # Errors
+    /// [`SceneError::Invalid`] naming `[mesh] start`: a file that cannot be read, another
+    /// vertex count, or a tetrahedralized scene (TetGen's inner points have no start).
+    pub fn read_start(&self, mesh: &Mesh, input_vertices: usize) -> Result<Option<Vec<DVec3>>, SceneError> {
+        let Some(path) = self.start_path() else { return Ok(None) };
+        let invalid =
+            |message: String| SceneError::Invalid { path: self.file.clone(), entry: "[mesh] start".into(), message };
+        if mesh.num_vertices() != input_vertices {
+            return Err(invalid(
+                "a start shape cannot be used with tetrahedralize = true (the points TetGen adds have none)".into(),
+            ));
+        }
+        let start = read_mesh(&path).map_err(|e| invalid(e.to_string()))?.mesh;
+        if start.num_vertices() != input_vertices {
+            return Err(invalid(format!(
+                "{} has {} vertices where the mesh {} has {input_vertices}: a start shape moves the mesh's own vertices, in their order",
+                path.display(),
+                start.num_vertices(),
+                self.mesh_path().display(),
+            )));
+        }
+        Ok(Some(start.positions))
     }
 
     /// The scene with each `physical = "NAME"` selection replaced by the vertices of the mesh's
@@ -185,6 +217,7 @@ impl Scene {
             load_seconds,
             build_seconds: t.elapsed().as_secs_f64(),
             contact,
+            start: None,
         })
     }
 
@@ -480,7 +513,16 @@ impl LoadedScene {
         &self.rest.positions
     }
 
-    /// Static solve from the rest shape: `iterations` local-global iterations (default: the
+    /// Where solves start, working frame: `[mesh] start` when the scene has one, else the rest
+    /// shape.
+    pub fn start_positions(&self) -> Vec<DVec3> {
+        match &self.start {
+            Some(start) => self.to_working(start),
+            None => self.rest.positions.clone(),
+        }
+    }
+
+    /// Static solve from [`LoadedScene::start_positions`] (the rest shape unless `[mesh] start`): `iterations` local-global iterations (default: the
     /// scene's steps × iterations). Returns the positions in the working frame.
     ///
     /// # Errors
@@ -502,7 +544,7 @@ impl LoadedScene {
         let iterations = self.static_iterations(iterations);
         self.warn_of_collider_motion();
         self.warn_of_handle_spin();
-        let mut q = self.rest.positions.clone();
+        let mut q = self.start_positions();
         if let Some(contact) = self.contact.as_mut().filter(|c| c.is_active()) {
             let report = solve_static_with_contact(&mut self.system, contact, &mut q, iterations, after_iteration)
                 .map_err(|source| SceneError::Solve { path: self.scene.file.clone(), source })?;
@@ -612,14 +654,18 @@ impl LoadedScene {
     /// so); for a surface the scene tetrahedralized, that surface: every input vertex in file
     /// order, its faces, without TetGen's points (which come after the input's
     /// vertices), so outputs line up with the input file. Vertices `is_solved` says no
-    /// constraint touches keep their input positions bit for bit (the round trip through the
-    /// working frame may change the last bit).
+    /// constraint touches keep their start positions (`[mesh] start`, else the input's) bit for
+    /// bit (the round trip through the working frame may change the last bit).
     pub fn output_mesh(&self, q: &[DVec3], volume: bool, is_solved: impl Fn(usize) -> bool) -> Mesh {
         let surface_only = !volume && self.input_vertices < self.mesh.num_vertices();
         let n = if surface_only { self.input_vertices.min(q.len()) } else { q.len() };
+        // Vertices the solver does not move keep their start coordinates exactly (no round
+        // trip through the working frame).
+        let start =
+            self.start.as_deref().filter(|s| s.len() == self.mesh.num_vertices()).unwrap_or(&self.mesh.positions);
         let positions = q[..n]
             .iter()
-            .zip(&self.mesh.positions)
+            .zip(start)
             .enumerate()
             .map(|(v, (&p, &input))| if is_solved(v) { self.frame.to_input(p) } else { input })
             .collect();
@@ -643,7 +689,7 @@ impl LoadedScene {
         self.scene.solver.dynamics_params(self.frame.scale)
     }
 
-    /// Starts a Projective Dynamics simulation at rest from the rest shape. The constraint
+    /// Starts a Projective Dynamics simulation at rest from [`LoadedScene::start_positions`]. The constraint
     /// system moves into the simulation (this scene keeps the mesh and frame, for output).
     ///
     /// # Errors
@@ -655,7 +701,7 @@ impl LoadedScene {
         let params = self.scene.solver.checked_dynamics_params(self.frame.scale).map_err(|e| invalid(e.to_string()))?;
         let system =
             std::mem::replace(&mut self.system, System::new(self.mesh.num_vertices(), SolverParams::default()));
-        let mut simulation = Simulation::new(system, self.masses(), self.rest.positions.clone(), params)
+        let mut simulation = Simulation::new(system, self.masses(), self.start_positions(), params)
             .map_err(|e| invalid(e.to_string()))?;
         simulation.set_contact(self.contact.clone()).map_err(|e| invalid(e.to_string()))?;
         Ok(simulation)

@@ -54,12 +54,20 @@ impl Scene {
         self.base_dir.join(&self.mesh.path)
     }
 
+    /// `[mesh] start`, relative to the scene file's directory, when the scene has one.
+    pub fn start_path(&self) -> Option<PathBuf> {
+        self.mesh.start.as_ref().map(|p| self.base_dir.join(p))
+    }
+
     /// The files a run of this scene reads, each with what it is: the scene file, its mesh
     /// (unless generated), every mesh collider's file. What no output may replace.
     pub fn input_files(&self) -> Vec<(PathBuf, String)> {
         let mut inputs: Vec<(PathBuf, String)> = vec![(self.file.clone(), "the scene file".into())];
         if self.mesh.generate.is_none() {
             inputs.push((self.mesh_path(), "the scene's mesh".into()));
+        }
+        if let Some(start) = self.start_path() {
+            inputs.push((start, "the scene's start shape".into()));
         }
         for (i, c) in self.colliders.iter().enumerate() {
             if let crate::contact::ShapeSpec::Mesh { path, .. } = &c.shape {

@@ -115,6 +115,12 @@ pub struct MeshSettings {
     /// Fill a closed surface with tetrahedra (default false).
     #[serde(default)]
     pub tetrahedralize: bool,
+    /// A mesh file (relative to the scene file) of the same vertices in the same order whose
+    /// positions the solve starts from instead of the rest shape (default none: from rest). The
+    /// editor saves the shape on screen here, so that a replay converges to the same minimum
+    /// of energies that have several.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub start: Option<PathBuf>,
 }
 
 fn yes() -> bool {

@@ -9,7 +9,7 @@ use std::fmt::Write as _;
 use toml::Value;
 
 impl Scene {
-    /// The scene as TOML text: `[mesh]` (path, normalize, and tetrahedralize when set), every
+    /// The scene as TOML text: `[mesh]` (path, normalize, and tetrahedralize and start when set), every
     /// field of `[solver]`, `[output]` when set, then one `[[constraints]]` entry per group with its type, name,
     /// weight, selection (`vertices`, `box` or `sphere`; none for all vertices), targets
     /// (`targets = [[x, y, z], …]` when explicit, else `translate` / `rotate`) and options.
@@ -30,6 +30,9 @@ impl Scene {
         line(&mut out, "normalize", Value::Boolean(self.mesh.normalize));
         if self.mesh.tetrahedralize {
             line(&mut out, "tetrahedralize", Value::Boolean(true));
+        }
+        if let Some(start) = &self.mesh.start {
+            line(&mut out, "start", Value::String(start.to_string_lossy().into_owned()));
         }
 
         let s = &self.solver;
@@ -229,6 +232,7 @@ mod tests {
                 generate: None,
                 normalize: false,
                 tetrahedralize: true,
+                start: Some(PathBuf::from("meshes/start shape.obj")),
             },
             solver: SolverSettings {
                 mode: Mode::Dynamic,

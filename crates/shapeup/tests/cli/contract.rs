@@ -2293,3 +2293,64 @@ fn physical_groups_of_a_gmsh_file_select_vertices_and_come_back_out() {
     shapeup([OsStr::new("deform"), by_tag.as_os_str(), "-o".as_ref(), out.as_os_str()]).success();
     assert_eq!(read(&out).positions, after.positions, "tag 1 is \"fixed\"");
 }
+
+/// Edge springs and vertex 0 held where it rests.
+const PINNED_SPRINGS: &str =
+    "[[constraints]]\ntype = \"edge_spring\"\n[[constraints]]\ntype = \"position\"\nvertices = [0]\n";
+
+#[test]
+fn a_start_shape_is_where_the_solve_starts() {
+    let dir = tempfile::tempdir().unwrap();
+    let spot = spot();
+    // The start: Spot moved 0.5 up and squashed (one of the shapes a drag leaves on screen).
+    let start: Vec<DVec3> = spot.positions.iter().map(|p| DVec3::new(p.x, 0.5 + 0.7 * p.y, p.z)).collect();
+    write_mesh(&dir.path().join("start.obj"), &Mesh { positions: start.clone(), ..spot.clone() }, &Default::default())
+        .unwrap();
+    let scene = write(&dir.path().join("s.toml"), &toml_scene(Path::new(SPOT), "start = 'start.obj'", PINNED_SPRINGS));
+    // No iterations: the output is the start shape itself.
+    let out = dir.path().join("out.obj");
+    shapeup([
+        "deform".as_ref(),
+        scene.as_os_str(),
+        "-o".as_ref(),
+        out.as_os_str(),
+        "--iterations".as_ref(),
+        "0".as_ref(),
+    ])
+    .success();
+    let written = read(&out).positions;
+    let worst = written.iter().zip(&start).map(|(a, b)| a.distance(*b)).fold(0.0, f64::max);
+    assert!(worst < 1e-9, "{worst}");
+    // The same scene simulated starts there too (frame 0 is the start at rest).
+    let frames = dir.path().join("frames");
+    let dynamic = write(
+        &dir.path().join("d.toml"),
+        &toml_scene(
+            Path::new(SPOT),
+            "start = 'start.obj'",
+            &format!("[solver]\nmode = \"dynamic\"\nsteps = 1\ngravity = [0.0, 0.0, 0.0]\n{PINNED_SPRINGS}"),
+        ),
+    );
+    simulate_in(None, &dynamic, &frames, &["--frames", "1"]).success();
+    let first = read(&frames.join("frame_0000.obj")).positions;
+    let worst = first.iter().zip(&start).map(|(a, b)| a.distance(*b)).fold(0.0, f64::max);
+    assert!(worst < 1e-9, "frame 0 is {worst} from the start shape");
+
+    // Bad input: one line naming the key, nothing written.
+    let refused = |start_line: &str, needle: &str| {
+        let scene = write(&dir.path().join("bad.toml"), &toml_scene(Path::new(SPOT), start_line, PINNED_SPRINGS));
+        let out = dir.path().join("bad.obj");
+        let o = shapeup(["deform".as_ref(), scene.as_os_str(), "-o".as_ref(), out.as_os_str()]);
+        assert_eq!(o.code, Some(1), "{}", o.describe());
+        assert_eq!(o.stderr.trim().lines().count(), 1, "{}", o.describe());
+        assert!(o.stderr.contains("[mesh] start") && o.stderr.contains(needle), "{}", o.describe());
+        assert!(!out.exists());
+    };
+    refused("start = 'missing.obj'", "missing.obj");
+    write_mesh(&dir.path().join("cow.obj"), &read(Path::new(COW)), &Default::default()).unwrap();
+    refused("start = 'cow.obj'", &format!("has 2903 vertices where the mesh {SPOT} has {}", spot.num_vertices()));
+    // The start is an input: no output replaces it.
+    let o = shapeup(["deform".as_ref(), scene.as_os_str(), "-o".as_ref(), dir.path().join("start.obj").as_os_str()]);
+    assert_eq!(o.code, Some(1), "{}", o.describe());
+    assert!(o.stderr.contains("start shape"), "{}", o.describe());
+}
