@@ -73,7 +73,8 @@ class Scene:
         output: PathLike | None = None,
         report: PathLike | None = None,
     ) -> tuple[np.ndarray, dict[str, Any]]:
-        """``shapeup deform``: the static solve from the rest shape (``iterations`` default:
+        """``shapeup deform``: the static solve from the rest shape, or from the scene's
+        ``[mesh] start`` shape when it has one (``iterations`` default:
         the scene's steps × iterations). Returns ``(V, report)``: the result in the input's
         frame float64 (n, 3), bit for bit what the command line writes, and the report the
         command line writes with ``--report``. Writes ``output`` (a mesh file, with the

@@ -284,3 +284,26 @@ def test_time_steps_stopped_short_warn_once(tmp_path):
             assert "(10 iterations a step)" in str(said[0].message)
         else:
             assert flagged == 0 and not said, [r["residual"] for r in reports]
+
+
+@pytest.mark.filterwarnings("ignore::shapeup.UnconvergedWarning")
+def test_a_start_shape_is_where_deform_starts(tmp_path, cli):
+    # The editor saves the shape on screen as [mesh] start; every door starts there.
+    spot = shapeup.read_mesh(EXAMPLES.parent / "data" / "spot.obj")
+    start = spot.V * np.array([1.0, 0.7, 1.0]) + np.array([0.0, 0.5, 0.0])
+    shapeup.write_mesh(tmp_path / "start.obj", start, spot.F)
+    scene = tmp_path / "s.toml"
+    scene.write_text(
+        f"[mesh]\npath = '{EXAMPLES.parent / 'data' / 'spot.obj'}'\nstart = 'start.obj'\n"
+        '[[constraints]]\ntype = "edge_spring"\n[[constraints]]\ntype = "position"\nvertices = [0]\n'
+    )
+    V, _ = shapeup.Scene.load(scene).deform(iterations=0)
+    np.testing.assert_allclose(V, start, rtol=0, atol=1e-12)
+    V, _ = shapeup.Scene.load(scene).deform(iterations=5)
+    out = tmp_path / "cli.obj"
+    subprocess.run([str(cli), "deform", str(scene), "-o", str(out), "--iterations", "5"], check=True, capture_output=True)
+    np.testing.assert_allclose(V, shapeup.read_mesh(out).V, rtol=0, atol=1e-12)
+    (tmp_path / "few.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    scene.write_text(scene.read_text().replace("start.obj", "few.obj"))
+    with pytest.raises(ValueError, match=r"\[mesh\] start.*has 3 vertices where the mesh"):
+        shapeup.Scene.load(scene).deform()
