@@ -110,6 +110,13 @@ pub struct SolveResult {
     /// Groups whose weights the factorization cannot resolve
     /// ([`shapeup_core::solver::SolveReport::lost_groups`]): how many, and the first described.
     pub lost_groups: Option<(usize, String)>,
+    /// Seconds the convergence should still take, while it runs: iterations until the
+    /// relative change reaches the tolerance at the rate it has fallen over the last iterations
+    /// (geometric, as local-global iterations converge), times the seconds per iteration; at
+    /// most what the iteration cap leaves. `None` when unknown (too few iterations, no fall).
+    pub seconds_left: Option<f64>,
+    /// The user stopped the convergence ([`SolverWorker::stop`]): finished, not converged.
+    pub stopped: bool,
 }
 
 impl SolveResult {
@@ -150,6 +157,8 @@ impl SolveResult {
         self.touching = next.touching;
         self.residual = next.residual;
         self.lost_groups = next.lost_groups;
+        self.seconds_left = next.seconds_left;
+        self.stopped = next.stopped;
     }
 }
 
@@ -162,6 +171,8 @@ impl fmt::Display for SolveResult {
         let noun = if n == 1 { "iteration" } else { "iterations" };
         if self.converged {
             write!(f, "converged: {n} {noun}")?;
+        } else if self.stopped {
+            write!(f, "stopped at {n} {noun}, not converged (any change converges again)")?;
         } else if self.finished {
             write!(f, "stopped at the {n}-iteration cap")?;
             if let Some(r) = self.residual.filter(|&r| r > STATIC_RESIDUAL_LIMIT) {
@@ -174,6 +185,9 @@ impl fmt::Display for SolveResult {
         if let Some(e) = self.last_energy() {
             write!(f, ", E {e:.3e}")?;
         }
+        if let Some(left) = self.seconds_left.filter(|_| !self.finished) {
+            write!(f, ", about {} left", seconds_text(left))?;
+        }
         if let Some((count, first)) = &self.lost_groups {
             // As the command line's `groups_lost_to_round_off` warning says it.
             write!(
@@ -182,6 +196,18 @@ impl fmt::Display for SolveResult {
             )?;
         }
         Ok(())
+    }
+}
+
+/// "0.4 s", "12 s", "3 min 20 s": a time left, as precise as it is worth.
+fn seconds_text(s: f64) -> String {
+    if s < 10.0 {
+        format!("{s:.1} s")
+    } else if s < 60.0 {
+        format!("{s:.0} s")
+    } else {
+        let whole = s.round().min(1e9) as u64;
+        format!("{} min {} s", whole / 60, whole % 60)
     }
 }
 
@@ -226,6 +252,8 @@ struct Pending {
     request: Option<(u64, SolveRequest)>,
     /// The thread is converging a request (cleared before its finished result is sent).
     converging: bool,
+    /// [`SolverWorker::stop`] asked to end the convergence under way.
+    stop: bool,
     shutdown: bool,
 }
 
@@ -268,9 +296,11 @@ impl Shared {
         }
     }
 
-    /// Whether a newer request waits: the chunk under way stops after its current iteration.
+    /// Whether a newer request or a stop waits: the chunk under way stops after its current
+    /// iteration.
     fn interrupted(&self) -> bool {
-        self.lock().request.is_some()
+        let pending = self.lock();
+        pending.request.is_some() || pending.stop
     }
 }
 
@@ -317,6 +347,17 @@ impl SolverWorker {
             .name("shapeup-solver".into())
             .spawn(move || run(&thread_shared, &notify, params))?;
         Ok(SolverWorker { shared, thread: Some(thread), next_seq: 0 })
+    }
+
+    /// Ends the convergence under way after its current iteration (dropping any request not
+    /// started yet): its last result comes finished, with [`SolveResult::stopped`], at the
+    /// shape reached. Nothing happens when the worker is idle. The next request converges on
+    /// from there.
+    pub fn stop(&mut self) {
+        let mut pending = self.shared.lock();
+        pending.request = None;
+        pending.stop = pending.converging;
+        self.shared.wake.notify_all();
     }
 
     /// Queues a request, replacing any pending one not started yet; the convergence under way
@@ -410,6 +451,17 @@ fn run(shared: &Shared, notify: &dyn Fn(), params: WorkerParams) {
                 if pending.shutdown {
                     return;
                 }
+                // A stop ends the convergence where it is: one finished result says so.
+                if std::mem::take(&mut pending.stop)
+                    && let Some(stopped) = job.take()
+                {
+                    pending.converging = false;
+                    shared.post(worker.stopped(&stopped));
+                    drop(pending);
+                    notify();
+                    pending = shared.lock();
+                    continue;
+                }
                 // The newest target wins at once, continuing from the current positions.
                 if let Some((seq, request)) = pending.request.take() {
                     job = Some(Job::new(seq, request));
@@ -459,13 +511,51 @@ struct Job {
     last_chunk: usize,
     /// The request's relative residual so far ([`SolveResult::residual`]).
     residual: Option<f64>,
+    /// (iterations done, relative change) after recent chunks, for [`Job::seconds_left`].
+    changes: std::collections::VecDeque<(usize, f64)>,
 }
 
 impl Job {
     fn new(seq: u64, request: SolveRequest) -> Self {
-        Job { seq, request, started: false, done: 0, last_energy: None, last_chunk: 0, residual: Some(1.0) }
+        Job {
+            seq,
+            request,
+            started: false,
+            done: 0,
+            last_energy: None,
+            last_chunk: 0,
+            residual: Some(1.0),
+            changes: std::collections::VecDeque::new(),
+        }
+    }
+
+    /// [`SolveResult::seconds_left`] after a chunk that ended at relative change `change`.
+    fn seconds_left(&mut self, change: Option<f64>, seconds_per_iteration: Option<f64>) -> Option<f64> {
+        let change = change.filter(|c| c.is_finite() && *c > 0.0)?;
+        self.changes.push_back((self.done, change));
+        // The rate over at least RATE_SPAN iterations back (accelerated iterations' changes
+        // wander: a longer span smooths them), from the newest sample that far back.
+        while self.changes.len() > 2 && self.changes[1].0 + RATE_SPAN <= self.done {
+            self.changes.pop_front();
+        }
+        let &(k0, c0) = self.changes.front()?;
+        let tolerance = self.request.tolerance;
+        if self.done < k0 + RATE_SPAN || tolerance <= 0.0 {
+            return None;
+        }
+        let rate = (change / c0).ln() / (self.done - k0) as f64;
+        // Not falling (or NaN): no estimate.
+        if rate.is_nan() || rate >= 0.0 {
+            return None;
+        }
+        let left = if change <= tolerance { 0.0 } else { (tolerance / change).ln() / rate };
+        let left = left.min(self.request.iterations.saturating_sub(self.done) as f64);
+        seconds_per_iteration.map(|s| left * s)
     }
 }
+
+/// Iterations over which [`Job::seconds_left`] measures how fast the relative change falls.
+const RATE_SPAN: usize = 20;
 
 /// The thread's solver and what it remembers between requests.
 struct Converger {
@@ -522,6 +612,29 @@ impl Converger {
         if request.state.has_handles() { Ok(()) } else { Err(EditorError::NoHandles) }
     }
 
+    /// The finished result of `job`, stopped by the user where its last chunk left it.
+    fn stopped(&self, job: &Job) -> SolveResult {
+        SolveResult {
+            seq: job.seq,
+            epoch: job.request.epoch,
+            positions: self.solver.positions(),
+            iterations: job.done,
+            converged: false,
+            finished: true,
+            relative_change: None,
+            local_ms: 0.0,
+            global_ms: 0.0,
+            setup_ms: 0.0,
+            energy: job.last_energy.into_iter().collect(),
+            error: None,
+            touching: self.solver.touching().map(<[bool]>::to_vec).unwrap_or_default(),
+            residual: job.residual,
+            lost_groups: None,
+            seconds_left: None,
+            stopped: true,
+        }
+    }
+
     /// Runs one chunk of `job` and says how far it got.
     fn step(&mut self, job: &mut Job, interrupted: &dyn Fn() -> bool) -> SolveResult {
         let started = Instant::now();
@@ -541,6 +654,8 @@ impl Converger {
             touching: Vec::new(),
             residual: None,
             lost_groups: None,
+            seconds_left: None,
+            stopped: false,
         };
         let outcome = self.chunk(job, interrupted);
         match outcome {
@@ -570,6 +685,7 @@ impl Converger {
                 result.residual = job.residual;
                 result.lost_groups = report.lost_groups.first().map(|g| (report.lost_groups.len(), g.describe()));
                 result.iterations = job.done;
+                result.seconds_left = job.seconds_left(result.relative_change, self.seconds_per_iteration);
                 result.local_ms = 1e3 * report.local_seconds;
                 result.global_ms = 1e3 * report.global_seconds;
                 result.setup_ms = 1e3 * report.setup_seconds;

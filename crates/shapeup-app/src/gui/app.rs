@@ -557,16 +557,28 @@ impl EditorApp {
     }
 
     /// The bottom line: the convergence and the last message, always in view.
-    fn status_bar(&self, ui: &mut egui::Ui) {
+    fn status_bar(&mut self, ui: &mut egui::Ui) {
         // Wrapped, never cut at the window's edge.
-        ui.horizontal_wrapped(|ui| {
-            let p = &self.view.progress;
-            if !p.line.is_empty() {
-                ui.add(egui::Label::new(&p.line).wrap());
-                ui.separator();
-            }
-            ui.add(egui::Label::new(&self.view.status).wrap());
-        });
+        let stop = ui
+            .horizontal_wrapped(|ui| {
+                let p = &self.view.progress;
+                let solving = self.worker.as_ref().is_some_and(SolverWorker::is_busy);
+                let stop = solving
+                    && ui
+                        .button("Stop solving")
+                        .on_hover_text("keep the shape reached; any change converges again")
+                        .clicked();
+                if !p.line.is_empty() {
+                    ui.add(egui::Label::new(&p.line).wrap());
+                    ui.separator();
+                }
+                ui.add(egui::Label::new(&self.view.status).wrap());
+                stop
+            })
+            .inner;
+        if stop && let Some(worker) = &mut self.worker {
+            worker.stop();
+        }
     }
 }
 

@@ -646,3 +646,49 @@ fn live_requests_pause_after_their_first_chunk() {
     assert!(results.last().unwrap().converged);
     assert!(results.iter().map(|r| r.energy.len()).sum::<usize>() > 1);
 }
+
+#[test]
+fn a_long_convergence_says_the_time_left_and_stops_when_asked() {
+    let (doc, _) = bent_grid(30);
+    let mut request = SolveRequest::from_document(&doc);
+    // Far past what a test waits for: only the stop ends it.
+    request.iterations = 1_000_000;
+    request.tolerance = 1e-300;
+    let mut worker = SolverWorker::spawn().unwrap();
+    let seq = worker.request(request.clone());
+    let deadline = Instant::now() + Duration::from_secs(60);
+    let estimate = loop {
+        let results = worker.poll_all();
+        if let Some(r) = results.iter().rev().find(|r| r.seconds_left.is_some()) {
+            break r.clone();
+        }
+        assert!(results.iter().all(|r| !r.finished), "finished before any estimate");
+        assert!(Instant::now() < deadline, "no estimate of the time left");
+        std::thread::sleep(Duration::from_millis(2));
+    };
+    let left = estimate.seconds_left.unwrap();
+    assert!(left.is_finite() && left > 0.0, "{left}");
+    assert!(estimate.status().contains(" left"), "{}", estimate.status());
+    assert!(estimate.iterations >= 20, "measured over 20 iterations at least: {}", estimate.iterations);
+
+    worker.stop();
+    let results = until_finished(&mut worker, seq);
+    let last = results.last().unwrap();
+    assert!(last.stopped && last.finished && !last.converged && last.error.is_none(), "{last:?}");
+    assert!(last.iterations < request.iterations);
+    assert!(last.status().starts_with(&format!("stopped at {} iterations, not converged", last.iterations)));
+    assert!(!last.status().contains(" left"), "{}", last.status());
+    assert!(!worker.is_busy());
+    // Nothing more comes; a stop while idle does nothing.
+    worker.stop();
+    std::thread::sleep(Duration::from_millis(50));
+    assert!(worker.poll_all().is_empty());
+
+    // The next request converges on from the shape reached.
+    let mut next = request.clone();
+    next.tolerance = 1e-6;
+    let seq = worker.request(next);
+    let results = until_finished(&mut worker, seq);
+    assert!(results.last().unwrap().converged);
+    assert!(!results.last().unwrap().stopped);
+}
