@@ -303,6 +303,10 @@ def test_a_start_shape_is_where_deform_starts(tmp_path, cli):
     out = tmp_path / "cli.obj"
     subprocess.run([str(cli), "deform", str(scene), "-o", str(out), "--iterations", "5"], check=True, capture_output=True)
     np.testing.assert_allclose(V, shapeup.read_mesh(out).V, rtol=0, atol=1e-12)
+    scene.write_text(scene.read_text().replace("start.obj", "missing.obj"))
+    with pytest.raises(FileNotFoundError, match=r"\[mesh\] start.*missing.obj"):
+        shapeup.Scene.load(scene).deform()
+    scene.write_text(scene.read_text().replace("missing.obj", "start.obj"))
     (tmp_path / "few.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
     scene.write_text(scene.read_text().replace("start.obj", "few.obj"))
     with pytest.raises(ValueError, match=r"\[mesh\] start.*has 3 vertices where the mesh"):

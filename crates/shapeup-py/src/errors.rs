@@ -44,6 +44,7 @@ pub(crate) fn scene_error(e: SceneError) -> PyErr {
         }
         SceneError::Read { .. } => PyOSError::new_err(e.to_string()),
         SceneError::Mesh { source: IoError::Open { ref source, .. }, .. }
+        | SceneError::Start { source: IoError::Open { ref source, .. }, .. }
             if source.kind() == std::io::ErrorKind::NotFound =>
         {
             pyo3::exceptions::PyFileNotFoundError::new_err(e.to_string())

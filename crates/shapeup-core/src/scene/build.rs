@@ -69,8 +69,9 @@ impl Scene {
     /// `input_vertices` vertices (before tetrahedralization); `None` without the key.
     ///
     /// # Errors
-    /// [`SceneError::Invalid`] naming `[mesh] start`: a file that cannot be read, another
-    /// vertex count, or a tetrahedralized scene (TetGen's inner points have no start).
+    /// [`SceneError::Start`] for a file that cannot be read; [`SceneError::Invalid`] naming
+    /// `[mesh] start` for another vertex count, other faces, an empty path, or a
+    /// tetrahedralized scene (TetGen's inner points have no start).
     pub fn read_start(&self, mesh: &Mesh, input_vertices: usize) -> Result<Option<Vec<DVec3>>, SceneError> {
         let Some(path) = self.start_path() else { return Ok(None) };
         let invalid =
@@ -80,13 +81,27 @@ impl Scene {
                 "a start shape cannot be used with tetrahedralize = true (the points TetGen adds have none)".into(),
             ));
         }
-        let start = read_mesh(&path).map_err(|e| invalid(e.to_string()))?.mesh;
+        if self.mesh.start.as_ref().is_some_and(|p| p.as_os_str().is_empty()) {
+            return Err(invalid("is empty: name a mesh file of the scene's vertices, or leave the key out".into()));
+        }
+        let start = read_mesh(&path).map_err(|source| SceneError::Start { path: self.file.clone(), source })?.mesh;
+        let mesh_name = match self.mesh.generate {
+            Some(_) => "the generated mesh".to_string(),
+            None => format!("the mesh {}", self.mesh_path().display()),
+        };
         if start.num_vertices() != input_vertices {
             return Err(invalid(format!(
-                "{} has {} vertices where the mesh {} has {input_vertices}: a start shape moves the mesh's own vertices, in their order",
+                "{} has {} vertices where {mesh_name} has {input_vertices}: a start shape moves the mesh's own vertices, in their order",
                 path.display(),
                 start.num_vertices(),
-                self.mesh_path().display(),
+            )));
+        }
+        // Same count, other order: an STL file's vertices are merged in the order its
+        // triangles first use them, so they would land on other vertices.
+        if start.polygons != mesh.polygons || start.tetrahedra != mesh.tetrahedra {
+            return Err(invalid(format!(
+                "{}'s faces are not those of {mesh_name}: a start shape is the mesh's own vertices in their order, with its faces (write it as OBJ, PLY, OFF or MSH; STL merges and reorders vertices)",
+                path.display(),
             )));
         }
         Ok(Some(start.positions))
@@ -567,12 +582,30 @@ impl LoadedScene {
             self.warnings.extend(found.for_file(&self.scene.file));
             return Ok((q, report));
         }
-        let report = self
+        let mut report = self
             .system
             .solve_with(&mut q, iterations, self.scene.solver.tolerance, after_iteration)
             .map_err(|source| SceneError::Solve { path: self.scene.file.clone(), source })?;
+        if self.start.is_some() {
+            self.residual_from_rest(&q, &mut report);
+        }
         self.warnings.extend(report.warnings().for_file(&self.scene.file));
         Ok((q, report))
+    }
+
+    /// A solve from a start shape near a minimum (the editor saves the shape it converged
+    /// to) begins with a gradient near round-off: measured against it, what is left at the end
+    /// reads as "short of the minimum" though E did not move. The gradient at the rest shape,
+    /// a solve from rest's reference, is taken instead when larger.
+    fn residual_from_rest(&mut self, q: &[DVec3], report: &mut SolveReport) {
+        let Some(residual) = report.residual.filter(|&r| r > 0.0) else { return };
+        // At q last: the system's projections stay those at the result, as the solve left them.
+        let rest = self.system.half_gradient_norm_at(&self.rest.positions);
+        let end = self.system.half_gradient_norm_at(q);
+        if rest > 0.0 && end / rest < residual {
+            report.residual = Some(end / rest);
+            report.unconverged = end / rest > crate::solver::STATIC_RESIDUAL_LIMIT;
+        }
     }
 
     /// Warns, once, of the colliders whose `velocity` or `spin` a static solve ignores (it

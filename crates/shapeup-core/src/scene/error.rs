@@ -33,6 +33,14 @@ pub enum SceneError {
         /// What is wrong.
         message: String,
     },
+    /// The `[mesh] start` file cannot be read.
+    #[error("{}: [mesh] start: {source}", one_line(path.display()))]
+    Start {
+        /// The scene file.
+        path: PathBuf,
+        /// The mesh error (names the start file).
+        source: crate::io::IoError,
+    },
     /// The mesh cannot be loaded.
     #[error("{}: {source}", one_line(path.display()))]
     Mesh {

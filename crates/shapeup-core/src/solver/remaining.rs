@@ -97,6 +97,16 @@ impl System {
         Ok(out)
     }
 
+    /// ‖A q − b(q)‖ at any q (half the gradient of E; of the objective in dynamic mode), after
+    /// a local step there: what [`SolveReport::residual`](super::SolveReport::residual)
+    /// divides, for a reference of the caller's (a scene's rest shape when it starts elsewhere).
+    pub fn half_gradient_norm_at(&mut self, q: &[DVec3]) -> f64 {
+        let Some(n) = self.factor.as_ref().map(|_| self.assembly.num_solved()) else { return 0.0 };
+        let mut g = vec![[0.0; 4]; n];
+        self.gradient_at(q, &mut g);
+        super::lbfgs::dot(&g, &g).sqrt()
+    }
+
     /// Half the objective's gradient at q ([`System::half_gradient`]) after a local step there.
     fn gradient_at(&mut self, q: &[DVec3], g: &mut [[f64; 4]]) {
         self.project(q);

@@ -2294,6 +2294,9 @@ fn physical_groups_of_a_gmsh_file_select_vertices_and_come_back_out() {
     assert_eq!(read(&out).positions, after.positions, "tag 1 is \"fixed\"");
 }
 
+/// A handle moving vertex 1500 up by 0.2.
+const MOVED_VERTEX: &str = "[[constraints]]\ntype = \"position\"\nvertices = [1500]\ntranslate = [0.0, 0.2, 0.0]\n";
+
 /// Edge springs and vertex 0 held where it rests.
 const PINNED_SPRINGS: &str =
     "[[constraints]]\ntype = \"edge_spring\"\n[[constraints]]\ntype = \"position\"\nvertices = [0]\n";
@@ -2336,6 +2339,32 @@ fn a_start_shape_is_where_the_solve_starts() {
     let worst = first.iter().zip(&start).map(|(a, b)| a.distance(*b)).fold(0.0, f64::max);
     assert!(worst < 1e-9, "frame 0 is {worst} from the start shape");
 
+    // From a converged start, a capped solve does not cry "short of the minimum": the gradient
+    // it began with is round-off; the rest shape's is the reference.
+    let converged = dir.path().join("converged.obj");
+    let moved = toml_scene(Path::new(SPOT), "", &format!("{PINNED_SPRINGS}{MOVED_VERTEX}"));
+    let from_rest = write(&dir.path().join("rest.toml"), &moved);
+    shapeup([
+        "deform".as_ref(),
+        from_rest.as_os_str(),
+        "-o".as_ref(),
+        converged.as_os_str(),
+        "--iterations".as_ref(),
+        "3000".as_ref(),
+    ])
+    .success();
+    let again = write(&dir.path().join("again.toml"), &moved.replacen("\n", "\nstart = 'converged.obj'\n", 1));
+    let o = shapeup([
+        "deform".as_ref(),
+        again.as_os_str(),
+        "-o".as_ref(),
+        dir.path().join("again.obj").as_os_str(),
+        "--iterations".as_ref(),
+        "30".as_ref(),
+    ])
+    .success();
+    assert!(!o.stderr.contains("short of its minimum"), "{}", o.describe());
+
     // Bad input: one line naming the key, nothing written.
     let refused = |start_line: &str, needle: &str| {
         let scene = write(&dir.path().join("bad.toml"), &toml_scene(Path::new(SPOT), start_line, PINNED_SPRINGS));
@@ -2347,6 +2376,11 @@ fn a_start_shape_is_where_the_solve_starts() {
         assert!(!out.exists());
     };
     refused("start = 'missing.obj'", "missing.obj");
+    refused("start = ''", "is empty");
+    // Same count, other order: STL merges vertices in the order its triangles use them.
+    write_mesh(&dir.path().join("start.stl"), &Mesh { positions: start.clone(), ..spot.clone() }, &Default::default())
+        .unwrap();
+    refused("start = 'start.stl'", "faces are not those of the mesh");
     write_mesh(&dir.path().join("cow.obj"), &read(Path::new(COW)), &Default::default()).unwrap();
     refused("start = 'cow.obj'", &format!("has 2903 vertices where the mesh {SPOT} has {}", spot.num_vertices()));
     // The start is an input: no output replaces it.
