@@ -893,6 +893,27 @@ fn the_screenshot_button_saves_the_3d_view_beside_the_scene() {
     }
 }
 
+#[test]
+fn a_scene_weight_outside_the_slider_range_is_kept() {
+    let text = format!(
+        "[mesh]\npath = '{SPOT}'\n[[constraints]]\ntype = \"edge_spring\"\nweight = 1e5\n\
+         [[constraints]]\ntype = \"position\"\nvertices = [0, 1, 2]\n\
+         [[constraints]]\ntype = \"smoothing\"\nweight = 1e-5\n"
+    );
+    let scene = shapeup_core::scene::Scene::parse(
+        &text,
+        shapeup_core::scene::SceneFormat::Toml,
+        Path::new("w.toml"),
+        PathBuf::new(),
+    )
+    .unwrap();
+    let mut harness = editor(Document::from_scene(&scene).unwrap());
+    harness.run_steps(5);
+    let weights: Vec<f64> = harness.state().document().groups().iter().map(|g| g.spec.weight).collect();
+    assert_eq!(weights, [1e5, 1.0, 1e-5]);
+    assert!(!harness.state().document().is_modified());
+}
+
 /// Presses at `from` holding `modifiers`, moves through `from + steps` one frame each, and
 /// releases: a drag as a hand makes it, frame by frame.
 fn drag_in_frames(

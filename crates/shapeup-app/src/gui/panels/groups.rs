@@ -105,10 +105,12 @@ pub fn groups_panel(ui: &mut egui::Ui, document: &Document, state: &mut GroupsPa
 /// Typed text that is no weight ([`typed_weight`]): why, in one line for the row.
 fn weight_control(ui: &mut egui::Ui, weight: f64, out: &mut PanelOutput) -> Result<Option<f64>, String> {
     let (lo, hi) = (WEIGHT_RANGE.0.log10(), WEIGHT_RANGE.1.log10());
-    let before = weight.max(WEIGHT_RANGE.0).log10();
+    let before = weight.log10();
     let mut exponent = before;
     let (refused, typed) = (std::cell::RefCell::new(None), std::cell::Cell::new(None));
+    // A scene's weight outside the range stays as it is until the user moves it.
     let slider = egui::Slider::new(&mut exponent, lo..=hi)
+        .clamping(egui::SliderClamping::Edits)
         .text("weight")
         .custom_formatter(|x, _| format_weight(10f64.powf(x)))
         .custom_parser(|text| match typed_weight(text) {
