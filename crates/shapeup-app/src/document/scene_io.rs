@@ -195,6 +195,20 @@ impl Document {
     }
 }
 
+/// Whether `value` of option `key` is that option's default among `options` (a number option
+/// whose default comes from the rest shape has none).
+fn at_default(options: &[shapeup_core::constraints::OptionSpec], key: &str, value: &serde_json::Value) -> bool {
+    use shapeup_core::constraints::OptionKind;
+    let Some(option) = options.iter().find(|o| o.key == key) else { return false };
+    match option.kind {
+        OptionKind::Number { default, .. } => default.is_some() && value.as_f64() == default,
+        OptionKind::Bool { default } => value.as_bool() == Some(default),
+        OptionKind::Vector { default } => {
+            value.as_array().is_some_and(|a| a.len() == 3 && a.iter().zip(default).all(|(v, d)| v.as_f64() == Some(d)))
+        }
+    }
+}
+
 /// A scene's group as the editor keeps it (see [`Group`]) and its role: a type with targets
 /// is a handle on an ascending vertex list with explicit targets (box and sphere selections
 /// resolved, translate and rotate applied, spin dropped); a shape-model type over all vertices
@@ -235,7 +249,8 @@ fn editor_group(spec: &GroupSpec, rest: &Rest) -> Result<(GroupRole, GroupSpec),
         other => SelectionSpec::Vertices(other.resolve(&rest.mesh.positions).map_err(Cause::new)?),
     };
     let shape_kind = ShapeModel::ALL.iter().any(|m| m.groups().iter().any(|(k, _)| *k == spec.kind));
-    let plain = spec.options.is_empty();
+    // Options spelled out at their defaults are the preset's too.
+    let plain = spec.options.iter().all(|(key, value)| at_default(ty.options(), key, value));
     let role = if shape_kind && plain && selection == SelectionSpec::All {
         GroupRole::Shape
     } else if spec.kind == "smoothing" && plain {

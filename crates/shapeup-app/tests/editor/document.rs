@@ -673,3 +673,25 @@ fn a_saved_scene_replays_the_converged_shape_of_each_shape_model() {
         assert_eq!(reopened.positions(), doc.positions());
     }
 }
+
+/// A scene that spells out a preset's options at their defaults is that preset: its model is
+/// selected and its groups are the model's (no remove button); other values keep them apart.
+#[test]
+fn a_scene_spelling_out_a_presets_defaults_selects_that_preset() {
+    const SPOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/spot.obj");
+    let open = |prevent_flips: bool| {
+        let text = format!(
+            "[mesh]\npath = '{SPOT}'\n[[constraints]]\ntype = \"triangle_strain\"\n\
+             [[constraints]]\ntype = \"bending\"\nprevent_flips = {prevent_flips}\n\
+             [[constraints]]\ntype = \"position\"\nvertices = [0, 1, 2]\n"
+        );
+        let scene = Scene::parse(&text, SceneFormat::Toml, Path::new("p.toml"), std::path::PathBuf::new()).unwrap();
+        Document::from_scene(&scene).unwrap()
+    };
+    let doc = open(false);
+    assert_eq!(doc.shape_model(), Some(ShapeModel::StrainBending));
+    assert!(doc.groups()[..2].iter().all(|g| g.role == GroupRole::Shape));
+    let doc = open(true);
+    assert_eq!(doc.shape_model(), None, "prevent_flips = true is not the preset");
+    assert_eq!(doc.groups()[1].role, GroupRole::Other);
+}
