@@ -101,7 +101,8 @@ class Scene:
         format: str = "obj",
         report: PathLike | None = None,
     ) -> tuple[np.ndarray, dict[str, Any]]:
-        """``shapeup simulate``: ``frames`` time steps (default the scene's steps) from rest.
+        """``shapeup simulate``: ``frames`` time steps (default the scene's steps) from rest (in
+        the scene's ``[mesh] start`` shape when it has one).
         Returns ``(X, report)``: X float64 (k, n, 3) holds frame 0, every ``every``-th frame
         and the last (their numbers in ``report["frame_numbers"]``), as the command line's
         frame files hold them; writes them to the folder ``output`` in ``format`` (obj, ply,

@@ -325,7 +325,7 @@ pub fn contact_model(
         base_dir: PathBuf::new(),
         file: PathBuf::new(),
     };
-    scene.build_contact(mesh, rest, frame, &mut Warnings::new()).map_err(|e| {
+    scene.build_contact(mesh, rest, None, frame, &mut Warnings::new()).map_err(|e| {
         EditorError::Collider(match e {
             SceneError::Invalid { entry, message, .. } => format!("{entry}: {message}"),
             other => other.to_string(),

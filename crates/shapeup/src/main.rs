@@ -1,6 +1,6 @@
 //! `shapeup`: the command-line tool.
 //!
-//! - `shapeup deform SCENE -o OUT` — static ShapeUp solve from the rest shape.
+//! - `shapeup deform SCENE -o OUT` — static ShapeUp solve from the rest shape (or `[mesh] start`).
 //! - `shapeup simulate SCENE --frames N -o DIR` — Projective Dynamics, a mesh file per frame
 //!   (OBJ by default; `--format` ply, off, stl, vtu with a ParaView `.pvd`, msh).
 //! - `shapeup energy SCENE POSITIONS` — E of given positions under a scene's constraints.
@@ -68,7 +68,7 @@ struct Cli {
 enum Command {
     /// Lists every constraint type a scene can use: what it acts on, its default weight and its options.
     Types,
-    /// Static solve of a scene from its rest shape; writes the deformed mesh.
+    /// Static solve of a scene from its rest shape (or its `[mesh] start`); writes the deformed mesh.
     Deform {
         /// Scene file (.toml or .json).
         scene: PathBuf,
@@ -89,7 +89,7 @@ enum Command {
         #[command(flatten)]
         acceleration: AccelerationArgs,
     },
-    /// Projective Dynamics time steps of a scene (whatever its mode) from rest; writes frame k
+    /// Projective Dynamics time steps of a scene (whatever its mode) from rest (at its `[mesh] start` shape when it has one); writes frame k
     /// (the state after k steps) to DIR/frame_000k.EXT: the input's surface (obj, ply, off,
     /// stl) or the whole mesh with its tetrahedra (vtu, with velocities and DIR/frames.pvd for
     /// ParaView; msh).

@@ -48,9 +48,7 @@ impl Document {
     /// tetrahedralized scene; [`EditorError::Constraint`] for a group that cannot be built.
     pub fn from_scene(scene: &Scene) -> Result<Document, EditorError> {
         let loaded = scene.read_mesh().map_err(|e| EditorError::Load(LoadError::Scene(Cause::new(e))))?;
-        let n = loaded.mesh.num_vertices();
-        let start =
-            scene.read_start(&loaded.mesh, n).map_err(|e| EditorError::Load(LoadError::Scene(Cause::new(e))))?;
+        let start = scene.read_start(&loaded.mesh).map_err(|e| EditorError::Load(LoadError::Scene(Cause::new(e))))?;
         let mut document = Document::from_scene_with_mesh(scene, loaded.mesh)?;
         document.source = scene.mesh.generate.is_none().then(|| scene.mesh_path());
         document.attributes = loaded.attributes;

@@ -59,24 +59,25 @@ impl Scene {
         let loaded = self.read_mesh()?;
         let load_seconds = t.elapsed().as_secs_f64();
         let scene = self.with_physical_groups(loaded.attributes.physical_groups())?;
-        let mut built = scene.build(loaded.mesh, loaded.warnings, load_seconds)?;
+        let start = self.read_start(&loaded.mesh)?;
+        let mut built = scene.build_from(loaded.mesh, start, loaded.warnings, load_seconds)?;
         built.attributes = loaded.attributes;
-        built.start = self.read_start(&built.mesh, built.input_vertices)?;
         Ok(built)
     }
 
-    /// The positions of `[mesh] start` (input frame), checked against the scene's `mesh` of
-    /// `input_vertices` vertices (before tetrahedralization); `None` without the key.
+    /// The positions of `[mesh] start` (input frame), checked against the scene's `mesh` as
+    /// read (before tetrahedralization); `None` without the key.
     ///
     /// # Errors
     /// [`SceneError::Start`] for a file that cannot be read; [`SceneError::Invalid`] naming
     /// `[mesh] start` for another vertex count, other faces, an empty path, or a
     /// tetrahedralized scene (TetGen's inner points have no start).
-    pub fn read_start(&self, mesh: &Mesh, input_vertices: usize) -> Result<Option<Vec<DVec3>>, SceneError> {
+    pub fn read_start(&self, mesh: &Mesh) -> Result<Option<Vec<DVec3>>, SceneError> {
         let Some(path) = self.start_path() else { return Ok(None) };
+        let input_vertices = mesh.num_vertices();
         let invalid =
             |message: String| SceneError::Invalid { path: self.file.clone(), entry: "[mesh] start".into(), message };
-        if mesh.num_vertices() != input_vertices {
+        if self.mesh.tetrahedralize && mesh.tetrahedra.is_empty() {
             return Err(invalid(
                 "a start shape cannot be used with tetrahedralize = true (the points TetGen adds have none)".into(),
             ));
@@ -97,10 +98,11 @@ impl Scene {
             )));
         }
         // Same count, other order: an STL file's vertices are merged in the order its
-        // triangles first use them, so they would land on other vertices.
-        if start.polygons != mesh.polygons || start.tetrahedra != mesh.tetrahedra {
+        // triangles first use them, so they would land on other vertices. Faces are compared
+        // as sets of vertex sets (their order, first corner and orientation may differ).
+        if let Some(why) = other_elements(mesh, &start) {
             return Err(invalid(format!(
-                "{}'s faces are not those of {mesh_name}: a start shape is the mesh's own vertices in their order, with its faces (write it as OBJ, PLY, OFF or MSH; STL merges and reorders vertices)",
+                "{} is not a shape of {mesh_name}'s vertices in their order: {why} (a start shape has the mesh's faces; STL merges vertices and reorders them)",
                 path.display(),
             )));
         }
@@ -151,11 +153,24 @@ impl Scene {
         }
     }
 
-    /// Builds the scene's groups on an already loaded mesh.
+    /// Builds the scene's groups on an already loaded mesh (without `[mesh] start`, which
+    /// [`Scene::load`] reads).
     ///
     /// # Errors
     /// As [`Scene::load`], but for the mesh file itself.
-    pub fn build(&self, mesh: Mesh, mut warnings: Warnings, load_seconds: f64) -> Result<LoadedScene, SceneError> {
+    pub fn build(&self, mesh: Mesh, warnings: Warnings, load_seconds: f64) -> Result<LoadedScene, SceneError> {
+        self.build_from(mesh, None, warnings, load_seconds)
+    }
+
+    /// [`Scene::build`] with the start shape's positions (input frame), which contact's checks
+    /// at time 0 look at and solves start from.
+    fn build_from(
+        &self,
+        mesh: Mesh,
+        start: Option<Vec<DVec3>>,
+        mut warnings: Warnings,
+        load_seconds: f64,
+    ) -> Result<LoadedScene, SceneError> {
         let t = Instant::now();
         let invalid = |entry: &str, message: String| SceneError::Invalid {
             path: self.file.clone(),
@@ -201,7 +216,8 @@ impl Scene {
             stranded.len(),
             || stranded.first().map(|v| format!("vertex {v}")).unwrap_or_default(),
         );
-        let contact = self.build_contact(&mesh, &rest, &frame, &mut warnings)?;
+        let start_working = start.as_ref().map(|s| s.iter().map(|&p| frame.to_working(p)).collect::<Vec<_>>());
+        let contact = self.build_contact(&mesh, &rest, start_working.as_deref(), &frame, &mut warnings)?;
         if let Some(model) = &contact {
             let inside = pins_inside_colliders(&system, model);
             warnings.add_many(
@@ -232,7 +248,7 @@ impl Scene {
             load_seconds,
             build_seconds: t.elapsed().as_secs_f64(),
             contact,
-            start: None,
+            start,
         })
     }
 
@@ -248,9 +264,15 @@ impl Scene {
         &self,
         mesh: &Mesh,
         rest: &RestGeometry,
+        start: Option<&[DVec3]>,
         frame: &WorkingFrame,
         warnings: &mut Warnings,
     ) -> Result<Option<ContactModel>, SceneError> {
+        // Checked where the run starts: the start shape when there is one.
+        let (at_start, shape) = match start {
+            Some(start) => (start, "start shape ([mesh] start)"),
+            None => (&rest.positions[..], "rest shape"),
+        };
         if self.colliders.is_empty() && !self.contact.self_collision {
             return Ok(None);
         }
@@ -291,14 +313,12 @@ impl Scene {
         for v in mesh.triangles.iter().flatten().chain(mesh.tetrahedra.iter().flatten()) {
             active[*v as usize] = true;
         }
-        let overlapping: Vec<usize> = (0..rest.positions.len())
-            .filter(|&v| {
-                active[v] && colliders.iter().any(|c| c.closest_at(rest.positions[v], 0.0).distance < thickness)
-            })
+        let overlapping: Vec<usize> = (0..at_start.len())
+            .filter(|&v| active[v] && colliders.iter().any(|c| c.closest_at(at_start[v], 0.0).distance < thickness))
             .collect();
         warnings.add_many(
             "collider_overlaps_rest_shape",
-            "vertices of the rest shape start inside a collider or closer than the contact thickness (they are pushed out: at a simulation's start, by a static solve's iterations; a hard pin keeps its vertices where it holds them)",
+            &format!("vertices of the {shape} start inside a collider or closer than the contact thickness (they are pushed out: at a simulation's start, by a static solve's iterations; a hard pin keeps its vertices where it holds them)"),
             overlapping.len(),
             || overlapping.first().map(|v| format!("vertex {v}")).unwrap_or_default(),
         );
@@ -310,10 +330,10 @@ impl Scene {
         let params =
             ContactParams { thickness, friction: self.contact.friction, self_collision: self.contact.self_collision };
         let mut model = ContactModel::new(colliders, params, &surface, active);
-        let close = model.self_pairs_at_rest(&rest.positions);
+        let close = model.self_pairs_at_rest(at_start);
         warnings.add_many(
             "self_contact_at_rest",
-            "pairs of the rest shape (a vertex and a triangle, or two edges, not neighbours) are closer than the self-collision thickness: they start in contact and push apart (give [contact] a thickness well under the mean edge length)",
+            &format!("pairs of the {shape} (a vertex and a triangle, or two edges, not neighbours) are closer than the self-collision thickness: they start in contact and push apart (give [contact] a thickness well under the mean edge length)"),
             close,
             || {
                 format!(
@@ -323,12 +343,14 @@ impl Scene {
                 )
             },
         );
-        let (caught, first) = model.self_intersections_at_rest(&rest.positions);
+        let (caught, first) = model.self_intersections_at_rest(at_start);
         warnings.add_many(
             "self_intersection_at_rest",
-            "pairs of an edge and a triangle of the rest shape (not neighbours) pass through or touch each other: \
-             self-collision keeps every pair on the side it starts on, so the surface stays caught in itself \
-             (separate its parts in the input)",
+            &format!(
+                "pairs of an edge and a triangle of the {shape} (not neighbours) pass through or touch each other: \
+                 self-collision keeps every pair on the side it starts on, so the surface stays caught in itself \
+                 (separate its parts in the input)"
+            ),
             caught,
             || {
                 first.map_or_else(String::new, |(e, t)| {
@@ -338,6 +360,33 @@ impl Scene {
         );
         Ok(Some(model))
     }
+}
+
+/// Why `other`'s elements are not `mesh`'s, if they are not: faces compared as sets of vertex
+/// sets (order, first corner and orientation free), then tetrahedra likewise.
+fn other_elements(mesh: &Mesh, other: &Mesh) -> Option<String> {
+    fn canonical<'a>(elements: impl Iterator<Item = &'a [u32]>) -> Vec<Vec<u32>> {
+        let mut all: Vec<Vec<u32>> = elements
+            .map(|e| {
+                let mut e = e.to_vec();
+                e.sort_unstable();
+                e
+            })
+            .collect();
+        all.sort_unstable();
+        all
+    }
+    let faces = |m: &Mesh| canonical((0..m.polygons.len()).filter_map(|i| m.polygons.get(i)));
+    let tets = |m: &Mesh| canonical(m.tetrahedra.iter().map(|t| &t[..]));
+    for (what, ours, theirs) in [("faces", faces(mesh), faces(other)), ("tetrahedra", tets(mesh), tets(other))] {
+        if ours.len() != theirs.len() {
+            return Some(format!("it has {} {what} where the mesh has {}", theirs.len(), ours.len()));
+        }
+        if let Some(missing) = ours.iter().find(|e| theirs.binary_search(e).is_err()) {
+            return Some(format!("the mesh's {what} on vertices {missing:?} (from 0) are not among its {what}"));
+        }
+    }
+    None
 }
 
 /// The vertices that a group's constraints hold at a point ([`crate::constraints::Constraint::held_points`]:

@@ -2380,7 +2380,56 @@ fn a_start_shape_is_where_the_solve_starts() {
     // Same count, other order: STL merges vertices in the order its triangles use them.
     write_mesh(&dir.path().join("start.stl"), &Mesh { positions: start.clone(), ..spot.clone() }, &Default::default())
         .unwrap();
-    refused("start = 'start.stl'", "faces are not those of the mesh");
+    refused("start = 'start.stl'", "is not a shape of the mesh");
+    // Faces in another order, or from another first corner, are the same faces.
+    let mut shuffled = Mesh { positions: start.clone(), ..spot.clone() };
+    shuffled.polygons = shapeup_core::mesh::Polygons::new();
+    for f in (0..spot.polygons.len()).rev() {
+        let mut corners = spot.polygons.get(f).unwrap().to_vec();
+        corners.rotate_left(1);
+        shuffled.polygons.push(&corners);
+    }
+    write_mesh(&dir.path().join("shuffled.obj"), &shuffled, &Default::default()).unwrap();
+    let scene = write(
+        &dir.path().join("shuffled.toml"),
+        &toml_scene(Path::new(SPOT), "start = 'shuffled.obj'", PINNED_SPRINGS),
+    );
+    let out = dir.path().join("shuffled-out.obj");
+    shapeup([
+        "deform".as_ref(),
+        scene.as_os_str(),
+        "-o".as_ref(),
+        out.as_os_str(),
+        "--iterations".as_ref(),
+        "0".as_ref(),
+    ])
+    .success();
+
+    // Contact's checks at time 0 look at the start shape: a sphere around its highest vertex
+    // (above the whole rest shape) is said to hold start vertices, not rest ones.
+    let top = start.iter().copied().fold(DVec3::splat(f64::NEG_INFINITY), |a, p| if p.y > a.y { p } else { a });
+    let rest_top = spot.positions.iter().map(|p| p.y).fold(f64::NEG_INFINITY, f64::max);
+    assert!(top.y - 0.05 > rest_top);
+    let collider =
+        format!("[[colliders]]\ntype = \"sphere\"\ncenter = [{}, {}, {}]\nradius = 0.05\n", top.x, top.y, top.z);
+    let scene = write(
+        &dir.path().join("contact.toml"),
+        &toml_scene(Path::new(SPOT), "start = 'start.obj'", &format!("{PINNED_SPRINGS}{collider}")),
+    );
+    let o = shapeup([
+        "deform".as_ref(),
+        scene.as_os_str(),
+        "-o".as_ref(),
+        dir.path().join("c.obj").as_os_str(),
+        "--iterations".as_ref(),
+        "1".as_ref(),
+    ])
+    .success();
+    assert!(
+        o.stderr.contains("vertices of the start shape ([mesh] start) start inside a collider"),
+        "{}",
+        o.describe()
+    );
     write_mesh(&dir.path().join("cow.obj"), &read(Path::new(COW)), &Default::default()).unwrap();
     refused("start = 'cow.obj'", &format!("has 2903 vertices where the mesh {SPOT} has {}", spot.num_vertices()));
     // The start is an input: no output replaces it.
