@@ -120,6 +120,30 @@ pub struct SolveResult {
 }
 
 impl SolveResult {
+    /// A result of `job` where it stands, with nothing of a chunk in it yet (no positions,
+    /// energies, timings; not finished), for [`Converger`] to fill in.
+    fn nothing_yet(job: &Job) -> SolveResult {
+        SolveResult {
+            seq: job.seq,
+            epoch: job.request.epoch,
+            positions: Vec::new(),
+            iterations: job.done,
+            converged: false,
+            finished: false,
+            relative_change: None,
+            local_ms: 0.0,
+            global_ms: 0.0,
+            setup_ms: 0.0,
+            energy: Vec::new(),
+            error: None,
+            touching: Vec::new(),
+            residual: None,
+            lost_groups: None,
+            seconds_left: None,
+            stopped: false,
+        }
+    }
+
     /// Hands the positions to the document (when of its current epoch and without error);
     /// returns whether they were taken.
     pub fn apply_to(&self, document: &mut Document) -> bool {
@@ -615,48 +639,20 @@ impl Converger {
     /// The finished result of `job`, stopped by the user where its last chunk left it.
     fn stopped(&self, job: &Job) -> SolveResult {
         SolveResult {
-            seq: job.seq,
-            epoch: job.request.epoch,
             positions: self.solver.positions(),
-            iterations: job.done,
-            converged: false,
             finished: true,
-            relative_change: None,
-            local_ms: 0.0,
-            global_ms: 0.0,
-            setup_ms: 0.0,
             energy: job.last_energy.into_iter().collect(),
-            error: None,
             touching: self.solver.touching().map(<[bool]>::to_vec).unwrap_or_default(),
             residual: job.residual,
-            lost_groups: None,
-            seconds_left: None,
             stopped: true,
+            ..SolveResult::nothing_yet(job)
         }
     }
 
     /// Runs one chunk of `job` and says how far it got.
     fn step(&mut self, job: &mut Job, interrupted: &dyn Fn() -> bool) -> SolveResult {
         let started = Instant::now();
-        let mut result = SolveResult {
-            seq: job.seq,
-            epoch: job.request.epoch,
-            positions: Vec::new(),
-            iterations: job.done,
-            converged: false,
-            finished: false,
-            relative_change: None,
-            local_ms: 0.0,
-            global_ms: 0.0,
-            setup_ms: 0.0,
-            energy: Vec::new(),
-            error: None,
-            touching: Vec::new(),
-            residual: None,
-            lost_groups: None,
-            seconds_left: None,
-            stopped: false,
-        };
+        let mut result = SolveResult::nothing_yet(job);
         let outcome = self.chunk(job, interrupted);
         match outcome {
             Ok((report, positions)) => {

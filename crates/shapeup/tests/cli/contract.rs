@@ -34,6 +34,13 @@ fn simulate_in<S: AsRef<OsStr>>(cwd: Option<&Path>, scene: &Path, dir: &Path, ex
     shapeup_in(cwd, args)
 }
 
+/// `shapeup deform SCENE -o OUT EXTRA…`.
+fn deform_to(scene: &Path, out: &Path, extra: &[&str]) -> Output {
+    let mut args: Vec<&OsStr> = vec!["deform".as_ref(), scene.as_os_str(), "-o".as_ref(), out.as_os_str()];
+    args.extend(extra.iter().map(OsStr::new));
+    shapeup(args)
+}
+
 fn read(path: &Path) -> Mesh {
     read_mesh(path).unwrap_or_else(|e| panic!("cannot read back {}: {e}", path.display())).mesh
 }
@@ -2312,17 +2319,8 @@ fn a_start_shape_is_where_the_solve_starts() {
     let scene = write(&dir.path().join("s.toml"), &toml_scene(Path::new(SPOT), "start = 'start.obj'", PINNED_SPRINGS));
     // No iterations: the output is the start shape itself.
     let out = dir.path().join("out.obj");
-    shapeup([
-        "deform".as_ref(),
-        scene.as_os_str(),
-        "-o".as_ref(),
-        out.as_os_str(),
-        "--iterations".as_ref(),
-        "0".as_ref(),
-    ])
-    .success();
-    let written = read(&out).positions;
-    let worst = written.iter().zip(&start).map(|(a, b)| a.distance(*b)).fold(0.0, f64::max);
+    deform_to(&scene, &out, &["--iterations", "0"]).success();
+    let worst = max_distance(&read(&out).positions, &start);
     assert!(worst < 1e-9, "{worst}");
     // The same scene simulated starts there too (frame 0 is the start at rest).
     let frames = dir.path().join("frames");
@@ -2335,8 +2333,7 @@ fn a_start_shape_is_where_the_solve_starts() {
         ),
     );
     simulate_in(None, &dynamic, &frames, &["--frames", "1"]).success();
-    let first = read(&frames.join("frame_0000.obj")).positions;
-    let worst = first.iter().zip(&start).map(|(a, b)| a.distance(*b)).fold(0.0, f64::max);
+    let worst = max_distance(&read(&frames.join("frame_0000.obj")).positions, &start);
     assert!(worst < 1e-9, "frame 0 is {worst} from the start shape");
 
     // From a converged start, a capped solve does not cry "short of the minimum": the gradient
@@ -2344,32 +2341,16 @@ fn a_start_shape_is_where_the_solve_starts() {
     let converged = dir.path().join("converged.obj");
     let moved = toml_scene(Path::new(SPOT), "", &format!("{PINNED_SPRINGS}{MOVED_VERTEX}"));
     let from_rest = write(&dir.path().join("rest.toml"), &moved);
-    shapeup([
-        "deform".as_ref(),
-        from_rest.as_os_str(),
-        "-o".as_ref(),
-        converged.as_os_str(),
-        "--iterations".as_ref(),
-        "3000".as_ref(),
-    ])
-    .success();
+    deform_to(&from_rest, &converged, &["--iterations", "3000"]).success();
     let again = write(&dir.path().join("again.toml"), &moved.replacen("\n", "\nstart = 'converged.obj'\n", 1));
-    let o = shapeup([
-        "deform".as_ref(),
-        again.as_os_str(),
-        "-o".as_ref(),
-        dir.path().join("again.obj").as_os_str(),
-        "--iterations".as_ref(),
-        "30".as_ref(),
-    ])
-    .success();
+    let o = deform_to(&again, &dir.path().join("again.obj"), &["--iterations", "30"]).success();
     assert!(!o.stderr.contains("short of its minimum"), "{}", o.describe());
 
     // Bad input: one line naming the key, nothing written.
     let refused = |start_line: &str, needle: &str| {
         let scene = write(&dir.path().join("bad.toml"), &toml_scene(Path::new(SPOT), start_line, PINNED_SPRINGS));
         let out = dir.path().join("bad.obj");
-        let o = shapeup(["deform".as_ref(), scene.as_os_str(), "-o".as_ref(), out.as_os_str()]);
+        let o = deform_to(&scene, &out, &[]);
         assert_eq!(o.code, Some(1), "{}", o.describe());
         assert_eq!(o.stderr.trim().lines().count(), 1, "{}", o.describe());
         assert!(o.stderr.contains("[mesh] start") && o.stderr.contains(needle), "{}", o.describe());
@@ -2395,15 +2376,7 @@ fn a_start_shape_is_where_the_solve_starts() {
         &toml_scene(Path::new(SPOT), "start = 'shuffled.obj'", PINNED_SPRINGS),
     );
     let out = dir.path().join("shuffled-out.obj");
-    shapeup([
-        "deform".as_ref(),
-        scene.as_os_str(),
-        "-o".as_ref(),
-        out.as_os_str(),
-        "--iterations".as_ref(),
-        "0".as_ref(),
-    ])
-    .success();
+    deform_to(&scene, &out, &["--iterations", "0"]).success();
 
     // Contact's checks at time 0 look at the start shape: a sphere around its highest vertex
     // (above the whole rest shape) is said to hold start vertices, not rest ones.
@@ -2416,15 +2389,7 @@ fn a_start_shape_is_where_the_solve_starts() {
         &dir.path().join("contact.toml"),
         &toml_scene(Path::new(SPOT), "start = 'start.obj'", &format!("{PINNED_SPRINGS}{collider}")),
     );
-    let o = shapeup([
-        "deform".as_ref(),
-        scene.as_os_str(),
-        "-o".as_ref(),
-        dir.path().join("c.obj").as_os_str(),
-        "--iterations".as_ref(),
-        "1".as_ref(),
-    ])
-    .success();
+    let o = deform_to(&scene, &dir.path().join("c.obj"), &["--iterations", "1"]).success();
     assert!(
         o.stderr.contains("vertices of the start shape ([mesh] start) start inside a collider"),
         "{}",
@@ -2433,7 +2398,7 @@ fn a_start_shape_is_where_the_solve_starts() {
     write_mesh(&dir.path().join("cow.obj"), &read(Path::new(COW)), &Default::default()).unwrap();
     refused("start = 'cow.obj'", &format!("has 2903 vertices where the mesh {SPOT} has {}", spot.num_vertices()));
     // The start is an input: no output replaces it.
-    let o = shapeup(["deform".as_ref(), scene.as_os_str(), "-o".as_ref(), dir.path().join("start.obj").as_os_str()]);
+    let o = deform_to(&scene, &dir.path().join("start.obj"), &[]);
     assert_eq!(o.code, Some(1), "{}", o.describe());
     assert!(o.stderr.contains("start shape"), "{}", o.describe());
 }
