@@ -340,7 +340,7 @@ impl SimulationRunner {
         if settings.tetrahedralize
             && from == StartShape::OnScreen
             && document.rest_mesh().num_tetrahedra() == 0
-            && !same_shape(document.positions(), &document.rest_mesh().positions)
+            && !is_rest_shape(document.positions(), document.rest_mesh())
         {
             return Err(SimulationError::TetrahedraFromRestOnly);
         }
@@ -474,12 +474,13 @@ impl SimulationRunner {
     }
 }
 
-/// Whether `a` and `b` are one shape: no vertex apart by more than 1e-9 of `b`'s bounding-box
-/// diagonal.
-fn same_shape(a: &[DVec3], b: &[DVec3]) -> bool {
-    let (lo, hi) = b.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
+/// Whether `positions` are `rest`'s shape: no vertex apart by more than 1e-9 of its
+/// bounding-box diagonal.
+fn is_rest_shape(positions: &[DVec3], rest: &Mesh) -> bool {
+    let (lo, hi) = rest.bounding_box();
     let limit = 1e-9 * (hi - lo).length();
-    a.len() == b.len() && a.iter().zip(b).all(|(p, q)| p.distance(*q) <= limit)
+    positions.len() == rest.positions.len()
+        && positions.iter().zip(&rest.positions).all(|(p, q)| p.distance(*q) <= limit)
 }
 
 /// The current shape on `mesh` (input frame); points TetGen added follow it.

@@ -129,9 +129,7 @@ impl Document {
     /// # Errors
     /// [`EditorError::Save`] naming the file.
     pub fn save_scene(&self, scene_path: &Path, mesh_path: impl Into<PathBuf>) -> Result<(), EditorError> {
-        let text = self.to_scene(mesh_path).to_toml_string();
-        shapeup_core::io::write_atomic(scene_path, |w| w.write_all(text.as_bytes()))
-            .map_err(|e| EditorError::Save(Cause::new(e)))
+        write_scene(scene_path, &self.to_scene(mesh_path))
     }
 
     /// Saves what replays the shape on screen: a scene at `scene_path` whose mesh is the file
@@ -166,9 +164,7 @@ impl Document {
         };
         let mut scene = self.to_scene(mesh_path);
         let start_mesh = self.save_start_shape(scene_path, &mut scene)?;
-        let text = scene.to_toml_string();
-        shapeup_core::io::write_atomic(scene_path, |w| w.write_all(text.as_bytes()))
-            .map_err(|e| EditorError::Save(Cause::new(e)))?;
+        write_scene(scene_path, &scene)?;
         self.modified = false;
         Ok(SavedScene { rest_mesh, start_mesh, warnings })
     }
@@ -191,6 +187,15 @@ impl Document {
         scene.mesh.start = Some(PathBuf::from(name));
         Ok(Some(path))
     }
+}
+
+/// `scene` as TOML at `path` (atomically).
+///
+/// # Errors
+/// [`EditorError::Save`] naming the file.
+fn write_scene(path: &Path, scene: &Scene) -> Result<(), EditorError> {
+    let text = scene.to_toml_string();
+    shapeup_core::io::write_atomic(path, |w| w.write_all(text.as_bytes())).map_err(|e| EditorError::Save(Cause::new(e)))
 }
 
 /// Whether `value` of option `key` is that option's default among `options` (a number option

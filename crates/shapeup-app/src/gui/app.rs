@@ -525,10 +525,12 @@ impl EditorApp {
             (true, None) => (0..self.document.num_vertices()).collect(),
         };
         let positions = self.document.positions();
-        let mut points = vertices.iter().filter_map(|&v| positions.get(v));
-        let Some(first) = points.next() else { return };
-        let (lo, hi) = points.fold((*first, *first), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
-        self.viewport.camera.look_at(lo.as_vec3(), hi.as_vec3());
+        let points: Vec<glam::DVec3> = vertices.iter().filter_map(|&v| positions.get(v).copied()).collect();
+        if points.is_empty() {
+            return;
+        }
+        let (lo, hi) = crate::picking::bounds(&points);
+        self.viewport.camera.look_at(lo, hi);
     }
 
     /// A new simulation from `from`, running; undo brings back the shape from before it.
