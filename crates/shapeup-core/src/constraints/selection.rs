@@ -28,6 +28,9 @@ pub enum Element {
     Triangle,
     /// One per tetrahedron.
     Tetrahedron,
+    /// One per selected vertex, with a triangle of a piece that holds no selected vertex to
+    /// follow (the mesh needs two pieces or more).
+    PieceVertex,
 }
 
 impl Element {
@@ -40,6 +43,7 @@ impl Element {
     pub fn plural(self) -> String {
         match self {
             Element::Vertex | Element::VertexSet { .. } => "vertices".into(),
+            Element::PieceVertex => "vertices of pieces that follow others".into(),
             Element::Edge => "edges".into(),
             Element::Face { min: 4, max: 4 } => "quad faces".into(),
             Element::Face { min, max } if max == usize::MAX => format!("faces of {min} or more corners"),
@@ -146,5 +150,9 @@ pub fn selects_any(element: Element, rest: &RestGeometry, selection: &Selection)
             .any(|(f, corners)| (min..=max).contains(&corners.len()) && selection.contains_face(f, corners)),
         Element::Triangle => rest.triangles.iter().any(|t| selection.contains_all(&t[..])),
         Element::Tetrahedron => rest.tetrahedra.iter().any(|t| selection.contains_all(&t[..])),
+        Element::PieceVertex => {
+            (0..n).any(|v| selection.contains(v))
+                && !crate::constraints::kit::pieces::unselected_piece_triangles(rest, selection).is_empty()
+        }
     }
 }

@@ -5,7 +5,7 @@
 //! and bad options are refused by name.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use crate::common::{Rng, dist2, quad_grid, rest_of, turned_options};
+use crate::common::{Rng, dist2, quad_grid, rest_of, turned_options, wavy};
 use glam::{DQuat, DVec3};
 use shapeup_core::constraints::{
     ConstraintType, Element, GroupDescription, OptionKind, OptionSpec, Params, Selection, build_group, registry,
@@ -17,17 +17,35 @@ use shapeup_core::solver::{Acceleration, ConstraintGroup, SolverParams, System};
 use shapeup_core::warnings::Warnings;
 use std::path::{Path, PathBuf};
 
-/// The mesh a type is tested on: tetrahedra for tetrahedron types, else the quad grid (its
-/// triangulation gives triangles, edges and vertices).
+/// The mesh a type is tested on: tetrahedra for tetrahedron types, the quad grid with a flake
+/// (a triangle of its own, vertices 25..28) above it for types that attach a piece to another,
+/// else the quad grid (its triangulation gives triangles, edges and vertices).
 fn mesh_for(ty: &dyn ConstraintType) -> Mesh {
     match ty.element() {
         Element::Tetrahedron => shapeup_core::generate::tet_box([2, 2, 2], DVec3::new(1.0, 0.8, 0.6)),
+        Element::PieceVertex => {
+            let grid = quad_grid(4);
+            let mut positions = grid.positions.clone();
+            positions.extend([wavy(0.1, 0.0), wavy(0.3, 0.1), wavy(0.15, 0.25)].map(|p| p + 0.05 * DVec3::Z));
+            let mut polygons = grid.polygons.clone();
+            polygons.push(&[25, 26, 27]);
+            Mesh::from_polygons(positions, polygons).unwrap().0
+        }
         _ => quad_grid(4),
     }
 }
 
+/// The vertices a type's group takes: the flake for types that attach a piece, else all.
+const FLAKE: [usize; 3] = [25, 26, 27];
+fn selection_for(ty: &dyn ConstraintType, rest: &RestGeometry) -> Selection {
+    match ty.element() {
+        Element::PieceVertex => Selection::from_indices(rest.num_vertices(), &FLAKE),
+        _ => Selection::All,
+    }
+}
+
 fn group(ty: &dyn ConstraintType, rest: &RestGeometry, options: Params) -> ConstraintGroup {
-    let description = GroupDescription { options, ..GroupDescription::new(ty.name(), Selection::All) };
+    let description = GroupDescription { options, ..GroupDescription::new(ty.name(), selection_for(ty, rest)) };
     build_group(&description, rest, &WorkingFrame::IDENTITY)
         .unwrap_or_else(|e| panic!("{}: default group on the test mesh: {e}", ty.name()))
 }
@@ -181,8 +199,12 @@ fn moving_the_input_and_targets_rigidly_moves_the_result_the_same_way() {
 
 /// A scene on the quad grid with one group of `ty` and `options` (TOML lines).
 fn scene_with(ty: &dyn ConstraintType, options: &str) -> Result<(), String> {
+    let selection = match ty.element() {
+        Element::PieceVertex => format!("vertices = {FLAKE:?}\n"),
+        _ => String::new(),
+    };
     let text = format!(
-        "[mesh]\npath = \"grid.obj\"\nnormalize = false\n[[constraints]]\ntype = \"{}\"\n{options}\n\
+        "[mesh]\npath = \"grid.obj\"\nnormalize = false\n[[constraints]]\ntype = \"{}\"\n{selection}{options}\n\
          [[constraints]]\ntype = \"position\"\nvertices = [0, 24]\nweight = 1\n",
         ty.name()
     );

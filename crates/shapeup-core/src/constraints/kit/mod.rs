@@ -8,6 +8,7 @@ pub(crate) mod gradient;
 pub(crate) mod laplacian_row;
 pub(crate) mod load;
 pub(crate) mod options;
+pub(crate) mod pieces;
 pub(crate) mod point_set;
 pub(crate) mod sets;
 pub(crate) mod vertex_set;

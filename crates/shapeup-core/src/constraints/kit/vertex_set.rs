@@ -196,6 +196,20 @@ impl ShapeMatch {
         gram / scale + (det - s2 * s * self.triple_det).abs() / (scale * scale)
     }
 
+    /// The nearest rotated copy of the rest shape to C q (shape matching, Müller et al. 2005):
+    /// `out` = R d⁰_i with R = [`nearest_rotation3`](crate::linalg::nearest_rotation3)(S) of
+    /// the centred rows, in the frame of C q's rows ([`to_row_frame`]). `rigid` and
+    /// `attachment` project with it.
+    pub(crate) fn project_rigid(&self, q: &[DVec3], out: &mut [DVec3]) {
+        // The centred rows first, then overwritten by the rotated rest shape.
+        centre_into(q, &self.vertices, out);
+        let r = crate::linalg::nearest_rotation3(self.covariance(out));
+        for (o, d0) in out.iter_mut().zip(self.rest.iter()) {
+            *o = r * *d0;
+        }
+        to_row_frame(&self.vertices, q, out);
+    }
+
     /// The vertex list of a vertex-set type's selection, refused with a clear line below 2.
     pub(crate) fn selected(ctx: &BuildContext, kind: &'static str) -> Result<Vec<u32>, ConstraintError> {
         let vertices = ctx.selection.vertex_list(ctx.rest.num_vertices());

@@ -44,6 +44,7 @@ types! {
     angle => AngleType, Angle;
     rigid => RigidType, Rigid;
     similarity => SimilarityType, Similarity;
+    attachment => AttachmentType, Attachment;
     // Handles, contact and loads.
     position => PositionType, Position;
     surface_closeness => SurfaceClosenessType, SurfaceCloseness;

@@ -31,7 +31,7 @@
 
 use crate::constraints::contract::{TypeInfo, BuildContext, Constraint, ConstraintType, RowSink};
 use crate::constraints::error::ConstraintError;
-use crate::constraints::kit::vertex_set::{centred_view, to_row_frame};
+use crate::constraints::kit::vertex_set::centred_view;
 use crate::constraints::params::Params;
 use crate::constraints::selection::Element;
 use crate::linalg::nearest_rotation3;
@@ -79,13 +79,7 @@ impl Constraint for Rigid {
         push_centred_rows(&self.shape.vertices, sink);
     }
     fn project(&self, q: &[DVec3], out: &mut [DVec3]) {
-        // The centred rows first, then overwritten by the rotated rest shape.
-        centre_into(q, &self.shape.vertices, out);
-        let r = nearest_rotation3(self.shape.covariance(out));
-        for (o, d0) in out.iter_mut().zip(self.shape.rest.iter()) {
-            *o = r * *d0;
-        }
-        to_row_frame(&self.shape.vertices, q, out);
+        self.shape.project_rigid(q, out);
     }
     fn set_residual(&self, p: &[DVec3]) -> f64 {
         self.shape.residual(&centred_view(p), 1.0)
