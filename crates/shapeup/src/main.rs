@@ -516,10 +516,16 @@ fn deform(
     // From the energy at the start: with 0 iterations that is also the energy at the end.
     let first = solve.initial_energy;
     let last = solve.energies.last().copied().unwrap_or(first);
+    // A start shape kept as it is (it met the tolerance at once) ran no counted iteration.
+    let kept = if solve.energies.is_empty() && loaded.start.is_some() && loaded.static_iterations(iterations) > 0 {
+        " (the start shape already meets the tolerance: kept as it is)"
+    } else {
+        ""
+    };
     let mut out = std::io::stdout().lock();
     writeln!(
         out,
-        "deformed {} vertices, {} constraints, {}: E {first:.6e} -> {last:.6e}; wrote {} ({total:.2} s)",
+        "deformed {} vertices, {} constraints, {}{kept}: E {first:.6e} -> {last:.6e}; wrote {} ({total:.2} s)",
         loaded.mesh.num_vertices(),
         loaded.system.num_constraints(),
         count(solve.energies.len(), "iteration"),

@@ -67,6 +67,9 @@ impl LoadedScene {
             "groups": groups,
             // The largest vertex displacement from the input, over its bounding-box diagonal.
             "max_displacement": moved / diagonal,
+            // Where the solve started: `[mesh] start`'s file, or null for the rest shape. A
+            // start that already met the tolerance is the result, with 0 iterations.
+            "start": self.scene.start_path().map(|p| p.display().to_string()),
             "iterations": solve.energies.len(),
             "initial_energy": solve.initial_energy,
             "energy": solve.energies,

@@ -50,6 +50,7 @@ use crate::constraints::Constraint;
 use anderson::Anderson;
 use assemble::Assembly;
 use cholesky::SparseCholesky;
+pub(crate) use convergence::meets_tolerance;
 use convergence::{Run, timed};
 use error::check_weight;
 use glam::DVec3;

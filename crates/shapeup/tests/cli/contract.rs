@@ -2346,6 +2346,22 @@ fn a_start_shape_is_where_the_solve_starts() {
     let o = deform_to(&again, &dir.path().join("again.obj"), &["--iterations", "30"]).success();
     assert!(!o.stderr.contains("short of its minimum"), "{}", o.describe());
 
+    // With a tolerance, a start that meets it at once (what the editor saves) is the result
+    // as it is: 0 iterations, said so, the report names the start.
+    let tolerant = format!("{moved}[solver]\niterations = 3000\ntolerance = 1e-6\n");
+    let from_rest = write(&dir.path().join("tolerant.toml"), &tolerant);
+    deform_to(&from_rest, &converged, &[]).success();
+    let again = write(&dir.path().join("again.toml"), &tolerant.replacen("\n", "\nstart = 'converged.obj'\n", 1));
+    let (kept, report) = (dir.path().join("kept.obj"), dir.path().join("kept.json"));
+    let o = deform_to(&again, &kept, &["--report", report.to_str().unwrap()]).success();
+    assert!(o.stdout.contains("0 iterations (the start shape already meets the tolerance"), "{}", o.describe());
+    // Kept to the working frame's round trip (normalize = true): a last-digit difference.
+    let off = max_distance(&read(&kept).positions, &read(&converged).positions);
+    assert!(off < 1e-14, "kept as it is: {off:e} away");
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    assert_eq!(report["iterations"], 0);
+    assert!(report["start"].as_str().unwrap().ends_with("converged.obj"), "{report}");
+
     // Bad input: one line naming the key, nothing written.
     let refused = |start_line: &str, needle: &str| {
         let scene = write(&dir.path().join("bad.toml"), &toml_scene(Path::new(SPOT), start_line, PINNED_SPRINGS));
