@@ -77,7 +77,8 @@ pub struct Document {
 
 impl Document {
     /// A document on a mesh (input frame, normalized working frame) with a shape model and no
-    /// handles.
+    /// handles; pieces within [`ATTACH_GAP`](crate::group::ATTACH_GAP) of the largest piece
+    /// are attached to it ([`Command::AttachFreePieces`]).
     ///
     /// # Errors
     /// [`EditorError::Load`] for a mesh without triangles, [`EditorError::Constraint`] if the
@@ -90,6 +91,13 @@ impl Document {
         let mut document = Document::empty(rest, SolverSettings::default());
         document.state.shape_model = Some(model);
         document.state.groups = document.model_groups(model);
+        // Pieces that sit on the body (an eye, nails, a belt) follow it from the start.
+        if document.pieces.count > 1 {
+            let mut state = document.state.clone();
+            if document.attach_free_pieces(&mut state).is_ok() {
+                document.state = state;
+            }
+        }
         document.solver.sync(&document.state)?;
         Ok(document)
     }
@@ -495,15 +503,23 @@ impl Document {
         &self.pieces
     }
 
-    /// How many pieces (with triangles) have no handle vertex: each makes the system singular.
+    /// How many pieces (with triangles) have no handle vertex and are not attached: each makes
+    /// the system singular.
     pub fn num_free_pieces(&self) -> usize {
-        let mut pinned = vec![false; self.positions.len()];
-        for handle in self.handles() {
-            for &v in handle.vertices().unwrap_or(&[]) {
-                pinned[v] = true;
+        self.pieces.free(&edit::held_vertices(&self.state)).len()
+    }
+
+    /// How many pieces (with triangles) `attachment` groups hold: they follow the pieces
+    /// around them.
+    pub fn num_attached_pieces(&self) -> usize {
+        let mut attached = vec![false; self.pieces.of_vertex.len()];
+        let groups = self.state.groups.iter().filter(|g| g.spec.kind == crate::group::ATTACHMENT_KIND);
+        for &v in groups.flat_map(|g| g.vertices().unwrap_or(&[])) {
+            if let Some(&p) = self.pieces.of_vertex.get(v) {
+                attached[p as usize] = true;
             }
         }
-        self.pieces.free(&pinned).len()
+        attached.iter().filter(|a| **a).count()
     }
 
     /// Whether the document changed since it was opened or last saved as a scene.

@@ -14,6 +14,15 @@ pub const WEIGHT_RANGE: (f64, f64) = (1e-4, 1e4);
 /// system non-singular, small enough not to fight the shape model.
 pub const FREE_PIECE_WEIGHT: f64 = 1e-2;
 
+/// How near a free piece must lie to a held one, as a fraction of the rest shape's
+/// bounding-box diagonal, for Attach free pieces (and opening a mesh) to attach it: 1 %, the
+/// gap between a fingernail, an eye or a belt and the body under it on a scanned or modelled
+/// character, far below the distance between separate parts of an assembly.
+pub const ATTACH_GAP: f64 = 0.01;
+
+/// The type and name of the group Attach free pieces makes.
+pub const ATTACHMENT_KIND: &str = "attachment";
+
 /// A group's identity in a [`Document`](crate::document::Document): stable while the group exists, never reused.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct GroupKey(pub u32);

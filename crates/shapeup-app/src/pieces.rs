@@ -1,5 +1,7 @@
 //! The connected pieces of a mesh, for "select piece" and for finding pieces no handle holds.
 
+use shapeup_core::topology::connected_pieces;
+
 /// The connected pieces of a mesh: vertices joined by triangle edges (a vertex no triangle
 /// uses is a piece of its own, but is never solved and so never counted as free).
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -13,41 +15,13 @@ pub struct Pieces {
 }
 
 impl Pieces {
-    /// The pieces of `n` vertices joined by `triangles` (union–find over the triangles' edges;
-    /// a few lines, not worth a graph crate).
+    /// The pieces of `n` vertices joined by `triangles` (the core's union–find,
+    /// [`connected_pieces`]).
     pub fn new(n: usize, triangles: &[[u32; 3]]) -> Pieces {
-        fn root(parent: &mut [u32], mut v: u32) -> u32 {
-            while parent[v as usize] != v {
-                let up = parent[parent[v as usize] as usize];
-                parent[v as usize] = up;
-                v = up;
-            }
-            v
-        }
-        let mut parent: Vec<u32> = (0..n as u32).collect();
-        let mut in_triangle = vec![false; n];
+        let (of_vertex, pieces) = connected_pieces(n, triangles.iter().map(|t| &t[..]));
+        let mut used = vec![false; pieces];
         for t in triangles {
-            for &v in t {
-                in_triangle[v as usize] = true;
-            }
-            for (a, b) in [(t[0], t[1]), (t[1], t[2])] {
-                let (ra, rb) = (root(&mut parent, a), root(&mut parent, b));
-                if ra != rb {
-                    parent[ra.max(rb) as usize] = ra.min(rb);
-                }
-            }
-        }
-        let mut label = vec![u32::MAX; n];
-        let mut of_vertex = vec![0; n];
-        let mut used = Vec::new();
-        for v in 0..n {
-            let r = root(&mut parent, v as u32) as usize;
-            if label[r] == u32::MAX {
-                label[r] = used.len() as u32;
-                used.push(false);
-            }
-            of_vertex[v] = label[r];
-            used[label[r] as usize] |= in_triangle[v];
+            used[of_vertex[t[0] as usize] as usize] = true;
         }
         let count = used.iter().filter(|u| **u).count();
         Pieces { of_vertex, count, used }
@@ -68,5 +42,15 @@ impl Pieces {
             }
         }
         (0..self.used.len() as u32).filter(|&p| self.used[p as usize] && !held[p as usize]).collect()
+    }
+
+    /// The piece with the most of `triangles` (the first on a tie); `None` without triangles.
+    pub fn largest(&self, triangles: &[[u32; 3]]) -> Option<u32> {
+        let mut count = vec![0usize; self.used.len()];
+        for t in triangles {
+            count[self.of_vertex[t[0] as usize] as usize] += 1;
+        }
+        let most = *count.iter().max()?;
+        (most > 0).then(|| count.iter().position(|&c| c == most).map(|p| p as u32)).flatten()
     }
 }

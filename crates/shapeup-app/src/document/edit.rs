@@ -5,11 +5,14 @@ use super::Document;
 use crate::command::Command;
 use crate::edit_state::{EditState, Rest};
 use crate::error::{EditorError, GroupError};
-use crate::group::{FREE_PIECE_WEIGHT, Group, GroupKey, GroupRole, ShapeModel, WEIGHT_RANGE, explicit_targets};
+use crate::group::{
+    ATTACH_GAP, ATTACHMENT_KIND, FREE_PIECE_WEIGHT, Group, GroupKey, GroupRole, ShapeModel, WEIGHT_RANGE,
+    explicit_targets,
+};
 use glam::{DQuat, DVec3};
 use serde_json::Map;
 use shapeup_core::constraints::constraint_type;
-use shapeup_core::contact::ColliderSpec;
+use shapeup_core::contact::{ColliderSpec, NearestTriangle};
 use shapeup_core::scene::{GroupSpec, SelectionSpec, Targets, unique_group_name};
 use shapeup_core::solver::Acceleration;
 use std::sync::Arc;
@@ -58,6 +61,7 @@ impl Document {
                 self.pin_free_pieces(state);
                 Ok(())
             }
+            Command::AttachFreePieces => self.attach_free_pieces(state).map(|_| ()),
             Command::AddCollider(spec) => {
                 checked(&spec)?;
                 state.colliders.push(spec);
@@ -189,15 +193,67 @@ impl Document {
         state.rest = Arc::new(Rest::new(mesh, old.normalize));
     }
 
+    /// [`Command::AttachFreePieces`]: the number of pieces attached (an error when none lies
+    /// near a held piece).
+    pub(super) fn attach_free_pieces(&mut self, state: &mut EditState) -> Result<usize, EditorError> {
+        let pieces = &self.pieces;
+        let held = held_vertices(state);
+        let free = pieces.free(&held);
+        let mut hosts = vec![false; pieces.of_vertex.len()];
+        for (v, &h) in held.iter().enumerate() {
+            hosts[pieces.of_vertex[v] as usize] |= h;
+        }
+        if !hosts.contains(&true) {
+            // Nothing held yet (a mesh just opened): the pieces sit on the largest one.
+            if let Some(largest) = pieces.largest(&state.rest.mesh.triangles) {
+                hosts[largest as usize] = true;
+            }
+        }
+        let mesh = &state.rest.mesh;
+        let surface: Vec<[u32; 3]> =
+            mesh.triangles.iter().filter(|t| hosts[pieces.of_vertex[t[0] as usize] as usize]).copied().collect();
+        let (lo, hi) = mesh.bounding_box();
+        let gap = ATTACH_GAP * (hi - lo).length();
+        let near: Vec<u32> = match NearestTriangle::new(&mesh.positions, surface) {
+            Some(surface) => free
+                .into_iter()
+                .filter(|&p| !hosts[p as usize])
+                .filter(|&p| {
+                    let mut vertices = (0..mesh.positions.len()).filter(|&v| pieces.of_vertex[v] == p);
+                    vertices.any(|v| surface.nearest(mesh.positions[v]).1 <= gap)
+                })
+                .collect(),
+            None => Vec::new(),
+        };
+        if near.is_empty() {
+            return Err(EditorError::BadValue(format!(
+                "no free piece lies within {} % of the diagonal of a held piece: Pin free pieces holds them at rest",
+                ATTACH_GAP * 100.0
+            )));
+        }
+        let mut attached = vec![false; hosts.len()];
+        for &p in &near {
+            attached[p as usize] = true;
+        }
+        let vertices: Vec<u32> =
+            (0..mesh.positions.len() as u32).filter(|&v| attached[pieces.of_vertex[v as usize] as usize]).collect();
+        let weight = constraint_type(ATTACHMENT_KIND).map_or(1.0, |t| t.default_multiplier());
+        let spec = GroupSpec {
+            kind: ATTACHMENT_KIND.into(),
+            name: unique_name(state, "attached pieces"),
+            weight,
+            targets: Targets::default(),
+            selection: vertex_list(&vertices),
+            options: Map::new(),
+        };
+        state.groups.push(Group { key: self.new_key(), role: GroupRole::Other, spec });
+        Ok(near.len())
+    }
+
     /// [`Command::PinFreePieces`]: one soft handle at rest on every vertex of the pieces no
     /// handle holds (nothing when there are none).
     fn pin_free_pieces(&mut self, state: &mut EditState) {
-        let mut pinned = vec![false; self.positions.len()];
-        for group in state.groups.iter().filter(|g| g.role == GroupRole::Handle) {
-            for &v in group.vertices().unwrap_or(&[]) {
-                pinned[v] = true;
-            }
-        }
+        let pinned = held_vertices(state);
         let mut free = vec![false; self.pieces.of_vertex.len()];
         for piece in self.pieces.free(&pinned) {
             free[piece as usize] = true;
@@ -217,6 +273,20 @@ impl Document {
         };
         state.groups.push(Group { key: self.new_key(), role: GroupRole::Handle, spec });
     }
+}
+
+/// Per vertex, whether a handle or an attachment holds it: a piece with such a vertex is not
+/// free.
+pub(super) fn held_vertices(state: &EditState) -> Vec<bool> {
+    let mut held = vec![false; state.rest.mesh.num_vertices()];
+    for group in state.groups.iter().filter(|g| g.role == GroupRole::Handle || g.spec.kind == ATTACHMENT_KIND) {
+        for &v in group.vertices().unwrap_or(&[]) {
+            if let Some(h) = held.get_mut(v) {
+                *h = true;
+            }
+        }
+    }
+    held
 }
 
 /// [`Command::MoveHandle`]: translates a handle's targets.

@@ -247,7 +247,10 @@ impl EditorApp {
             // Moving targets or changing weights changes nothing drawn until the solve returns.
             self.viewport.geometry_dirty |= effect.redraws;
             let solve = effect.changes_solve;
-            let fixes = matches!(command, Command::FixSelection | Command::PinFreePieces);
+            // A new handle from the selection gets the gizmo; pinning or attaching free pieces
+            // leaves it on the handle the user was working with.
+            let fixes = matches!(command, Command::FixSelection);
+            let attaches = matches!(command, Command::AttachFreePieces);
             match self.document.apply(command) {
                 Ok(changed_state) => {
                     // Undo with nothing to undo, a weight set to what it was: nothing to solve.
@@ -258,6 +261,11 @@ impl EditorApp {
                     }
                     changed |= solve;
                     contact_only &= !solve || contact_edit;
+                    if attaches {
+                        let n = self.document.num_attached_pieces();
+                        self.view.status =
+                            format!("{} follow the surface under them", super::panels::count(n, "piece", "pieces"));
+                    }
                     if fixes {
                         // The new handle gets the gizmo.
                         self.groups.active_handle = self.document.handles().last().map(|h| h.key);

@@ -81,7 +81,7 @@ pub(super) enum OpenError {
 /// # Errors
 /// [`OpenError`] naming the file.
 pub(super) fn open_document(path: &Path) -> Result<Document, OpenError> {
-    if is_scene(path) {
+    if is_scene_path(path) {
         let scene = Scene::from_file(path)?;
         Document::from_scene(&scene).map_err(|source| OpenError::Scene { path: path.to_path_buf(), source })
     } else {
@@ -90,7 +90,7 @@ pub(super) fn open_document(path: &Path) -> Result<Document, OpenError> {
 }
 
 /// Whether `path` names a scene file (.toml or .json).
-fn is_scene(path: &Path) -> bool {
+pub(super) fn is_scene_path(path: &Path) -> bool {
     path.extension().and_then(|e| e.to_str()).is_some_and(|e| matches!(e, "toml" | "json"))
 }
 

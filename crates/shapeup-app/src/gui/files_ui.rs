@@ -5,8 +5,9 @@
 
 use super::app::{EditorApp, spawn_worker};
 use super::dialogs::DialogPurpose;
-use super::files::{SAMPLES, file_name_of, open_document, sample_path, scene_name_for};
+use super::files::{SAMPLES, file_name_of, is_scene_path, open_document, sample_path, scene_name_for};
 use super::metrics::SolveProgress;
+use super::panels::count;
 use crate::command::Command;
 use crate::simulation::tetrahedralize_available;
 use eframe::egui;
@@ -44,6 +45,13 @@ impl EditorApp {
                 self.view.energy_history.clear();
                 self.files.scene_input = scene_name_for(&path);
                 self.view.status = format!("opened {}", path.display());
+                let attached = self.document.num_attached_pieces();
+                if attached > 0 && !is_scene_path(&path) {
+                    self.view.status += &format!(
+                        "; {} that sit on the body follow it (group \"attached pieces\"; remove it to let them go)",
+                        count(attached, "piece", "pieces")
+                    );
+                }
                 self.request_solve();
             }
             Err(e) => self.view.status = e.to_string(),

@@ -39,6 +39,6 @@ impl PanelOutput {
 }
 
 /// "1 vertex", "2 vertices".
-fn count(n: usize, one: &str, many: &str) -> String {
+pub(in crate::gui) fn count(n: usize, one: &str, many: &str) -> String {
     format!("{n} {}", if n == 1 { one } else { many })
 }

@@ -4,6 +4,7 @@
 use super::count;
 use crate::command::{Command, SelectMode};
 use crate::document::Document;
+use crate::group::ATTACH_GAP;
 use eframe::egui;
 use egui::Color32;
 use serde_json::{Map, Value};
@@ -65,6 +66,17 @@ pub fn selection_panel(ui: &mut egui::Ui, document: &Document, state: &mut Selec
             } else {
                 ui.label(text);
             }
+        }
+        if ui
+            .add_enabled(free > 0, egui::Button::new("Attach free pieces"))
+            .on_hover_text(format!(
+                "each piece without a handle that lies within {} % of the diagonal of a held piece follows \
+                 the surface under it (an eye, nails, a belt move with the body)",
+                ATTACH_GAP * 100.0
+            ))
+            .clicked()
+        {
+            commands.push(Command::AttachFreePieces);
         }
         if ui
             .add_enabled(free > 0, egui::Button::new("Pin free pieces"))
