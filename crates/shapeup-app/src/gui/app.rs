@@ -167,6 +167,11 @@ impl EditorApp {
         self.view.progress.converged
     }
 
+    /// The handle the gizmo is on, if any.
+    pub fn active_handle(&self) -> Option<GroupKey> {
+        self.groups.active_handle
+    }
+
     /// The error shown over the 3D view, if any.
     pub fn banner(&self) -> Option<&str> {
         self.view.banner.as_deref()

@@ -425,6 +425,39 @@ fn a_free_piece_shows_the_banner_keeps_the_shape_and_pin_free_pieces_clears_it()
     assert!(red < 50, "the banner is still drawn ({red} red pixels)");
 }
 
+/// Suzanne's eyes (separate pieces) are attached when she is opened; with that group removed,
+/// "Attach free pieces" attaches them again and the gizmo stays on the user's handle.
+#[test]
+fn attach_free_pieces_attaches_the_eyes_and_leaves_the_gizmo_on_its_handle() {
+    let path = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/suzanne.obj"));
+    let mut doc = Document::open(path, ShapeModel::EdgeSprings).unwrap();
+    assert_eq!(doc.num_attached_pieces(), 2);
+    let attached = doc.groups().iter().find(|g| g.spec.kind == "attachment").unwrap().key;
+    doc.apply(Command::RemoveGroup(attached)).unwrap();
+    let piece = |v: u32| doc.pieces().of_vertex[v as usize];
+    let size = |p: u32| (0..doc.num_vertices() as u32).filter(|&v| piece(v) == p).count();
+    let largest = (0..3).max_by_key(|&p| size(p)).unwrap();
+    let head: Vec<u32> = (0..doc.num_vertices() as u32).filter(|&v| piece(v) == largest).collect();
+    fix(&mut doc, head[..10].to_vec());
+    doc.apply(Command::Select { vertices: head[head.len() - 10..].to_vec(), mode: SelectMode::Replace }).unwrap();
+    let mut harness = editor_at(doc, path, egui::vec2(1100.0, 800.0));
+    harness.get_by_label("2 of 3 pieces have no handle");
+    // The user's handle, made on screen, has the gizmo.
+    harness.get_by_label("Fix selection").click();
+    settle(&mut harness);
+    let mine = harness.state().document().handles().last().unwrap().key;
+    assert_eq!(harness.state().active_handle(), Some(mine));
+
+    harness.get_by_label("Attach free pieces").click();
+    settle(&mut harness);
+    let app = harness.state();
+    assert_eq!(app.document().num_attached_pieces(), 2);
+    assert_eq!(app.document().num_free_pieces(), 0);
+    assert_eq!(app.active_handle(), Some(mine), "the gizmo stays on the handle the user was working with");
+    assert!(app.status().contains("2 pieces follow the surface under them"), "{}", app.status());
+    harness.get_by_label("0 of 3 pieces have no handle");
+}
+
 // ---- 3. The Open row's path field ----
 
 /// The bunny-ears scene as opened: its mesh, its two handles, and it opens solved (the ears
