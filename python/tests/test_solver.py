@@ -37,10 +37,19 @@ def test_every_type_solves_and_never_raises_the_energy(kind):
         anchor = [0]
     else:
         V, F = grid(4, 3, bump=0.3)
-        s = shapeup.Solver(V, F)
         anchor = [0, 4]
+    selection = None
+    if info.acts_on == "vertices of pieces that follow others":
+        # A flake of its own above the grid: the piece that follows it.
+        n = len(V)
+        centre = V.mean(axis=0)
+        flake = centre + np.array([[0.0, 0.0, 0.05], [0.1, 0.0, 0.05], [0.1, 0.1, 0.05], [0.0, 0.1, 0.05]])
+        V, F = np.vstack([V, flake]), np.vstack([F, [[n, n + 1, n + 2, n + 3]]])
+        selection = [n, n + 1, n + 2, n + 3]
+    if info.acts_on != "tetrahedra":
+        s = shapeup.Solver(V, F)
     kwargs = {"translate": [0.0, 0.1, 0.0]} if info.has_targets else {}
-    g = s.add(kind, **kwargs)
+    g = s.add(kind, selection, **kwargs) if selection is not None else s.add(kind, **kwargs)
     assert g.type == kind and g.constraints > 0
     if kind != "position":
         s.add("position", anchor, weight=10.0, name="anchor")

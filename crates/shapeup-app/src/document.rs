@@ -114,6 +114,18 @@ impl Document {
         Ok(document)
     }
 
+    /// A document on a bundled sample mesh ([`crate::samples`]), read from memory: it has no
+    /// source file, so saving a scene writes its mesh beside the scene.
+    ///
+    /// # Errors
+    /// As [`Document::open`].
+    pub fn open_sample(sample: &crate::samples::Sample, model: ShapeModel) -> Result<Document, EditorError> {
+        let loaded = sample.read().map_err(|e| EditorError::Load(LoadError::Mesh(Cause::new(e))))?;
+        let mut document = Document::new(loaded.mesh, model)?;
+        document.attributes = loaded.attributes;
+        Ok(document)
+    }
+
     fn empty(rest: Arc<Rest>, solver_settings: SolverSettings) -> Document {
         let n = rest.mesh.num_vertices();
         let positions = rest.mesh.positions.clone();

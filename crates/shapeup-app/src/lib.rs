@@ -34,6 +34,7 @@ pub mod gizmo;
 pub mod group;
 pub mod picking;
 pub mod pieces;
+pub mod samples;
 pub mod simulation;
 pub mod worker;
 

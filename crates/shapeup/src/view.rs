@@ -28,8 +28,8 @@ fn open(input: Option<PathBuf>) -> Result<(Document, PathBuf)> {
     };
     if let Some(sample) = crate::samples::resolve(&path) {
         let name = PathBuf::from(sample.file_name());
-        let document = Document::new(sample.read()?.mesh, ShapeModel::EdgeSprings)
-            .map_err(|e| anyhow!("{}: {e}", name.display()))?;
+        let document =
+            Document::open_sample(&sample, ShapeModel::EdgeSprings).map_err(|e| anyhow!("{}: {e}", name.display()))?;
         Ok((document, name))
     } else if is_scene(&path) {
         let scene = Scene::from_file(&path)?;

@@ -8,20 +8,25 @@ use crate::error::EditorError;
 use shapeup_core::scene::{Scene, SceneError};
 use std::path::{Path, PathBuf};
 
-/// The bundled sample meshes (name, path relative to the repository root).
+/// The Samples menu: (label, entry): a bundled mesh's name ([`crate::samples`]) or the example
+/// scene's path relative to the repository root.
 pub const SAMPLES: [(&str, &str); 5] = [
-    ("Stanford bunny", "data/stanford-bunny.obj"),
-    ("Spot", "data/spot.obj"),
-    ("Cow", "data/cow.obj"),
-    ("Suzanne (quads)", "data/suzanne.obj"),
+    ("Stanford bunny", "stanford-bunny"),
+    ("Spot", "spot"),
+    ("Cow", "cow"),
+    ("Suzanne (quads)", "suzanne"),
     ("Bunny ears (scene)", "examples/bunny-springs.toml"),
 ];
 
-/// A bundled sample's path: relative to the working directory when it exists there, else to
-/// the source tree.
-pub fn sample_path(relative: &str) -> PathBuf {
-    let local = PathBuf::from(relative);
-    if local.exists() { local } else { PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../..")).join(relative) }
+/// What a Samples entry opens: a bundled mesh by its name (read from memory, whatever the
+/// working directory), or the example scene's file (relative to the working directory when
+/// it exists there, else to the source tree).
+pub fn sample_path(entry: &str) -> PathBuf {
+    if crate::samples::Sample::find(entry).is_some() {
+        return PathBuf::from(entry);
+    }
+    let local = PathBuf::from(entry);
+    if local.exists() { local } else { PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../..")).join(entry) }
 }
 
 /// The file rows' typed paths, the dialogs, and the pending confirmations.
@@ -78,10 +83,14 @@ pub(super) enum OpenError {
 
 /// A document from a scene file (`.toml`, `.json`) or a mesh file (with edge springs).
 ///
+/// A bare name with no file of that name is a bundled sample, as on the command line.
+///
 /// # Errors
 /// [`OpenError`] naming the file.
 pub(super) fn open_document(path: &Path) -> Result<Document, OpenError> {
-    if is_scene_path(path) {
+    if let Some(sample) = crate::samples::resolve(path) {
+        Document::open_sample(&sample, ShapeModel::EdgeSprings).map_err(OpenError::Mesh)
+    } else if is_scene_path(path) {
         let scene = Scene::from_file(path)?;
         Document::from_scene(&scene).map_err(|source| OpenError::Scene { path: path.to_path_buf(), source })
     } else {

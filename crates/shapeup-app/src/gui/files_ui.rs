@@ -44,7 +44,10 @@ impl EditorApp {
                 self.view.tetrahedralize = tetrahedralize_available(&self.document);
                 self.view.energy_history.clear();
                 self.files.scene_input = scene_name_for(&path);
-                self.view.status = format!("opened {}", path.display());
+                self.view.status = match crate::samples::resolve(&path) {
+                    Some(sample) => format!("opened the bundled sample {}", sample.name),
+                    None => format!("opened {}", path.display()),
+                };
                 let attached = self.document.num_attached_pieces();
                 if attached > 0 && !is_scene_path(&path) {
                     self.view.status += &format!(
