@@ -1,7 +1,8 @@
 //! `shapeup view`: the interactive editor, or one headless frame with `--screenshot`.
 
 use anyhow::{Result, anyhow};
-use shapeup_app::document::{Document, ShapeModel};
+use shapeup_app::document::Document;
+use shapeup_app::group::DEFAULT_SHAPE_MODEL;
 use shapeup_app::gui::app::{WindowOptions, run_window};
 use shapeup_app::gui::headless::{render_rgba, write_png};
 use shapeup_app::gui::renderer::BASE_COLOR;
@@ -29,14 +30,14 @@ fn open(input: Option<PathBuf>) -> Result<(Document, PathBuf)> {
     if let Some(sample) = crate::samples::resolve(&path) {
         let name = PathBuf::from(sample.file_name());
         let document =
-            Document::open_sample(&sample, ShapeModel::EdgeSprings).map_err(|e| anyhow!("{}: {e}", name.display()))?;
+            Document::open_sample(&sample, DEFAULT_SHAPE_MODEL).map_err(|e| anyhow!("{}: {e}", name.display()))?;
         Ok((document, name))
     } else if is_scene(&path) {
         let scene = Scene::from_file(&path)?;
         let document = Document::from_scene(&scene).map_err(|e| anyhow!("{}: {e}", path.display()))?;
         Ok((document, path))
     } else {
-        let document = Document::open(&path, ShapeModel::EdgeSprings).map_err(|e| anyhow!("{e}"))?;
+        let document = Document::open(&path, DEFAULT_SHAPE_MODEL).map_err(|e| anyhow!("{e}"))?;
         Ok((document, path))
     }
 }

@@ -3,8 +3,9 @@
 //! shell.
 
 use super::dialogs::FileDialogs;
-use crate::document::{Document, ShapeModel};
+use crate::document::Document;
 use crate::error::EditorError;
+use crate::group::DEFAULT_SHAPE_MODEL;
 use shapeup_core::scene::{Scene, SceneError};
 use std::path::{Path, PathBuf};
 
@@ -89,12 +90,12 @@ pub(super) enum OpenError {
 /// [`OpenError`] naming the file.
 pub(super) fn open_document(path: &Path) -> Result<Document, OpenError> {
     if let Some(sample) = crate::samples::resolve(path) {
-        Document::open_sample(&sample, ShapeModel::EdgeSprings).map_err(OpenError::Mesh)
+        Document::open_sample(&sample, DEFAULT_SHAPE_MODEL).map_err(OpenError::Mesh)
     } else if is_scene_path(path) {
         let scene = Scene::from_file(path)?;
         Document::from_scene(&scene).map_err(|source| OpenError::Scene { path: path.to_path_buf(), source })
     } else {
-        Document::open(path, ShapeModel::EdgeSprings).map_err(OpenError::Mesh)
+        Document::open(path, DEFAULT_SHAPE_MODEL).map_err(OpenError::Mesh)
     }
 }
 

@@ -840,3 +840,65 @@ fn pieces_that_sit_on_the_body_follow_it() {
         "pinned eyes stay behind (lag {stayed:.2}, drift {left_behind:.3})"
     );
 }
+
+/// The cow with its hooves held and its head dragged by 0.11 of the diagonal, converged with
+/// `model`: the 99th percentile and the largest change of a dihedral angle (degrees), the 99th
+/// percentile edge stretch, and how far the handle is from its target (fraction of the drag).
+fn cow_drag(model: ShapeModel) -> (f64, f64, f64, f64) {
+    let mut doc = Document::open(Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/cow.obj")), model).unwrap();
+    let n = doc.num_vertices();
+    let sorted = |axis: fn(DVec3) -> f64| {
+        let mut order: Vec<u32> = (0..n as u32).collect();
+        order.sort_by(|&a, &b| axis(doc.positions()[a as usize]).total_cmp(&axis(doc.positions()[b as usize])));
+        order
+    };
+    let (by_y, by_x) = (sorted(|p| p.y), sorted(|p| p.x));
+    fix(&mut doc, &by_y[..n / 20]);
+    let head = fix(&mut doc, &by_x[n - n / 30..]);
+    let drag = DVec3::new(0.0, 0.1, 0.05) * diagonal(&doc);
+    doc.apply(Command::MoveHandle { handle: head, delta: drag }).unwrap();
+    doc.converge().unwrap();
+    let (q, x) = (doc.positions(), doc.rest_positions());
+    let triangles = doc.triangles().to_vec();
+    let normal = |p: &[DVec3], t: [u32; 3]| {
+        let [a, b, c] = t.map(|v| p[v as usize]);
+        (b - a).cross(c - a).normalize_or_zero()
+    };
+    let mut faces_of_edge: std::collections::BTreeMap<(u32, u32), Vec<usize>> = Default::default();
+    for (i, t) in triangles.iter().enumerate() {
+        for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
+            faces_of_edge.entry((a.min(b), a.max(b))).or_default().push(i);
+        }
+    }
+    let percentile = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        (v[v.len() * 99 / 100], v[v.len() - 1])
+    };
+    let dihedral = faces_of_edge.values().filter(|f| f.len() == 2).map(|f| {
+        let angle = |p: &[DVec3]| normal(p, triangles[f[0]]).dot(normal(p, triangles[f[1]])).clamp(-1.0, 1.0).acos();
+        (angle(q) - angle(x)).abs().to_degrees()
+    });
+    let (bend99, bend_max) = percentile(dihedral.collect());
+    let stretch = faces_of_edge.keys().map(|&(a, b)| {
+        let (a, b) = (a as usize, b as usize);
+        ((q[a] - q[b]).length() / (x[a] - x[b]).length() - 1.0).abs()
+    });
+    let (stretch99, _) = percentile(stretch.collect());
+    let held = doc.group(head).unwrap().vertices().unwrap();
+    let lag = held.iter().map(|&v| (q[v] - x[v] - drag).length()).fold(0.0, f64::max) / drag.length();
+    (bend99, bend_max, stretch99, lag)
+}
+
+/// The editor's default shape model holds a real mesh's shape on a modest drag and reaches
+/// the handle; edge springs, the old default, fold the cow's edges (figures in
+/// `DEFAULT_SHAPE_MODEL`'s doc).
+#[test]
+fn the_default_shape_model_holds_the_cow_on_a_modest_drag() {
+    assert_eq!(shapeup_app::group::DEFAULT_SHAPE_MODEL, ShapeModel::IsoOneRing);
+    let (bend99, bend_max, stretch99, lag) = cow_drag(shapeup_app::group::DEFAULT_SHAPE_MODEL);
+    assert!(bend99 < 15.0 && bend_max < 45.0, "dihedral angles change by {bend99:.1}° (p99), {bend_max:.1}° at most");
+    assert!(stretch99 < 0.3, "edges stretch by {:.0} % (p99)", 100.0 * stretch99);
+    assert!(lag < 0.01, "the handle is {:.1} % of the drag from its target", 100.0 * lag);
+    let (springs99, springs_max, _, _) = cow_drag(ShapeModel::EdgeSprings);
+    assert!(springs99 > 45.0 && springs_max > 150.0, "springs fold: {springs99:.1}° (p99), {springs_max:.1}°");
+}
