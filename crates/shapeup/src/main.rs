@@ -558,15 +558,25 @@ pub(crate) fn print_warnings(warnings: &shapeup_core::warnings::Warnings) {
 fn energy(scene_path: &Path, positions_path: &Path) -> Result<()> {
     let scene = Scene::from_file(scene_path)?;
     let mut loaded = scene.load()?;
-    let positions = samples::read_mesh_arg(positions_path)?.0.mesh.positions;
-    if positions.len() != loaded.mesh.num_vertices() {
+    let shape = samples::read_mesh_arg(positions_path)?.0.mesh;
+    if shape.num_vertices() != loaded.mesh.num_vertices() {
         bail!(
             "{}: has {} vertices but the scene's mesh has {} (positions must match the mesh vertex by vertex)",
             positions_path.display(),
-            positions.len(),
+            shape.num_vertices(),
             loaded.mesh.num_vertices()
         );
     }
+    // Same count, other order (an STL file merges vertices in the order its triangles use
+    // them): refused, as a `[mesh] start` is. A file of points alone is taken as it is.
+    let has_elements = !shape.polygons.is_empty() || !shape.tetrahedra.is_empty();
+    if let Some(why) = has_elements.then(|| shapeup_core::scene::other_elements(&loaded.mesh, &shape)).flatten() {
+        bail!(
+            "{}: is not a shape of the scene's mesh vertex by vertex: {why} (STL merges vertices and reorders them)",
+            positions_path.display()
+        );
+    }
+    let positions = shape.positions;
     let e = loaded.energy_of(&positions)?;
     let mut out = std::io::stdout().lock();
     writeln!(out, "E = {:.12e}", e.total)?;

@@ -363,8 +363,10 @@ impl Scene {
 }
 
 /// Why `other`'s elements are not `mesh`'s, if they are not: faces compared as sets of vertex
-/// sets (order, first corner and orientation free), then tetrahedra likewise.
-fn other_elements(mesh: &Mesh, other: &Mesh) -> Option<String> {
+/// sets (order, first corner and orientation free), then tetrahedra likewise. What tells a
+/// shape of a mesh's own vertices (a `[mesh] start`, `shapeup energy`'s positions) from a
+/// file whose vertices were merged or reordered (STL).
+pub fn other_elements(mesh: &Mesh, other: &Mesh) -> Option<String> {
     fn canonical<'a>(elements: impl Iterator<Item = &'a [u32]>) -> Vec<Vec<u32>> {
         let mut all: Vec<Vec<u32>> = elements
             .map(|e| {

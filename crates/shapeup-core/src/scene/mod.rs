@@ -17,7 +17,9 @@ mod spec;
 mod strict;
 mod write;
 
-pub use build::{DynamicSettingsError, LoadedScene, SpinningHandle, lumped_masses, solve_static_with_contact};
+pub use build::{
+    DynamicSettingsError, LoadedScene, SpinningHandle, lumped_masses, other_elements, solve_static_with_contact,
+};
 pub use error::SceneError;
 pub use generated::{GeneratedMesh, MAX_GENERATED_BYTES};
 pub use parse::{SceneFormat, from_json_entry};
