@@ -612,8 +612,11 @@ impl LoadedScene {
         self.warn_of_handle_spin();
         let mut q = self.start_positions();
         if let Some(contact) = self.contact.as_mut().filter(|c| c.is_active()) {
-            let report = solve_static_with_contact(&mut self.system, contact, &mut q, iterations, after_iteration)
-                .map_err(|source| SceneError::Solve { path: self.scene.file.clone(), source })?;
+            let report = match solve_static_with_contact(&mut self.system, contact, &mut q, iterations, after_iteration)
+            {
+                Ok(report) => report,
+                Err(source) => return Err(self.solve_error(source)),
+            };
             // The report's contacts are those of the result itself.
             contact.record_touching_at(&q, 0.0);
             let inside = contact.stats().inside;
@@ -634,16 +637,37 @@ impl LoadedScene {
             return Ok((q, report));
         }
         let tolerance = self.scene.solver.tolerance;
-        let mut report = self
-            .system
-            .solve_with(&mut q, iterations, tolerance, after_iteration)
-            .map_err(|source| SceneError::Solve { path: self.scene.file.clone(), source })?;
+        let mut report = match self.system.solve_with(&mut q, iterations, tolerance, after_iteration) {
+            Ok(report) => report,
+            Err(source) => return Err(self.solve_error(source)),
+        };
         if self.start.is_some() {
             self.keep_a_converged_start(&mut q, &mut report, tolerance);
             self.residual_from_rest(&q, &mut report);
         }
         self.warnings.extend(report.warnings().for_file(&self.scene.file));
         Ok((q, report))
+    }
+
+    /// A static solve's error for this scene: a non-finite energy where the `[mesh] start`
+    /// shape itself has none (coordinates of 1e300, say) names that key and file; any other
+    /// is [`SceneError::Solve`].
+    fn solve_error(&mut self, source: SolveError) -> SceneError {
+        if matches!(source, SolveError::NonFiniteEnergy) && self.start.is_some() {
+            let start = self.start_positions();
+            if self.system.finite_energy(&start).is_err() {
+                let file = self.scene.start_path().unwrap_or_default();
+                return SceneError::Invalid {
+                    path: self.scene.file.clone(),
+                    entry: "[mesh] start".into(),
+                    message: format!(
+                        "the energy of {} is not finite (its coordinates are too large for the constraints to measure): a start shape is a shape of the mesh at its own scale",
+                        file.display()
+                    ),
+                };
+            }
+        }
+        SceneError::Solve { path: self.scene.file.clone(), source }
     }
 
     /// A start shape that already meets the tolerance (its first iteration changed E by at

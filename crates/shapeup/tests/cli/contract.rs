@@ -2385,6 +2385,11 @@ fn a_start_shape_is_where_the_solve_starts() {
     write_mesh(&dir.path().join("start.stl"), &Mesh { positions: start.clone(), ..spot.clone() }, &Default::default())
         .unwrap();
     refused("start = 'start.stl'", "is not a shape of the mesh");
+    // Finite coordinates too large for the energy: named as the start's fault.
+    let mut huge = start.clone();
+    huge[7] = DVec3::new(1e300, 0.0, 0.0);
+    write_mesh(&dir.path().join("huge.obj"), &Mesh { positions: huge, ..spot.clone() }, &Default::default()).unwrap();
+    refused("start = 'huge.obj'", "huge.obj is not finite");
     // Faces in another order, or from another first corner, are the same faces.
     let mut shuffled = Mesh { positions: start.clone(), ..spot.clone() };
     shuffled.polygons = shapeup_core::mesh::Polygons::new();
