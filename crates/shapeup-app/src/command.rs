@@ -59,11 +59,11 @@ pub enum Command {
     /// One soft handle (g = [`FREE_PIECE_WEIGHT`](crate::group::FREE_PIECE_WEIGHT)) on
     /// every vertex of the pieces no handle holds, at rest, listed as one group "free pieces".
     PinFreePieces,
-    /// One `attachment` group on every piece no handle holds that lies within
-    /// [`ATTACH_GAP`](crate::group::ATTACH_GAP) of the diagonal of a held piece at rest (of
-    /// the largest piece when nothing is held): each of its vertices follows the nearest
-    /// triangle of the pieces around it, listed as one group "attached pieces". Farther pieces
-    /// stay free (Pin free pieces holds them); none near is an error naming the gap.
+    /// One `attachment` group on every piece that no handle holds and no attachment holds:
+    /// each of its vertices follows the nearest triangle of the held pieces (of the largest
+    /// piece when nothing is held), listed as one group "attached pieces". Opening a mesh does
+    /// the same for the pieces within [`ATTACH_GAP`](crate::group::ATTACH_GAP) of the largest.
+    /// Nothing free is an error.
     AttachFreePieces,
     /// Translates a handle's targets by `delta` (input frame).
     MoveHandle {

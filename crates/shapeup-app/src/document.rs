@@ -94,7 +94,7 @@ impl Document {
         // Pieces that sit on the body (an eye, nails, a belt) follow it from the start.
         if document.pieces.count > 1 {
             let mut state = document.state.clone();
-            if document.attach_free_pieces(&mut state).is_ok() {
+            if document.attach_free_pieces(&mut state, Some(crate::group::ATTACH_GAP)).is_ok() {
                 document.state = state;
             }
         }

@@ -6,8 +6,7 @@ use crate::command::Command;
 use crate::edit_state::{EditState, Rest};
 use crate::error::{EditorError, GroupError};
 use crate::group::{
-    ATTACH_GAP, ATTACHMENT_KIND, FREE_PIECE_WEIGHT, Group, GroupKey, GroupRole, ShapeModel, WEIGHT_RANGE,
-    explicit_targets,
+    ATTACHMENT_KIND, FREE_PIECE_WEIGHT, Group, GroupKey, GroupRole, ShapeModel, WEIGHT_RANGE, explicit_targets,
 };
 use glam::{DQuat, DVec3};
 use serde_json::Map;
@@ -61,7 +60,7 @@ impl Document {
                 self.pin_free_pieces(state);
                 Ok(())
             }
-            Command::AttachFreePieces => self.attach_free_pieces(state).map(|_| ()),
+            Command::AttachFreePieces => self.attach_free_pieces(state, None).map(|_| ()),
             Command::AddCollider(spec) => {
                 checked(&spec)?;
                 state.colliders.push(spec);
@@ -193,9 +192,10 @@ impl Document {
         state.rest = Arc::new(Rest::new(mesh, old.normalize));
     }
 
-    /// [`Command::AttachFreePieces`]: the number of pieces attached (an error when none lies
-    /// near a held piece).
-    pub(super) fn attach_free_pieces(&mut self, state: &mut EditState) -> Result<usize, EditorError> {
+    /// [`Command::AttachFreePieces`] (every free piece, `gap` `None`) or opening a mesh (the
+    /// pieces within `gap`, a fraction of the diagonal, of the largest): the number of pieces
+    /// attached (an error when none is).
+    pub(super) fn attach_free_pieces(&mut self, state: &mut EditState, gap: Option<f64>) -> Result<usize, EditorError> {
         let pieces = &self.pieces;
         let held = held_vertices(state);
         let free = pieces.free(&held);
@@ -213,7 +213,7 @@ impl Document {
         let surface: Vec<[u32; 3]> =
             mesh.triangles.iter().filter(|t| hosts[pieces.of_vertex[t[0] as usize] as usize]).copied().collect();
         let (lo, hi) = mesh.bounding_box();
-        let gap = ATTACH_GAP * (hi - lo).length();
+        let gap = gap.map_or(f64::INFINITY, |g| g * (hi - lo).length());
         let near: Vec<u32> = match NearestTriangle::new(&mesh.positions, surface) {
             Some(surface) => free
                 .into_iter()
@@ -226,10 +226,9 @@ impl Document {
             None => Vec::new(),
         };
         if near.is_empty() {
-            return Err(EditorError::BadValue(format!(
-                "no free piece lies within {} % of the diagonal of a held piece: Pin free pieces holds them at rest",
-                ATTACH_GAP * 100.0
-            )));
+            return Err(EditorError::BadValue(
+                "no free piece to attach: every piece has a handle or is attached".into(),
+            ));
         }
         let mut attached = vec![false; hosts.len()];
         for &p in &near {

@@ -576,6 +576,32 @@ fn pieces_without_handles() {
     assert_eq!(doc.can_undo(), undo_before);
 }
 
+/// Pieces far apart are not attached when opened; Attach free pieces attaches every free
+/// one to the held piece, however far, and then the system solves; nothing left free is an
+/// error that changes nothing.
+#[test]
+fn attach_free_pieces_attaches_every_free_piece_to_the_held_ones() {
+    let (mut positions, mut triangles) = grid(4, DVec3::ZERO);
+    let (p2, t2) = grid(4, DVec3::new(2.0, 0.0, 0.0));
+    let offset = positions.len() as u32;
+    positions.extend(p2);
+    triangles.extend(t2.iter().map(|t| t.map(|v| v + offset)));
+    let mesh = shapeup_core::mesh::Mesh::new(positions, triangles).unwrap();
+    let mut doc = Document::new(mesh, ShapeModel::IsoOneRing).unwrap();
+    assert_eq!((doc.num_attached_pieces(), doc.num_free_pieces()), (0, 2), "1 apart: not attached when opened");
+    let handle = fix(&mut doc, &[0, 1, 2, 5]);
+    doc.apply(Command::AttachFreePieces).unwrap();
+    assert_eq!((doc.num_attached_pieces(), doc.num_free_pieces()), (1, 0));
+    doc.apply(Command::MoveHandle { handle, delta: DVec3::Z * 0.2 }).unwrap();
+    doc.converge().unwrap();
+    let moved = (doc.positions()[offset as usize] - doc.rest_positions()[offset as usize]).length();
+    assert!(moved > 0.05, "the attached sheet went with the held one ({moved})");
+    let groups = doc.groups().len();
+    let error = doc.apply(Command::AttachFreePieces).unwrap_err();
+    assert!(error.to_string().contains("no free piece"), "{error}");
+    assert_eq!(doc.groups().len(), groups);
+}
+
 /// Undo brings back the shape that was on screen: after a drag (one step however many
 /// moves), Reset shape, Make rest shape and a dynamics run (a checkpoint).
 #[test]

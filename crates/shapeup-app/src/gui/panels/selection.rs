@@ -4,7 +4,6 @@
 use super::count;
 use crate::command::{Command, SelectMode};
 use crate::document::Document;
-use crate::group::ATTACH_GAP;
 use eframe::egui;
 use egui::Color32;
 use serde_json::{Map, Value};
@@ -69,11 +68,10 @@ pub fn selection_panel(ui: &mut egui::Ui, document: &Document, state: &mut Selec
         }
         if ui
             .add_enabled(free > 0, egui::Button::new("Attach free pieces"))
-            .on_hover_text(format!(
-                "each piece without a handle that lies within {} % of the diagonal of a held piece follows \
-                 the surface under it (an eye, nails, a belt move with the body)",
-                ATTACH_GAP * 100.0
-            ))
+            .on_hover_text(
+                "each piece without a handle follows the nearest surface of the held pieces (an eye, nails, \
+                 a belt move with the body)",
+            )
             .clicked()
         {
             commands.push(Command::AttachFreePieces);
