@@ -60,6 +60,7 @@ pub mod io;
 pub mod linalg;
 pub mod mesh;
 pub mod motion;
+pub mod nearest;
 pub mod scene;
 pub mod solver;
 #[cfg(feature = "tetgen")]

@@ -11,7 +11,8 @@ use crate::group::{
 use glam::{DQuat, DVec3};
 use serde_json::Map;
 use shapeup_core::constraints::constraint_type;
-use shapeup_core::contact::{ColliderSpec, NearestTriangle};
+use shapeup_core::contact::ColliderSpec;
+use shapeup_core::nearest::NearestTriangle;
 use shapeup_core::scene::{GroupSpec, SelectionSpec, Targets, unique_group_name};
 use shapeup_core::solver::Acceleration;
 use std::sync::Arc;

@@ -730,7 +730,7 @@ const SUZANNE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/suzanne.o
 fn drift_from_body(doc: &Document, piece: &[u32]) -> f64 {
     let body = |positions: &[DVec3]| {
         let triangles = doc.triangles().iter().filter(|t| !piece.contains(&t[0])).copied().collect::<Vec<[u32; 3]>>();
-        shapeup_core::contact::NearestTriangle::new(positions, triangles).unwrap()
+        shapeup_core::nearest::NearestTriangle::new(positions, triangles).unwrap()
     };
     let (rest, now) = (body(doc.rest_positions()), body(doc.positions()));
     piece

@@ -1,21 +1,10 @@
-//! Boxes and points in parry's types: the one conversion between glam and parry, and the boxes
-//! of elements the contact's BVHs hold. Beneath the self-collision detection, the crossing check,
-//! the colliders' features and the mesh collider's queries.
+//! Boxes in parry's types: the boxes of elements the contact's BVHs hold (the point conversion
+//! is `crate::nearest`'s). Beneath the self-collision detection, the crossing check, the
+//! colliders' features and the mesh collider's queries.
 
+pub(crate) use crate::nearest::{from_parry, to_parry};
 use glam::DVec3;
 use parry3d_f64::bounding_volume::Aabb;
-
-/// glam's point as parry's.
-#[inline]
-pub(crate) fn to_parry(p: DVec3) -> parry3d_f64::math::Vector {
-    parry3d_f64::math::Vector::new(p.x, p.y, p.z)
-}
-
-/// parry's point as glam's.
-#[inline]
-pub(crate) fn from_parry(p: parry3d_f64::math::Vector) -> DVec3 {
-    DVec3::new(p.x, p.y, p.z)
-}
 
 /// The box around `points`, grown by `grow` on every side.
 pub(crate) fn aabb(points: impl IntoIterator<Item = DVec3>, grow: f64) -> Aabb {

@@ -17,14 +17,12 @@ mod crossing;
 mod features;
 mod gap;
 pub mod model;
-mod nearest;
 mod self_collision;
 pub mod shape;
 pub mod spec;
 
 pub use collider::{Collider, Motion};
 pub use model::{ContactModel, ContactParams, ContactStats};
-pub use nearest::NearestTriangle;
 pub use shape::{MeshShape, Proximity, Shape};
 pub use spec::{
     COLLIDER_TYPES, ColliderError, ColliderSpec, ContactSettings, DEFAULT_THICKNESS_FRACTION,

@@ -1,6 +1,5 @@
 //! Pieces of a mesh and the surface that selected pieces follow (`attachment`).
 
-use crate::constraints::selection::Selection;
 use crate::geometry::{RestGeometry, is_degenerate_triangle};
 use crate::topology::connected_pieces;
 
@@ -12,13 +11,13 @@ pub(crate) fn pieces_of(rest: &RestGeometry) -> (Vec<u32>, usize) {
     connected_pieces(rest.num_vertices(), triangles.chain(tetrahedra))
 }
 
-/// The triangles (with area at rest) of the pieces that hold no selected vertex: the surface
-/// the selected pieces follow.
-pub(crate) fn unselected_piece_triangles(rest: &RestGeometry, selection: &Selection) -> Vec<[u32; 3]> {
+/// The triangles (with area at rest) of the pieces that hold no vertex `selected` says: the
+/// surface the selected pieces follow.
+pub(crate) fn unselected_piece_triangles(rest: &RestGeometry, selected: impl Fn(u32) -> bool) -> Vec<[u32; 3]> {
     let (piece, count) = pieces_of(rest);
     let mut touched = vec![false; count];
     for (v, &p) in piece.iter().enumerate() {
-        if selection.contains(v as u32) {
+        if selected(v as u32) {
             touched[p as usize] = true;
         }
     }

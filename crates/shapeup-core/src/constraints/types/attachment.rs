@@ -30,7 +30,7 @@ use crate::constraints::contract::{BuildContext, Constraint, ConstraintType, Row
 use crate::constraints::error::ConstraintError;
 use crate::constraints::kit::build::non_empty;
 use crate::constraints::kit::pieces::unselected_piece_triangles;
-use crate::contact::NearestTriangle;
+use crate::nearest::NearestTriangle;
 use crate::constraints::kit::vertex_set::{ShapeMatch, push_centred_rows};
 use crate::constraints::params::Params;
 use crate::constraints::selection::Element;
@@ -117,7 +117,7 @@ impl ConstraintType for AttachmentType {
         if selected.is_empty() {
             return Err(ConstraintError::NothingSelected { kind: KIND, element: "vertices" });
         }
-        let host = unselected_piece_triangles(rest, ctx.selection);
+        let host = unselected_piece_triangles(rest, |v| ctx.selection.contains(v));
         let surface = (!host.is_empty()).then(|| NearestTriangle::new(&rest.positions, host)).flatten().ok_or_else(|| {
             ConstraintError::Invalid {
                 kind: KIND,

@@ -1,10 +1,23 @@
 //! The nearest triangle of a surface to a point, through parry3d's BVH: which triangle an
-//! `attachment` follows, and how far a piece lies from the body (the editor's attach test).
+//! `attachment` follows, and how far a piece lies from the body (the editor's attach test);
+//! and the one conversion between glam's points and parry's, which contact uses too. Beneath
+//! the constraints and contact.
 
-use super::boxes::{from_parry, to_parry};
 use glam::DVec3;
 use parry3d_f64::query::PointQueryWithLocation;
 use parry3d_f64::shape::{TriMesh, TriMeshFlags};
+
+/// glam's point as parry's.
+#[inline]
+pub(crate) fn to_parry(p: DVec3) -> parry3d_f64::math::Vector {
+    parry3d_f64::math::Vector::new(p.x, p.y, p.z)
+}
+
+/// parry's point as glam's.
+#[inline]
+pub(crate) fn from_parry(p: parry3d_f64::math::Vector) -> DVec3 {
+    DVec3::new(p.x, p.y, p.z)
+}
 
 /// A surface of triangles answering nearest-triangle queries.
 pub struct NearestTriangle {
