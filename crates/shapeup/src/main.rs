@@ -571,9 +571,11 @@ fn energy(scene_path: &Path, positions_path: &Path) -> Result<()> {
     // them): refused, as a `[mesh] start` is. A file of points alone is taken as it is.
     let has_elements = !shape.polygons.is_empty() || !shape.tetrahedra.is_empty();
     if let Some(why) = has_elements.then(|| shapeup_core::scene::other_elements(&loaded.mesh, &shape)).flatten() {
+        let stl = positions_path.extension().is_some_and(|e| e.eq_ignore_ascii_case("stl"));
         bail!(
-            "{}: is not a shape of the scene's mesh vertex by vertex: {why} (STL merges vertices and reorders them)",
-            positions_path.display()
+            "{}: is not a shape of the scene's mesh vertex by vertex: {why}{}",
+            positions_path.display(),
+            if stl { " (STL merges vertices and reorders them)" } else { "" }
         );
     }
     let positions = shape.positions;

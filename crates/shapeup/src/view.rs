@@ -71,7 +71,8 @@ pub fn run(input: Option<PathBuf>, screenshot: Option<PathBuf>, size: (u32, u32)
             let report = document.converge().map_err(|e| anyhow!("{}: {e}", path.display()))?;
             let n = report.energies.len();
             let how = if n < document.iterations() { "converged" } else { "stopped at the cap" };
-            note(format!("{how} after {n} iterations ({:.1} s)", started.elapsed().as_secs_f64()));
+            let iterations = if n == 1 { "1 iteration".to_string() } else { format!("{n} iterations") };
+            note(format!("{how} after {iterations} ({:.1} s)", started.elapsed().as_secs_f64()));
         }
         let mesh = document.current_mesh();
         // Handles in green, as in the editor.

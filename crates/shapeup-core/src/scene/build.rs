@@ -677,9 +677,14 @@ impl LoadedScene {
     /// of an editor session must be the shape that was on screen (issue 29).
     fn keep_a_converged_start(&self, q: &mut Vec<DVec3>, report: &mut SolveReport, tolerance: f64) {
         let [first] = report.energies[..] else { return };
-        if tolerance > 0.0
-            && crate::solver::meets_tolerance(report.initial_energy, first, tolerance, report.energy_floor)
-        {
+        // The start itself must be converged: its first iteration changed E by at most the
+        // tolerance, or E was at its round-off floor before it. An iteration that takes E
+        // from 42 to round-off meets the solve's stopping test (the floor) but moved the shape
+        // (the trial's moved handle: kept 0.5 away from its target).
+        let start = report.initial_energy;
+        let unchanged = (start - first).abs() <= tolerance * start.abs();
+        let at_floor = (0.0..=report.energy_floor).contains(&start);
+        if tolerance > 0.0 && (unchanged || at_floor) {
             *q = self.start_positions();
             report.energies.clear();
             report.residual = None;
@@ -781,8 +786,9 @@ impl LoadedScene {
     /// so); for a surface the scene tetrahedralized, that surface: every input vertex in file
     /// order, its faces, without TetGen's points (which come after the input's
     /// vertices), so outputs line up with the input file. Vertices `is_solved` says no
-    /// constraint touches keep their start positions (`[mesh] start`, else the input's) bit for
-    /// bit (the round trip through the working frame may change the last bit).
+    /// constraint touches, and vertices still exactly where they started (a start kept as it
+    /// is), keep their start positions (`[mesh] start`, else the input's) bit for bit (the
+    /// round trip through the working frame may change the last bit).
     pub fn output_mesh(&self, q: &[DVec3], volume: bool, is_solved: impl Fn(usize) -> bool) -> Mesh {
         let surface_only = !volume && self.input_vertices < self.mesh.num_vertices();
         let n = if surface_only { self.input_vertices.min(q.len()) } else { q.len() };
@@ -794,7 +800,11 @@ impl LoadedScene {
             .iter()
             .zip(start)
             .enumerate()
-            .map(|(v, (&p, &input))| if is_solved(v) { self.frame.to_input(p) } else { input })
+            .map(
+                |(v, (&p, &input))| {
+                    if is_solved(v) && p != self.frame.to_working(input) { self.frame.to_input(p) } else { input }
+                },
+            )
             .collect();
         let mut mesh = self.mesh.with_positions(positions);
         if surface_only {

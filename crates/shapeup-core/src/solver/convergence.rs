@@ -37,7 +37,7 @@ pub fn is_converged(previous: f64, energy: f64, tolerance: f64, floor: f64) -> b
 }
 
 /// [`is_converged`] without [`ENERGY_FLOOR`]: what a solve tests, with its own relative floor.
-pub(crate) fn meets_tolerance(previous: f64, energy: f64, tolerance: f64, floor: f64) -> bool {
+fn meets_tolerance(previous: f64, energy: f64, tolerance: f64, floor: f64) -> bool {
     // A load makes E negative: the round-off floor is for E ≥ 0 (constraints met).
     (0.0..=floor).contains(&energy) || (previous - energy).abs() <= tolerance * previous.abs()
 }

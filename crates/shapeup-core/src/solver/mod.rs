@@ -50,7 +50,6 @@ use crate::constraints::Constraint;
 use anderson::Anderson;
 use assemble::Assembly;
 use cholesky::SparseCholesky;
-pub(crate) use convergence::meets_tolerance;
 use convergence::{Run, timed};
 use error::check_weight;
 use glam::DVec3;
@@ -298,7 +297,7 @@ impl System {
             group.constraints.iter().map(|c| c.held_points().map_or(0, |(v, _)| v.len())).collect();
         let expected: usize = counts.iter().sum();
         if expected == 0 {
-            return Err(bad(format!("has no targets (a {} group)", group.kind)));
+            return Err(bad(format!("has no targets (its type, {}, has none)", group.kind)));
         }
         if targets.len() != expected {
             return Err(bad(format!("has {expected} vertices but {} targets were given", targets.len())));

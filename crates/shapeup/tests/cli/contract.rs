@@ -2362,12 +2362,24 @@ fn a_start_shape_is_where_the_solve_starts() {
     let (kept, report) = (dir.path().join("kept.obj"), dir.path().join("kept.json"));
     let o = deform_to(&again, &kept, &["--report", report.to_str().unwrap()]).success();
     assert!(o.stdout.contains("0 iterations (the start shape already meets the tolerance"), "{}", o.describe());
-    // Kept to the working frame's round trip (normalize = true): a last-digit difference.
-    let off = max_distance(&read(&kept).positions, &read(&converged).positions);
-    assert!(off < 1e-14, "kept as it is: {off:e} away");
+    // Kept bit for bit (vertices where they started skip the working frame's round trip).
+    assert!(read(&kept).positions == read(&converged).positions, "kept as it is");
     let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
     assert_eq!(report["iterations"], 0);
     assert!(report["start"].as_str().unwrap().ends_with("converged.obj"), "{report}");
+    // A start far from the minimum whose first iteration lands at E ≈ 0 is not converged:
+    // Spot moved by 1 with vertex 0 held at rest goes back (the trial found it kept as it was).
+    let shifted: Vec<DVec3> = spot.positions.iter().map(|p| *p + DVec3::X).collect();
+    write_mesh(&dir.path().join("shifted.obj"), &Mesh { positions: shifted, ..spot.clone() }, &Default::default())
+        .unwrap();
+    let back = write(
+        &dir.path().join("back.toml"),
+        &toml_scene(Path::new(SPOT), "start = 'shifted.obj'", &format!("{PINNED_SPRINGS}[solver]\ntolerance = 1e-6\n")),
+    );
+    let o = deform_to(&back, &dir.path().join("back.obj"), &[]).success();
+    assert!(!o.stdout.contains("kept as it is") && !o.stdout.contains(" 0 iterations"), "{}", o.describe());
+    let off = max_distance(&read(&dir.path().join("back.obj")).positions, &spot.positions);
+    assert!(off < 1e-6, "back at rest: {off:e} away");
 
     // Bad input: one line naming the key, nothing written.
     let refused = |start_line: &str, needle: &str| {
