@@ -24,13 +24,14 @@ pub const FREE_PIECE_WEIGHT: f64 = 1e-2;
 /// take 1.1 s).
 pub const DEFAULT_SHAPE_MODEL: ShapeModel = ShapeModel::IsoOneRing;
 
-/// How near a free piece must lie to a held one, as a fraction of the rest shape's
-/// bounding-box diagonal, for Attach free pieces (and opening a mesh) to attach it: 1 %, the
-/// gap between a fingernail, an eye or a belt and the body under it on a scanned or modelled
-/// character, far below the distance between separate parts of an assembly.
+/// How near a piece must lie to the largest one, as a fraction of the rest shape's
+/// bounding-box diagonal, for opening a mesh to attach it (Attach free pieces, the user's
+/// explicit choice, attaches every free piece): 1 %, the gap between a fingernail, an eye or a
+/// belt and the body under it on a modelled character, below the distance between separate
+/// parts of an assembly.
 pub const ATTACH_GAP: f64 = 0.01;
 
-/// The type and name of the group Attach free pieces makes.
+/// The constraint type of the group Attach free pieces and opening a mesh make.
 pub const ATTACHMENT_KIND: &str = "attachment";
 
 /// A group's identity in a [`Document`](crate::document::Document): stable while the group exists, never reused.

@@ -82,7 +82,7 @@ pub(super) enum OpenError {
     Mesh(EditorError),
 }
 
-/// A document from a scene file (`.toml`, `.json`) or a mesh file (with edge springs).
+/// A document from a scene file (`.toml`, `.json`) or a mesh file (with [`DEFAULT_SHAPE_MODEL`]).
 ///
 /// A bare name with no file of that name is a bundled sample, as on the command line.
 ///
