@@ -279,6 +279,9 @@ pub struct RestGeometry {
     pub vertex_areas: Vec<f64>,
     /// Rest cotan weight c_ij of each edge of `topology.edges`.
     pub cotan_weights: Vec<f64>,
+    /// Connected piece of each vertex (joined by triangles or tetrahedra; 0-based, in order of
+    /// each piece's smallest vertex), and the number of pieces ([`crate::topology::connected_pieces`]).
+    pub pieces: (Vec<u32>, usize),
 }
 
 impl RestGeometry {
@@ -289,7 +292,19 @@ impl RestGeometry {
         let vertex_areas = vertex_areas(positions.len(), &triangles, &triangle_areas);
         let cotan_weights = cotan_weights(&positions, &triangles, &topology);
         let faces = crate::mesh::Polygons::from_triangles(&triangles);
-        RestGeometry { positions, triangles, tetrahedra, faces, topology, triangle_areas, vertex_areas, cotan_weights }
+        let links = triangles.iter().map(|t| &t[..]).chain(tetrahedra.iter().map(|t| &t[..]));
+        let pieces = crate::topology::connected_pieces(positions.len(), links);
+        RestGeometry {
+            positions,
+            triangles,
+            tetrahedra,
+            faces,
+            topology,
+            triangle_areas,
+            vertex_areas,
+            cotan_weights,
+            pieces,
+        }
     }
 
     /// The rest geometry of `mesh` at `positions` (its vertices in the working frame), with

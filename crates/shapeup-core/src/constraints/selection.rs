@@ -152,8 +152,9 @@ pub fn selects_any(element: Element, rest: &RestGeometry, selection: &Selection)
         Element::Tetrahedron => rest.tetrahedra.iter().any(|t| selection.contains_all(&t[..])),
         Element::PieceVertex => {
             (0..n).any(|v| selection.contains(v))
-                && !crate::constraints::kit::pieces::unselected_piece_triangles(rest, |v| selection.contains(v))
-                    .is_empty()
+                && crate::constraints::kit::pieces::unselected_piece_triangles(rest, |v| selection.contains(v))
+                    .next()
+                    .is_some()
         }
     }
 }

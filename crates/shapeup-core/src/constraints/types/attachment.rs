@@ -117,7 +117,7 @@ impl ConstraintType for AttachmentType {
         if selected.is_empty() {
             return Err(ConstraintError::NothingSelected { kind: KIND, element: "vertices" });
         }
-        let host = unselected_piece_triangles(rest, |v| ctx.selection.contains(v));
+        let host: Vec<[u32; 3]> = unselected_piece_triangles(rest, |v| ctx.selection.contains(v)).collect();
         let surface = (!host.is_empty()).then(|| NearestTriangle::new(&rest.positions, host)).flatten().ok_or_else(|| {
             ConstraintError::Invalid {
                 kind: KIND,
