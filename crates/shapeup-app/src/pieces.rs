@@ -44,6 +44,17 @@ impl Pieces {
         (0..self.used.len() as u32).filter(|&p| self.used[p as usize] && !held[p as usize]).collect()
     }
 
+    /// The vertices of the `pieces` (by piece label), ascending.
+    pub fn vertices_of(&self, pieces: &[u32]) -> Vec<u32> {
+        let mut chosen = vec![false; self.used.len()];
+        for &p in pieces {
+            if let Some(c) = chosen.get_mut(p as usize) {
+                *c = true;
+            }
+        }
+        (0..self.of_vertex.len() as u32).filter(|&v| chosen[self.of_vertex[v as usize] as usize]).collect()
+    }
+
     /// The piece with the most of `triangles` (the first on a tie); `None` without triangles.
     pub fn largest(&self, triangles: &[[u32; 3]]) -> Option<u32> {
         let mut count = vec![0usize; self.used.len()];

@@ -10,7 +10,7 @@ use crate::group::{
 };
 use glam::{DQuat, DVec3};
 use serde_json::Map;
-use shapeup_core::constraints::constraint_type;
+use shapeup_core::constraints::{AttachmentType, ConstraintType, constraint_type};
 use shapeup_core::contact::ColliderSpec;
 use shapeup_core::nearest::NearestTriangle;
 use shapeup_core::scene::{GroupSpec, SelectionSpec, Targets, unique_group_name};
@@ -215,33 +215,31 @@ impl Document {
             mesh.triangles.iter().filter(|t| hosts[pieces.of_vertex[t[0] as usize] as usize]).copied().collect();
         let (lo, hi) = mesh.bounding_box();
         let gap = gap.map_or(f64::INFINITY, |g| g * (hi - lo).length());
-        let near: Vec<u32> = match NearestTriangle::new(&mesh.positions, surface) {
-            Some(surface) => free
-                .into_iter()
-                .filter(|&p| !hosts[p as usize])
-                .filter(|&p| {
-                    let mut vertices = (0..mesh.positions.len()).filter(|&v| pieces.of_vertex[v] == p);
-                    vertices.any(|v| surface.nearest(mesh.positions[v]).1 <= gap)
-                })
-                .collect(),
-            None => Vec::new(),
-        };
+        // One pass over the vertices: a free piece is near when any of its vertices is.
+        let mut near = vec![false; hosts.len()];
+        if let Some(surface) = NearestTriangle::new(&mesh.positions, surface) {
+            let mut candidate = vec![false; hosts.len()];
+            for p in free.into_iter().filter(|&p| !hosts[p as usize]) {
+                candidate[p as usize] = true;
+            }
+            for (v, &p) in pieces.of_vertex.iter().enumerate() {
+                let p = p as usize;
+                if candidate[p] && !near[p] && surface.nearest(mesh.positions[v]).1 <= gap {
+                    near[p] = true;
+                }
+            }
+        }
+        let near: Vec<u32> = (0..near.len() as u32).filter(|&p| near[p as usize]).collect();
         if near.is_empty() {
             return Err(EditorError::BadValue(
                 "no free piece to attach: every piece has a handle or is attached".into(),
             ));
         }
-        let mut attached = vec![false; hosts.len()];
-        for &p in &near {
-            attached[p as usize] = true;
-        }
-        let vertices: Vec<u32> =
-            (0..mesh.positions.len() as u32).filter(|&v| attached[pieces.of_vertex[v as usize] as usize]).collect();
-        let weight = constraint_type(ATTACHMENT_KIND).map_or(1.0, |t| t.default_multiplier());
+        let vertices = pieces.vertices_of(&near);
         let spec = GroupSpec {
             kind: ATTACHMENT_KIND.into(),
             name: unique_name(state, "attached pieces"),
-            weight,
+            weight: AttachmentType.default_multiplier(),
             targets: Targets::default(),
             selection: vertex_list(&vertices),
             options: Map::new(),
@@ -253,13 +251,7 @@ impl Document {
     /// [`Command::PinFreePieces`]: one soft handle at rest on every vertex of the pieces no
     /// handle holds (nothing when there are none).
     fn pin_free_pieces(&mut self, state: &mut EditState) {
-        let pinned = held_vertices(state);
-        let mut free = vec![false; self.pieces.of_vertex.len()];
-        for piece in self.pieces.free(&pinned) {
-            free[piece as usize] = true;
-        }
-        let vertices: Vec<u32> =
-            (0..self.positions.len() as u32).filter(|&v| free[self.pieces.of_vertex[v as usize] as usize]).collect();
+        let vertices = self.pieces.vertices_of(&self.pieces.free(&held_vertices(state)));
         if vertices.is_empty() {
             return;
         }

@@ -522,20 +522,25 @@ fn export_keeps_every_vertex_the_polygons_and_the_texture_coordinates() {
     assert_eq!(back.polygons, doc.rest_mesh().polygons, "quads stay quads");
 }
 
+/// Separate sheets, `grid(n, origin)` each, in one mesh, and the first vertex of each.
+fn sheets(parts: &[(u32, DVec3)]) -> (shapeup_core::mesh::Mesh, Vec<u32>) {
+    let (mut positions, mut triangles, mut offsets) = (Vec::new(), Vec::new(), Vec::new());
+    for &(n, origin) in parts {
+        let (p, t) = grid(n, origin);
+        let offset = positions.len() as u32;
+        offsets.push(offset);
+        positions.extend(p);
+        triangles.extend(t.iter().map(|t| t.map(|v| v + offset)));
+    }
+    (shapeup_core::mesh::Mesh::new(positions, triangles).unwrap(), offsets)
+}
+
 /// Two separate sheets: the free one is counted, makes the solve fail without changing the
 /// shape, and "Pin free pieces" makes it solvable; a piece is selected from one vertex.
 #[test]
 fn pieces_without_handles() {
-    let (mut positions, mut triangles) = grid(4, DVec3::ZERO);
-    let (p2, t2) = grid(4, DVec3::new(2.0, 0.0, 0.0));
-    let offset = positions.len() as u32;
-    positions.extend(p2);
-    triangles.extend(t2.iter().map(|t| t.map(|v| v + offset)));
-    let (p3, t3) = grid(2, DVec3::new(0.0, 2.0, 0.0));
-    let offset3 = positions.len() as u32;
-    positions.extend(p3);
-    triangles.extend(t3.iter().map(|t| t.map(|v| v + offset3)));
-    let mesh = shapeup_core::mesh::Mesh::new(positions, triangles).unwrap();
+    let (mesh, offsets) = sheets(&[(4, DVec3::ZERO), (4, DVec3::new(2.0, 0.0, 0.0)), (2, DVec3::new(0.0, 2.0, 0.0))]);
+    let (offset, offset3) = (offsets[1], offsets[2]);
     let mut doc = Document::new(mesh, ShapeModel::StrainBending).unwrap();
     assert_eq!(doc.pieces().count, 3);
     assert_eq!(doc.num_free_pieces(), 3);
@@ -581,12 +586,8 @@ fn pieces_without_handles() {
 /// error that changes nothing.
 #[test]
 fn attach_free_pieces_attaches_every_free_piece_to_the_held_ones() {
-    let (mut positions, mut triangles) = grid(4, DVec3::ZERO);
-    let (p2, t2) = grid(4, DVec3::new(2.0, 0.0, 0.0));
-    let offset = positions.len() as u32;
-    positions.extend(p2);
-    triangles.extend(t2.iter().map(|t| t.map(|v| v + offset)));
-    let mesh = shapeup_core::mesh::Mesh::new(positions, triangles).unwrap();
+    let (mesh, offsets) = sheets(&[(4, DVec3::ZERO), (4, DVec3::new(2.0, 0.0, 0.0))]);
+    let offset = offsets[1];
     let mut doc = Document::new(mesh, ShapeModel::IsoOneRing).unwrap();
     assert_eq!((doc.num_attached_pieces(), doc.num_free_pieces()), (0, 2), "1 apart: not attached when opened");
     let handle = fix(&mut doc, &[0, 1, 2, 5]);
