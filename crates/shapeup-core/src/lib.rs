@@ -58,6 +58,7 @@ pub mod geometry;
 pub mod inspect;
 pub mod io;
 pub mod linalg;
+pub mod materials;
 pub mod mesh;
 pub mod motion;
 pub mod nearest;

@@ -121,6 +121,21 @@ pub trait Constraint: Any + Send + Sync + Debug {
         1
     }
 
+    /// Whether the term is `ω ‖C q − p(q)‖²` with p a closest point (`true`, the default).
+    /// A term that is not (a hyperelastic material, [`crate::materials`]) gives its energy from
+    /// C q in [`Constraint::energy_from_rows`], and its [`Constraint::project`] writes the point
+    /// p that makes ω (C q − p) half its energy's gradient with respect to C q; the solver then
+    /// minimizes with a line search, since a plain local-global step no longer lowers E.
+    fn is_projective(&self) -> bool {
+        true
+    }
+    /// The energy of a term that is not projective ([`Constraint::is_projective`]) at
+    /// `cq` = C q (`num_rows()` rows), without the group multiplier; `None` (the default) for a
+    /// projective term, whose energy is ω ‖C q − p(q)‖².
+    fn energy_from_rows(&self, _cq: &[DVec3]) -> Option<f64> {
+        None
+    }
+
     /// `C_i q`, computed from [`Constraint::rows`] (for tests and diagnostics, not the solver's
     /// hot path, which uses the assembled matrix).
     fn apply(&self, q: &[DVec3]) -> Vec<DVec3> {
@@ -133,9 +148,13 @@ pub trait Constraint: Any + Send + Sync + Debug {
         cq
     }
 
-    /// The term's energy without the group multiplier: ω ‖C q − p(q)‖².
+    /// The term's energy without the group multiplier: ω ‖C q − p(q)‖², or
+    /// [`Constraint::energy_from_rows`] for a term that is not projective.
     fn energy(&self, q: &[DVec3]) -> f64 {
         let cq = self.apply(q);
+        if let Some(energy) = self.energy_from_rows(&cq) {
+            return energy;
+        }
         let mut p = vec![DVec3::ZERO; self.num_rows()];
         self.project(q, &mut p);
         self.element_weight() * cq.iter().zip(&p).map(|(a, b)| (*a - *b).length_squared()).sum::<f64>()

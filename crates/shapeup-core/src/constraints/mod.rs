@@ -14,7 +14,7 @@ mod attachment;
 mod contract;
 mod error;
 mod group;
-mod kit;
+pub(crate) mod kit;
 mod options;
 mod params;
 mod registry;

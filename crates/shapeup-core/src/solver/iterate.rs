@@ -18,7 +18,15 @@ pub(super) struct Scratch {
     x: Vec<[f64; 4]>,
     pub(super) g: Vec<[f64; 4]>,
     d: Vec<[f64; 4]>,
+    /// The search direction a line search halves (materials only).
+    dir: Vec<[f64; 4]>,
 }
+
+/// Armijo's sufficient-decrease constant c₁ (Nocedal & Wright's usual 1e-4).
+const ARMIJO: f64 = 1e-4;
+
+/// Halvings a line search tries before it gives up on a direction (t down to 2⁻⁴⁰).
+const MAX_BACKTRACKS: usize = 40;
 
 impl System {
     /// The plain iteration: global step from the last projections, then the local step at the
@@ -106,13 +114,13 @@ impl System {
     ) -> Result<bool, SolveError> {
         let solved = self.assembly.num_solved();
         self.lbfgs.resize(solved, self.params.lbfgs_memory);
-        let Scratch { plain: trial, x, g, d, .. } = scratch;
+        let Scratch { plain: trial, x, g, d, dir, .. } = scratch;
         trial.resize(q.len(), DVec3::ZERO);
-        for b in [&mut *x, &mut *g, &mut *d] {
+        for b in [&mut *x, &mut *g, &mut *d, &mut *dir] {
             b.resize(solved, [0.0; 4]);
         }
-        /// Armijo's sufficient-decrease constant c₁ (Nocedal & Wright's usual 1e-4).
-        const ARMIJO: f64 = 1e-4;
+        // Terms that are not projective (materials): no step is safe without a line search.
+        let energy_terms = self.energy_groups.contains(&true);
         // The next iteration is a plain step that confirms a quasi-Newton step's convergence.
         let mut confirm = false;
         for _ in 0..run.iterations {
@@ -129,6 +137,41 @@ impl System {
             }
             // The directional derivative of the objective along −d is −2 gᵀd.
             let slope = -2.0 * lbfgs::dot(g, d);
+            if energy_terms {
+                report.global_seconds += t.elapsed().as_secs_f64();
+                let mut found = self.line_search(x, d, dir, q, trial, slope, run.objective, report)?;
+                if found.is_none() && quasi_newton {
+                    // Not a descent direction after all: forget the history, search along −A⁻¹g.
+                    self.lbfgs.reset();
+                    report.rejected += 1;
+                    d.copy_from_slice(g);
+                    if let Some(factor) = self.factor.as_mut() {
+                        factor.solve_permuted_in_place(d);
+                    }
+                    let slope = -2.0 * lbfgs::dot(g, d);
+                    found = self.line_search(x, d, dir, q, trial, slope, run.objective, report)?;
+                }
+                let Some((energy, objective)) = found else {
+                    // No step lowers the objective measurably along −A⁻¹g: at a minimum to
+                    // round-off. The iteration is recorded unchanged, which meets any tolerance.
+                    let energy = report.energies.last().copied().unwrap_or(report.initial_energy);
+                    let objective = run.objective;
+                    // The projections and C q at q again, for the residual measured next.
+                    self.evaluate(q);
+                    run.record(report, energy, objective, after_iteration)?;
+                    return Ok(true);
+                };
+                q.copy_from_slice(trial);
+                let (mut converged, stop) = run.record(report, energy, objective, after_iteration)?;
+                confirm = converged && quasi_newton;
+                if confirm {
+                    converged = false;
+                }
+                if converged || stop {
+                    return Ok(true);
+                }
+                continue;
+            }
             self.step_to(x, d, q, trial)?;
             report.global_seconds += t.elapsed().as_secs_f64();
             let t = Instant::now();
@@ -165,6 +208,58 @@ impl System {
             }
         }
         Ok(false)
+    }
+
+    /// Backtracking (Armijo) line search for terms that are not projective: `trial` = q moved
+    /// to x − t d for the first t in 1, ½, ¼, … (at most [`MAX_BACKTRACKS`] halvings) whose
+    /// objective is at most `objective` + c₁ t `slope` (`slope` the objective's derivative
+    /// along −d, negative for a descent direction), returning its E and objective; `None`
+    /// when no t does (or d is no descent direction). A trial with a NaN or an infinity is
+    /// rejected like one that rises. `dir` keeps d; `d` is scratch. Each halving is counted in
+    /// `report.rejected`.
+    #[allow(clippy::too_many_arguments)]
+    fn line_search(
+        &mut self,
+        x: &[[f64; 4]],
+        d: &mut [[f64; 4]],
+        dir: &mut [[f64; 4]],
+        q: &[DVec3],
+        trial: &mut [DVec3],
+        slope: f64,
+        objective: f64,
+        report: &mut SolveReport,
+    ) -> Result<Option<(f64, f64)>, SolveError> {
+        // A NaN slope is no descent direction either.
+        if slope.is_nan() || slope >= 0.0 {
+            return Ok(None);
+        }
+        dir.copy_from_slice(d);
+        let mut t = 1.0;
+        for _ in 0..=MAX_BACKTRACKS {
+            let started = Instant::now();
+            for (di, ri) in d.iter_mut().zip(dir.iter()) {
+                for k in 0..4 {
+                    di[k] = t * ri[k];
+                }
+            }
+            let finite = match self.step_to(x, d, q, trial) {
+                Ok(()) => true,
+                Err(SolveError::NonFinite) => false,
+                Err(e) => return Err(e),
+            };
+            report.global_seconds += started.elapsed().as_secs_f64();
+            if finite {
+                let started = Instant::now();
+                let (energy, trial_objective) = self.evaluate(trial);
+                report.local_seconds += started.elapsed().as_secs_f64();
+                if trial_objective.is_finite() && trial_objective <= objective + ARMIJO * t * slope {
+                    return Ok(Some((energy, trial_objective)));
+                }
+            }
+            report.rejected += 1;
+            t *= 0.5;
+        }
+        Ok(None)
     }
 
     /// Half the objective's gradient over the solved vertices, in the factor's order (see

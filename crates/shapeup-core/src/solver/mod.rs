@@ -71,6 +71,9 @@ enum Stale {
     Pattern,
 }
 
+/// Terms per parallel task when summing a material's energy (also fixes the summation order).
+const ENERGY_CHUNK: usize = 2048;
+
 /// Energy of a configuration, in total and per group (each including its multiplier).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Energy {
@@ -149,6 +152,10 @@ pub struct System {
     constant_rhs: Vec<DVec3>,
     /// The groups lost to round-off in the matrix last factored ([`LostGroup`]).
     lost: Vec<LostGroup>,
+    /// Per group in assembly order, whether its terms are not projective (a material,
+    /// [`Constraint::is_projective`]): their energy comes from C q, and a solve needs a line
+    /// search.
+    energy_groups: Vec<bool>,
 }
 
 impl System {
@@ -185,6 +192,7 @@ impl System {
             factorizations: 0,
             constant_rhs: Vec::new(),
             lost: Vec::new(),
+            energy_groups: Vec::new(),
         }
     }
 
@@ -364,6 +372,7 @@ impl System {
                     .ok_or(SolveError::WrongLength { expected: self.num_vertices, found: v as usize + 1 })? = true;
             }
         }
+        self.energy_groups = lists.iter().map(|l| l.iter().any(|c| !c.is_projective())).collect();
         self.assembly = Assembly::new(self.num_vertices, &lists, &hard, fixed, self.inertia.as_deref());
         let rows = self.assembly.num_rows();
         self.projections = vec![DVec3::ZERO; rows];
@@ -469,7 +478,11 @@ impl System {
     /// As [`System::step`].
     pub fn run(&mut self, q: &mut [DVec3]) -> Result<SolveReport, SolveError> {
         let SolverParams { iterations, tolerance, .. } = self.params;
-        if self.params.needs_energy() { self.solve(q, iterations, tolerance) } else { self.iterate(q, iterations) }
+        if self.params.needs_energy() || self.has_energy_terms() {
+            self.solve(q, iterations, tolerance)
+        } else {
+            self.iterate(q, iterations)
+        }
     }
 
     /// [`System::solve_with`] for the settings' [`SolverParams::iterations`] and
@@ -556,24 +569,24 @@ impl System {
         // A static solve's residual is relative to the gradient it starts from (a time step's
         // is not measured: see SolveReport::residual).
         let measured = !self.has_inertial_term() && iterations > 0;
-        let lbfgs =
-            self.params.acceleration == Acceleration::Lbfgs && self.params.is_accelerated() && self.factor.is_some();
+        // Terms that are not projective need L-BFGS's line search, whatever the acceleration.
+        let energy_terms = self.energy_groups.contains(&true);
+        let lbfgs = (energy_terms || self.params.acceleration == Acceleration::Lbfgs && self.params.is_accelerated())
+            && self.factor.is_some();
         // L-BFGS's first iteration computes it (SolveReport::start_gradient); the others do not.
         let start_gradient = if measured && !lbfgs { self.half_gradient_norm(q, &mut scratch.g) } else { 0.0 };
-        let result = match self.params.acceleration {
-            Acceleration::Anderson if self.params.is_accelerated() => {
-                if !continuing {
-                    self.anderson.reset();
-                }
-                self.iterate_anderson(q, &mut scratch, run, &mut after_iteration, &mut report)
+        let result = if lbfgs {
+            if !continuing {
+                self.lbfgs.reset();
             }
-            Acceleration::Lbfgs if lbfgs => {
-                if !continuing {
-                    self.lbfgs.reset();
-                }
-                self.iterate_lbfgs(q, &mut scratch, run, &mut after_iteration, &mut report)
+            self.iterate_lbfgs(q, &mut scratch, run, &mut after_iteration, &mut report)
+        } else if self.params.acceleration == Acceleration::Anderson && self.params.is_accelerated() {
+            if !continuing {
+                self.anderson.reset();
             }
-            _ => self.iterate_plain(q, run, &mut after_iteration, &mut report),
+            self.iterate_anderson(q, &mut scratch, run, &mut after_iteration, &mut report)
+        } else {
+            self.iterate_plain(q, run, &mut after_iteration, &mut report)
         };
         if let (Ok(false), true, Some(&energy)) = (&result, measured, report.energies.last()) {
             let start_gradient = report.start_gradient.unwrap_or(start_gradient);
@@ -619,9 +632,10 @@ impl System {
             .order
             .iter()
             .zip(&self.assembly.groups)
-            .map(|(&slot, rows)| {
+            .enumerate()
+            .map(|(k, (&slot, rows))| {
                 let g = self.slots[slot].as_ref().map_or(0.0, |g| g.multiplier);
-                (GroupId(slot as u32), g * self.weighted_residual(rows.range()) + self.load_energy(q, [slot]))
+                (GroupId(slot as u32), g * self.group_energy(k, slot, rows) + self.load_energy(q, [slot]))
             })
             .collect::<Vec<_>>();
         Ok(Energy { total: per_group.iter().map(|(_, e)| e).sum(), per_group })
@@ -720,7 +734,8 @@ impl System {
             .groups
             .iter()
             .zip(&self.order)
-            .map(|(rows, &slot)| self.multiplier(slot) * self.weighted_residual(rows.range()))
+            .enumerate()
+            .map(|(k, (rows, &slot))| self.multiplier(slot) * self.group_energy(k, slot, rows))
             .sum();
         // `load_rhs` is non-empty exactly when some group carries a load (set on assembly).
         if self.load_rhs.is_empty() {
@@ -732,6 +747,41 @@ impl System {
     /// Σ_r ω_r ‖(Cq)_r − P_r‖² over a range of rows (no multiplier).
     fn weighted_residual(&self, rows: std::ops::Range<usize>) -> f64 {
         rows.map(|r| self.assembly.row_weight[r] * (self.cq[r] - self.projections[r]).length_squared()).sum()
+    }
+
+    /// The energy of the `k`-th group in assembly order (in `slot`, on `rows`) without its
+    /// multiplier, from C q and the projections: [`System::weighted_residual`], or for terms
+    /// that are not projective the sum of their [`Constraint::energy_from_rows`] (in parallel,
+    /// in a fixed order whatever the thread count).
+    fn group_energy(&self, k: usize, slot: usize, rows: &assemble::GroupRows) -> f64 {
+        let Some(group) = self.slots[slot].as_ref().filter(|_| self.energy_groups.get(k) == Some(&true)) else {
+            return self.weighted_residual(rows.range());
+        };
+        use rayon::prelude::*;
+        let cq = &self.cq[rows.range()];
+        let parts: Vec<f64> = group
+            .constraints
+            .par_chunks(ENERGY_CHUNK)
+            .enumerate()
+            .map(|(chunk, constraints)| {
+                let first = chunk * ENERGY_CHUNK;
+                constraints
+                    .iter()
+                    .enumerate()
+                    .map(|(i, c)| {
+                        let (a, b) = (rows.offsets[first + i], rows.offsets[first + i + 1]);
+                        c.energy_from_rows(&cq[a..b]).unwrap_or(0.0)
+                    })
+                    .sum::<f64>()
+            })
+            .collect();
+        parts.iter().sum()
+    }
+
+    /// Whether some group's terms are not projective (a material): then every solve is L-BFGS
+    /// with a line search, and E is evaluated at every iteration.
+    pub fn has_energy_terms(&self) -> bool {
+        self.groups().any(|(_, g)| g.constraints.iter().any(|c| !c.is_projective()))
     }
 
     fn check_length<T>(&self, q: &[T]) -> Result<(), SolveError> {

@@ -1,0 +1,37 @@
+//! Fixed corotated elasticity: the distance of F from its rotation, and the volume change.
+//!
+//! Ψ(F) = μ ‖F − R‖²_F + (λ/2) (J − 1)²,  R the rotation nearest F (polar decomposition, det R =
+//! +1), J = det F,
+//! P(F) = 2μ (F − R) + λ (J − 1) cof F,  cof F = J F⁻ᵀ.
+//!
+//! Source: Stomakhin, Howes, Schroeder and Teran, "Energetically Consistent Invertible
+//! Elasticity", SCA 2012, §4 ("fixed corotated"); the gradient is Sifakis and Barbič's course
+//! notes (2012), §5.3. R varies with F, but ∂/∂F of ‖F − R‖² is 2(F − R) all the same, since R
+//! is the closest rotation. Defined through inversion (R stays a rotation, J changes sign).
+
+use super::{Hyperelastic, Lame, ModelInfo};
+use crate::linalg::{cofactor, frobenius2, nearest_rotation3};
+use glam::DMat3;
+
+/// Fixed corotated ([module docs](self)).
+#[derive(Debug, Clone, Copy)]
+pub struct Corotated;
+
+const INFO: ModelInfo = ModelInfo {
+    name: "corotated",
+    summary: "fixed corotated: μ ‖F − R‖² + λ/2 (det F − 1)², R the nearest rotation",
+};
+
+impl Hyperelastic for Corotated {
+    fn info(&self) -> &'static ModelInfo {
+        &INFO
+    }
+    fn energy_density(&self, f: DMat3, lame: Lame) -> f64 {
+        let j = f.determinant();
+        lame.mu * frobenius2(&(f - nearest_rotation3(f))) + 0.5 * lame.lambda * (j - 1.0) * (j - 1.0)
+    }
+    fn first_piola(&self, f: DMat3, lame: Lame) -> DMat3 {
+        let j = f.determinant();
+        (f - nearest_rotation3(f)) * (2.0 * lame.mu) + cofactor(&f) * (lame.lambda * (j - 1.0))
+    }
+}
