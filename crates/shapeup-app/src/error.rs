@@ -124,6 +124,11 @@ pub enum LoadError {
     /// A scene that asks for tetrahedra.
     #[error("the editor does not support tetrahedralize = true")]
     Tetrahedralize,
+    /// A scene with a `[material]`, which the editor cannot keep yet.
+    #[error(
+        "the editor does not support [material] yet (it would drop it on saving): run the scene with `shapeup deform` or `shapeup simulate`, or from Python"
+    )]
+    Material,
     /// A scene entry that cannot become an editor group.
     #[error("constraints[{index}] (\"{name}\"): {cause}")]
     Entry {

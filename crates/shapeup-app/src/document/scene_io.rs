@@ -68,6 +68,9 @@ impl Document {
         if scene.mesh.tetrahedralize {
             return Err(EditorError::Load(LoadError::Tetrahedralize));
         }
+        if scene.material.as_ref().is_some_and(|m| m.model != "projective") {
+            return Err(EditorError::Load(LoadError::Material));
+        }
         if mesh.triangles.is_empty() {
             return Err(EditorError::Load(LoadError::NoTriangles));
         }
@@ -113,12 +116,14 @@ impl Document {
                 normalize: self.state.rest.normalize,
                 tetrahedralize: false,
                 start: None,
+                units: None,
             },
             solver: self.solver_settings(),
             groups,
             colliders: self.state.colliders.clone(),
             contact: self.state.contact,
             output: Default::default(),
+            material: None,
             base_dir: PathBuf::new(),
             file: PathBuf::new(),
         }

@@ -1,14 +1,14 @@
 //! From a parsed [`Scene`] to a solvable system: load the mesh, map it to the working frame,
 //! resolve selections and build each group.
 
-use super::{Scene, SceneError, SolverSettings};
+use super::{Mode, Scene, SceneError, SolverSettings};
 use crate::constraints::{attach_degenerate_vertices, held_vertices};
 use crate::contact::{ContactModel, ContactParams, Shape, ShapeSpec};
 use crate::dynamics::{DynamicsParams, ParamError, Simulation};
 use crate::geometry::{RestGeometry, WorkingFrame, lumped_masses_surface, lumped_masses_volume};
 use crate::io::{Attributes, read_mesh};
 use crate::mesh::Mesh;
-use crate::solver::{GroupId, SolveError, SolveReport, SolverParams, System};
+use crate::solver::{ConstraintGroup, GroupId, SolveError, SolveReport, SolverParams, System};
 use crate::warnings::Warnings;
 use glam::DVec3;
 use std::time::Instant;
@@ -189,7 +189,8 @@ impl Scene {
                 format!("{} has no faces{}", self.mesh_path().display(), mesh.why_no_triangles()),
             ));
         }
-        let frame = if self.mesh.normalize { WorkingFrame::fit(&mesh.positions) } else { WorkingFrame::IDENTITY };
+        let material = self.material()?;
+        let frame = self.working_frame(&mesh.positions, material.is_some());
         let working: Vec<DVec3> = mesh.positions.iter().map(|&p| frame.to_working(p)).collect();
         let rest = RestGeometry::of_mesh(working, &mesh);
         let mut system = System::new(mesh.num_vertices(), self.solver.solver_params());
@@ -198,6 +199,21 @@ impl Scene {
             let entry = format!("constraints[{i}] (\"{}\")", spec.name);
             let group = spec.build(&mesh, &rest, &frame).map_err(|e| invalid(&entry, e.to_string()))?;
             group_ids.push(system.add_group(group).map_err(|e| invalid(&entry, e.to_string()))?);
+        }
+        if let Some(material) = &material {
+            if !self.colliders.is_empty() || self.contact.self_collision {
+                return Err(invalid(
+                    "[material]",
+                    "colliders and self-collision do not work with a material yet: contact iterates plain \
+                     local-global steps, which a material's energy needs a line search for; leave out [material] \
+                     or the contact"
+                        .into(),
+                ));
+            }
+            for group in self.material_groups(&rest, material) {
+                let group = group.map_err(|e| invalid("[material]", e.to_string()))?;
+                system.add_group(group).map_err(|e| invalid("[material]", e.to_string()))?;
+            }
         }
         // Vertices that only zero-area triangles use follow their edge (math reference, "Edge cases").
         let (group, attached, stranded) = attach_degenerate_vertices(&rest, system.groups().map(|(_, g)| g));
@@ -250,6 +266,50 @@ impl Scene {
             contact,
             start,
         })
+    }
+
+    /// The frame the solver works in: with a material, metres ([`super::Units`]: x_work = x · metres
+    /// per unit, so that moduli, densities and gravity are physical); otherwise the normalized
+    /// frame when `[mesh] normalize` (the default), else the input's.
+    pub fn working_frame(&self, positions: &[DVec3], material: bool) -> WorkingFrame {
+        if material {
+            WorkingFrame { center: DVec3::ZERO, scale: self.mesh.units.unwrap_or_default().metres() }
+        } else if self.mesh.normalize {
+            WorkingFrame::fit(positions)
+        } else {
+            WorkingFrame::IDENTITY
+        }
+    }
+
+    /// A material's groups on `rest` (metres): its hyperelastic energy on every tetrahedron
+    /// (multiplier 1 in static mode; 1/k in dynamic mode, where the solver divides every term
+    /// by the stiffness k, so that the material's stiffness is its own whatever k), and in
+    /// static mode its self-weight, the loads m_v g of the lumped masses (ρ |V_T|/4 per corner)
+    /// under `[solver] gravity` (m/s²), so that a static solve is the simulation's equilibrium.
+    fn material_groups(
+        &self,
+        rest: &RestGeometry,
+        material: &crate::materials::Material,
+    ) -> Vec<Result<ConstraintGroup, crate::materials::MaterialError>> {
+        let multiplier = match self.solver.mode {
+            Mode::Static => 1.0,
+            Mode::Dynamic => 1.0 / self.solver.stiffness,
+        };
+        let mut groups = vec![crate::materials::material_group(rest, material, multiplier)];
+        let gravity = DVec3::from_array(self.solver.gravity);
+        if self.solver.mode == Mode::Static && gravity != DVec3::ZERO && !rest.tetrahedra.is_empty() {
+            let weights: Vec<Box<dyn crate::constraints::Constraint>> = lumped_masses(rest, material.density)
+                .iter()
+                .enumerate()
+                .filter(|(_, m)| **m > 0.0)
+                .map(|(v, &m)| {
+                    Box::new(crate::constraints::Force::new(v as u32, gravity * m, rest.positions[v]))
+                        as Box<dyn crate::constraints::Constraint>
+                })
+                .collect();
+            groups.push(Ok(ConstraintGroup::new(SELF_WEIGHT_GROUP, 1.0, weights)));
+        }
+        groups
     }
 
     /// The scene's colliders and `[contact]` settings as a [`ContactModel`] (`None` when there
@@ -413,6 +473,9 @@ fn pins_inside_colliders(system: &System, model: &ContactModel) -> Vec<(u32, Str
 /// Iterations of a static solve between two contact detections: a handle drags the surface
 /// over many iterations, so what touches is found again from where it has got to.
 const STATIC_CONTACT_CHUNK: usize = 10;
+
+/// Name of the group of a material's self-weight in static mode.
+pub const SELF_WEIGHT_GROUP: &str = "self-weight";
 
 /// A static solve with contact: chunks of [`STATIC_CONTACT_CHUNK`] iterations of
 /// [`crate::contact::solve_with_contact`], each detecting from where the last left the
@@ -817,13 +880,28 @@ impl LoadedScene {
     /// (floored at 1e-9); 0 for a vertex in no element, which is not simulated and keeps its
     /// position (as in static mode).
     pub fn masses(&self) -> Vec<f64> {
-        lumped_masses(&self.rest, self.scene.solver.density)
+        lumped_masses(&self.rest, self.density())
+    }
+
+    /// The density the masses take: the material's (kg/m³, the working frame in metres), else
+    /// `[solver] density`.
+    fn density(&self) -> f64 {
+        match self.scene.material() {
+            Ok(Some(material)) => material.density,
+            _ => self.scene.solver.density,
+        }
+    }
+
+    /// How gravity converts to the working frame: with a material it is in m/s² and the frame
+    /// is in metres (1); otherwise it is in input units per s² (the frame's scale).
+    fn gravity_scale(&self) -> f64 {
+        if matches!(self.scene.material(), Ok(Some(_))) { 1.0 } else { self.frame.scale }
     }
 
     /// The scene's time-stepping settings in the working frame (gravity, an acceleration in
-    /// input units per s², scales with lengths; time is not scaled).
+    /// input units per s², scales with lengths; in m/s² with a material; time is not scaled).
     pub fn dynamics_params(&self) -> DynamicsParams {
-        self.scene.solver.dynamics_params(self.frame.scale)
+        self.scene.solver.dynamics_params(self.gravity_scale())
     }
 
     /// Starts a Projective Dynamics simulation at rest from [`LoadedScene::start_positions`]. The constraint
@@ -835,7 +913,8 @@ impl LoadedScene {
         let invalid =
             |message: String| SceneError::Invalid { path: self.scene.file.clone(), entry: "[solver]".into(), message };
         // Checked before the system moves, so that a refused start leaves this scene whole.
-        let params = self.scene.solver.checked_dynamics_params(self.frame.scale).map_err(|e| invalid(e.to_string()))?;
+        let params =
+            self.scene.solver.checked_dynamics_params(self.gravity_scale()).map_err(|e| invalid(e.to_string()))?;
         let system =
             std::mem::replace(&mut self.system, System::new(self.mesh.num_vertices(), SolverParams::default()));
         let mut simulation = Simulation::new(system, self.masses(), self.start_positions(), params)

@@ -24,7 +24,10 @@ pub use error::SceneError;
 pub use generated::{GeneratedMesh, MAX_GENERATED_BYTES};
 pub use parse::{SceneFormat, from_json_entry};
 pub use run::{RunError, SceneSimulation, StepError, StepTotals, relative_changes};
-pub use settings::{MeshSettings, Mode, OutputSettings, SolverSettings};
+pub use settings::{
+    MATERIAL_ITERATIONS, MATERIAL_TOLERANCE, MaterialSettings, MeshSettings, Mode, OutputSettings, SolverSettings,
+    Units,
+};
 pub use spec::{GroupSpec, Rotate, SelectionSpec, SpecError, Spin, Targets, resolve_selection, unique_group_name};
 
 use std::path::PathBuf;
@@ -44,6 +47,8 @@ pub struct Scene {
     pub contact: crate::contact::ContactSettings,
     /// The `[output]` table.
     pub output: OutputSettings,
+    /// The `[material]` table, when given.
+    pub material: Option<MaterialSettings>,
     /// Directory that relative paths start from.
     pub base_dir: PathBuf,
     /// The scene file, for messages.

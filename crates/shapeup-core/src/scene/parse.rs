@@ -1,7 +1,10 @@
 //! From scene text (TOML or JSON) to a validated [`Scene`].
 
 use super::strict::{Entry, EntryList, OneTable, StrictValue, spelled};
-use super::{GroupSpec, MeshSettings, OutputSettings, Scene, SceneError, SolverSettings};
+use super::{
+    GroupSpec, MATERIAL_ITERATIONS, MATERIAL_TOLERANCE, MaterialSettings, MeshSettings, OutputSettings, Scene,
+    SceneError, SolverSettings,
+};
 use crate::solver::{MAX_ANDERSON_WINDOW, MAX_LBFGS_MEMORY};
 use crate::text::{plain_words, value_as};
 use serde::Deserialize;
@@ -23,6 +26,12 @@ struct RawScene {
     contact: crate::contact::ContactSettings,
     #[serde(default, deserialize_with = "output_table")]
     output: OutputSettings,
+    #[serde(default, deserialize_with = "material_table")]
+    material: Option<MaterialSettings>,
+}
+
+fn material_table<'de, D: serde::Deserializer<'de>>(deserializer: D) -> Result<Option<MaterialSettings>, D::Error> {
+    deserializer.deserialize_any(OneTable("material", std::marker::PhantomData)).map(Some)
 }
 
 fn constraint_list<'de, D: serde::Deserializer<'de>>(deserializer: D) -> Result<Vec<Entry>, D::Error> {
@@ -120,9 +129,10 @@ impl Scene {
             apply_override(&mut tree, key, value.clone())?;
         }
         // The tree has no lines: a message names the key it is about, as the overrides do.
+        let given = SolverKeys::of(&tree);
         let raw: RawScene = serde_path_to_error::deserialize(tree)
             .map_err(|e| parse_error(format!("{}: {}", e.path(), plain_words(&e.inner().to_string()))))?;
-        Scene::from_raw(raw, path, base_dir)
+        Scene::from_raw(raw, path, base_dir).map(|scene| given.material_defaults(scene))
     }
 
     /// Parses scene text; `path` is only used in messages, `base_dir` resolves the mesh path.
@@ -135,7 +145,16 @@ impl Scene {
             SceneFormat::Toml => toml::from_str(text).map_err(|e| parse_error(toml_message(text, &e)))?,
             SceneFormat::Json => serde_json::from_str(text).map_err(|e| parse_error(json_message(text, &e)))?,
         };
-        Scene::from_raw(raw, path, base_dir)
+        let scene = Scene::from_raw(raw, path, base_dir)?;
+        if scene.material()?.is_none() {
+            return Ok(scene);
+        }
+        // Which [solver] keys the text gives (it parsed above, so it parses again).
+        let tree = match format {
+            SceneFormat::Toml => StrictValue::read_toml(text).ok(),
+            SceneFormat::Json => StrictValue::read_json(text).ok(),
+        };
+        Ok(tree.map_or(SolverKeys::default(), |t| SolverKeys::of(&t)).material_defaults(scene))
     }
 
     /// Checks a scene's tables and entries (the part of [`Scene::parse`] after the syntax).
@@ -184,16 +203,71 @@ impl Scene {
                     .map_err(|e| invalid(plain_words(&e.to_string())))
             })
             .collect::<Result<Vec<_>, _>>()?;
-        Ok(Scene {
+        let scene = Scene {
             mesh: raw.mesh,
             solver: raw.solver,
             groups,
             colliders,
             contact: raw.contact,
             output: raw.output,
+            material: raw.material,
             base_dir,
             file: path.into(),
+        };
+        // A material's keys, and units only with a material.
+        if scene.material()?.is_none()
+            && let Some(units) = scene.mesh.units
+        {
+            return Err(mesh_error(format!(
+                "units = \"{}\" needs a [material] table (with a material the solver works in metres and the units convert the mesh)",
+                units.name()
+            )));
+        }
+        Ok(scene)
+    }
+
+    /// The `[material]` table's material, checked: `None` without one (or with `model =
+    /// "projective"`).
+    ///
+    /// # Errors
+    /// [`SceneError::Invalid`] naming `[material]` and its first bad key.
+    pub fn material(&self) -> Result<Option<crate::materials::Material>, SceneError> {
+        let Some(settings) = &self.material else { return Ok(None) };
+        settings.material().map_err(|message| SceneError::Invalid {
+            path: self.file.clone(),
+            entry: "[material]".into(),
+            message,
         })
+    }
+}
+
+/// Which `[solver]` keys a scene's text gives, for the defaults a material changes.
+#[derive(Debug, Default)]
+struct SolverKeys {
+    iterations: bool,
+    tolerance: bool,
+}
+
+impl SolverKeys {
+    fn of(tree: &Value) -> SolverKeys {
+        let solver = tree.get("solver");
+        let given = |key: &str| solver.and_then(|s| s.get(key)).is_some();
+        SolverKeys { iterations: given("iterations"), tolerance: given("tolerance") }
+    }
+
+    /// With a material, a solve runs to [`MATERIAL_TOLERANCE`] under a guard of
+    /// [`MATERIAL_ITERATIONS`] unless the scene says otherwise (a material's solve that stops
+    /// at 10 iterations is not the material's behaviour: it freezes).
+    fn material_defaults(&self, mut scene: Scene) -> Scene {
+        if matches!(scene.material(), Ok(Some(_))) {
+            if !self.iterations {
+                scene.solver.iterations = MATERIAL_ITERATIONS;
+            }
+            if !self.tolerance {
+                scene.solver.tolerance = MATERIAL_TOLERANCE;
+            }
+        }
+        scene
     }
 }
 

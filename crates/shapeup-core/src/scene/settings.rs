@@ -121,6 +121,102 @@ pub struct MeshSettings {
     /// of energies that have several.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub start: Option<PathBuf>,
+    /// The length unit of the mesh's coordinates, with a `[material]` (default metres): the
+    /// solver then works in metres, so moduli in pascals, densities in kg/m³ and gravity in
+    /// m/s² mean what they say.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub units: Option<Units>,
+}
+
+/// `[mesh] units`: the length unit of the mesh's coordinates.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Units {
+    /// Metres (the default).
+    #[default]
+    M,
+    /// Centimetres.
+    Cm,
+    /// Millimetres.
+    Mm,
+    /// Inches (25.4 mm).
+    In,
+}
+
+impl Units {
+    /// Metres per unit.
+    pub fn metres(self) -> f64 {
+        match self {
+            Units::M => 1.0,
+            Units::Cm => 0.01,
+            Units::Mm => 0.001,
+            Units::In => 0.0254,
+        }
+    }
+
+    /// The name in scene files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Units::M => "m",
+            Units::Cm => "cm",
+            Units::Mm => "mm",
+            Units::In => "in",
+        }
+    }
+}
+
+/// The `[material]` table: a hyperelastic model in physical units ([`crate::materials`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialSettings {
+    /// `"stvk"`, `"corotated"`, `"neo_hookean"`, or `"projective"` (no material: the scene's
+    /// constraint groups alone, as without the table).
+    pub model: String,
+    /// Young's modulus E, Pa.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub youngs_modulus: Option<f64>,
+    /// Poisson's ratio ν ∈ (−1, ½).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub poisson_ratio: Option<f64>,
+    /// Density ρ, kg/m³.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub density: Option<f64>,
+}
+
+/// Iterations a static solve or a time step with a material runs at most when `[solver]
+/// iterations` is not given: a material runs to its tolerance, and this is only the guard.
+pub const MATERIAL_ITERATIONS: usize = 1000;
+
+/// `[solver] tolerance` with a material when the scene gives none: the relative change of the
+/// objective at which a static solve or a time step stops.
+pub const MATERIAL_TOLERANCE: f64 = 1e-10;
+
+impl MaterialSettings {
+    /// The material, checked; `None` for `model = "projective"`.
+    ///
+    /// # Errors
+    /// One line naming the first bad key.
+    pub fn material(&self) -> Result<Option<crate::materials::Material>, String> {
+        let keys =
+            [("youngs_modulus", self.youngs_modulus), ("poisson_ratio", self.poisson_ratio), ("density", self.density)];
+        if self.model == "projective" {
+            if let Some((key, _)) = keys.iter().find(|(_, v)| v.is_some()) {
+                return Err(format!(
+                    "model = \"projective\" (the constraint groups alone) takes no {key}: choose one of {} to give the material's moduli",
+                    crate::materials::model_names().join(", ")
+                ));
+            }
+            return Ok(None);
+        }
+        let mut values = [0.0; 3];
+        for (value, (key, given)) in values.iter_mut().zip(keys) {
+            *value = given.ok_or_else(|| {
+                format!("missing {key} (a material needs youngs_modulus in Pa, poisson_ratio and density in kg/m³)")
+            })?;
+        }
+        let [e, nu, rho] = values;
+        crate::materials::Material::new(&self.model, e, nu, rho).map(Some).map_err(|e| e.to_string())
+    }
 }
 
 fn yes() -> bool {

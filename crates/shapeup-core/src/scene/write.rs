@@ -34,6 +34,9 @@ impl Scene {
         if let Some(start) = &self.mesh.start {
             line(&mut out, "start", Value::String(start.to_string_lossy().into_owned()));
         }
+        if let Some(units) = self.mesh.units {
+            line(&mut out, "units", Value::String(units.name().into()));
+        }
 
         let s = &self.solver;
         out.push_str("\n[solver]\n");
@@ -66,6 +69,18 @@ impl Scene {
             for (key, path) in [("path", &o.path), ("report", &o.report)] {
                 if let Some(p) = path {
                     line(&mut out, key, Value::String(p.to_string_lossy().into_owned()));
+                }
+            }
+        }
+
+        if let Some(m) = &self.material {
+            out.push_str("\n[material]\n");
+            line(&mut out, "model", Value::String(m.model.clone()));
+            for (key, value) in
+                [("youngs_modulus", m.youngs_modulus), ("poisson_ratio", m.poisson_ratio), ("density", m.density)]
+            {
+                if let Some(v) = value {
+                    line(&mut out, key, Value::Float(v));
                 }
             }
         }
@@ -233,6 +248,7 @@ mod tests {
                 normalize: false,
                 tetrahedralize: true,
                 start: Some(PathBuf::from("meshes/start shape.obj")),
+                units: None,
             },
             solver: SolverSettings {
                 mode: Mode::Dynamic,
@@ -266,6 +282,7 @@ mod tests {
             ],
             contact: crate::contact::ContactSettings { self_collision: true, thickness: Some(0.01), friction: 0.2 },
             output: super::super::OutputSettings { path: Some("out/result.obj".into()), report: None },
+            material: None,
             base_dir: PathBuf::from("dir"),
             file: PathBuf::from("s.toml"),
         };

@@ -7,6 +7,7 @@ mod common;
 mod contract;
 mod conventions;
 mod frames;
+mod materials;
 mod obj_assets;
 mod ply_assets;
 #[cfg(feature = "gui")]
