@@ -311,3 +311,22 @@ def test_a_start_shape_is_where_deform_starts(tmp_path, cli):
     scene.write_text(scene.read_text().replace("start.obj", "few.obj"))
     with pytest.raises(ValueError, match=r"\[mesh\] start.*has 3 vertices where the mesh"):
         shapeup.Scene.load(scene).deform()
+
+
+def test_a_material_scene_runs_from_python_as_from_the_command_line(tmp_path, cli):
+    # [material] is a scene key like any other: Scene.load takes it, and deform gives the
+    # command line's shape (same solver, same tolerance).
+    scene = tmp_path / "beam.toml"
+    text = (EXAMPLES / "cantilever.toml").read_text().replace("cells = [40, 4, 4]", "cells = [20, 2, 2]")
+    scene.write_text(text)
+    V, _ = shapeup.Scene.load(scene).deform()
+    out = tmp_path / "cli.obj"
+    subprocess.run([str(cli), "deform", str(scene), "-o", str(out)], check=True, capture_output=True)
+    np.testing.assert_allclose(V, shapeup.read_mesh(out).V, rtol=0, atol=1e-12)
+    # The free end sags under the beam's own weight (Euler–Bernoulli: 14.7 mm; 20 cubes lock
+    # to about half of it).
+    tip = V[np.isclose(V[:, 0], V[:, 0].max(), atol=0.02)]
+    assert 0.005 < -tip[:, 1].mean() < 0.0147
+    scene.write_text(text.replace("poisson_ratio = 0.3", "poisson_ratio = 0.5"))
+    with pytest.raises(ValueError, match=r"\[material\].*poisson_ratio"):
+        shapeup.Scene.load(scene).deform()

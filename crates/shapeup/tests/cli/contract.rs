@@ -1118,7 +1118,8 @@ fn check_example(ws: &Workspace, scene_path: &Path) -> Result<(), String> {
     }
     if problems.is_empty() {
         let d = diagonal(&rest);
-        // Vertices in no triangle and in no position group are touched by no constraint.
+        // Vertices in no triangle, no tetrahedron (a material's) and no position group are
+        // touched by no constraint.
         let largest_translate = scene
             .groups
             .iter()
@@ -1127,6 +1128,7 @@ fn check_example(ws: &Workspace, scene_path: &Path) -> Result<(), String> {
             .fold(0.0, f64::max);
         let mut touched = vec![false; rest.num_vertices()];
         rest.triangles.iter().flatten().for_each(|&v| touched[v as usize] = true);
+        rest.tetrahedra.iter().flatten().for_each(|&v| touched[v as usize] = true);
         for g in scene.groups.iter().filter(|g| g.kind == "position") {
             let s = selected(&g.selection, &rest);
             touched.iter_mut().zip(&s).for_each(|(t, s)| *t |= *s);
