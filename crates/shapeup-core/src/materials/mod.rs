@@ -114,7 +114,7 @@ pub enum MaterialError {
     UnknownModel(String),
     /// No tetrahedron to carry the material.
     #[error(
-        "a material needs tetrahedra, and the mesh has none: give a tetrahedral mesh (.msh, .vtu, .node/.ele, .mesh) or set [mesh] tetrahedralize = true (shells with a thickness are not supported yet)"
+        "a material needs tetrahedra, and the mesh has none (or only flat ones): give a tetrahedral mesh (.msh, .node/.ele), generate = {{ kind = \"tet_box\", … }} or [mesh] tetrahedralize = true (shells with a thickness are not supported yet)"
     )]
     NoTetrahedra,
 }
@@ -160,10 +160,16 @@ pub struct TetMaterial {
 }
 
 impl TetMaterial {
-    /// The term of tetrahedron `vertices` of the rest shape `rest` (metres); `None` when its
-    /// rest volume is ≤ 1e-12 (as `tet_strain`).
+    /// The term of tetrahedron `vertices` of the rest shape `rest` (metres); `None` when it is
+    /// flat: its rest volume at most 1e-12 ℓ³, ℓ its longest edge (relative, since a part in
+    /// millimetres has tetrahedra of 1e-12 m³).
     pub fn new(vertices: [u32; 4], rest: &[DVec3], material: &Material) -> Option<Self> {
-        TetGradient::new(vertices, rest).map(|gradient| TetMaterial {
+        let p = vertices.map(|v| rest[v as usize]);
+        let longest = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)]
+            .iter()
+            .map(|&(i, j)| (p[i] - p[j]).length())
+            .fold(0.0, f64::max);
+        TetGradient::with_min_volume(vertices, rest, 1e-12 * longest.powi(3)).map(|gradient| TetMaterial {
             gradient,
             model: material.model,
             lame: material.lame,
@@ -226,7 +232,8 @@ impl Constraint for TetMaterial {
 
 /// The material's group on every tetrahedron of `rest` (working frame in metres), with
 /// multiplier `multiplier` (1 in static mode; 1/k in dynamic mode, where the solver divides
-/// every term by the stiffness k); tetrahedra of volume ≤ 1e-12 carry none.
+/// every term by the stiffness k), and the indices of the flat tetrahedra that carry none
+/// ([`TetMaterial::new`]), for the caller to say.
 ///
 /// # Errors
 /// [`MaterialError::NoTetrahedra`] when `rest` has no tetrahedron of positive volume.
@@ -234,17 +241,19 @@ pub fn material_group(
     rest: &RestGeometry,
     material: &Material,
     multiplier: f64,
-) -> Result<ConstraintGroup, MaterialError> {
-    let terms: Vec<Box<dyn Constraint>> = rest
-        .tetrahedra
-        .iter()
-        .filter_map(|t| TetMaterial::new(*t, &rest.positions, material))
-        .map(|c| Box::new(c) as Box<dyn Constraint>)
-        .collect();
+) -> Result<(ConstraintGroup, Vec<usize>), MaterialError> {
+    let mut flat = Vec::new();
+    let mut terms: Vec<Box<dyn Constraint>> = Vec::with_capacity(rest.tetrahedra.len());
+    for (i, t) in rest.tetrahedra.iter().enumerate() {
+        match TetMaterial::new(*t, &rest.positions, material) {
+            Some(c) => terms.push(Box::new(c)),
+            None => flat.push(i),
+        }
+    }
     if terms.is_empty() {
         return Err(MaterialError::NoTetrahedra);
     }
-    Ok(ConstraintGroup::new(MATERIAL_GROUP, multiplier, terms))
+    Ok((ConstraintGroup::new(MATERIAL_GROUP, multiplier, terms), flat))
 }
 
 #[cfg(test)]

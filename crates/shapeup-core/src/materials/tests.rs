@@ -215,7 +215,7 @@ fn a_block_in_uniaxial_tension_follows_each_models_law() {
                 .map(|(v, f)| Box::new(Force::new(v as u32, *f, mesh.positions[v])) as Box<dyn Constraint>)
                 .collect();
             let mut system = System::new(mesh.positions.len(), SolverParams::default());
-            system.add_group(material_group(&rest, &material, 1.0).unwrap()).unwrap();
+            system.add_group(material_group(&rest, &material, 1.0).unwrap().0).unwrap();
             system.add_group(ConstraintGroup::new("traction", 1.0, forces)).unwrap();
             // One corner held: translations are fixed, the balanced loads fix the rotation.
             let corner = Position::new(vec![0], vec![mesh.positions[0]]).unwrap();
@@ -342,7 +342,7 @@ fn the_static_equilibrium_is_newtons() {
         let name = model.info().name;
         let material = Material::new(name, RUBBER.0, 0.4, 1000.0).unwrap();
         let mut system = System::new(mesh.positions.len(), SolverParams::default());
-        system.add_group(material_group(&rest, &material, 1.0).unwrap()).unwrap();
+        system.add_group(material_group(&rest, &material, 1.0).unwrap().0).unwrap();
         let forces: Vec<Box<dyn Constraint>> = free
             .iter()
             .map(|&v| Box::new(Force::new(v as u32, load, mesh.positions[v])) as Box<dyn Constraint>)
@@ -373,7 +373,7 @@ fn an_inverted_block_recovers() {
     for name in ["neo_hookean", "corotated"] {
         let material = Material::new(name, RUBBER.0, 0.45, 1000.0).unwrap();
         let mut system = System::new(mesh.positions.len(), SolverParams::default());
-        system.add_group(material_group(&rest, &material, 1.0).unwrap()).unwrap();
+        system.add_group(material_group(&rest, &material, 1.0).unwrap().0).unwrap();
         // The centre vertex held where it is: the rest shape is the minimum, up to rotations
         // about it, which the reflected start does not favour.
         let centre = (0..mesh.positions.len())

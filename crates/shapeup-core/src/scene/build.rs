@@ -1,7 +1,7 @@
 //! From a parsed [`Scene`] to a solvable system: load the mesh, map it to the working frame,
 //! resolve selections and build each group.
 
-use super::{Mode, Scene, SceneError, SolverSettings};
+use super::{Scene, SceneError, SolverSettings};
 use crate::constraints::{attach_degenerate_vertices, held_vertices};
 use crate::contact::{ContactModel, ContactParams, Shape, ShapeSpec};
 use crate::dynamics::{DynamicsParams, ParamError, Simulation};
@@ -210,10 +210,17 @@ impl Scene {
                         .into(),
                 ));
             }
-            for group in self.material_groups(&rest, material) {
-                let group = group.map_err(|e| invalid("[material]", e.to_string()))?;
+            let (groups, flat) =
+                self.material_groups(&rest, material).map_err(|e| invalid("[material]", e.to_string()))?;
+            for group in groups {
                 system.add_group(group).map_err(|e| invalid("[material]", e.to_string()))?;
             }
+            warnings.add_many(
+                "flat_tetrahedra_without_material",
+                "flat tetrahedra (rest volume at most 1e-12 of their longest edge cubed) carry no material",
+                flat.len(),
+                || flat.first().map(|t| format!("tetrahedron {t}")).unwrap_or_default(),
+            );
         }
         // Vertices that only zero-area triangles use follow their edge (math reference, "Edge cases").
         let (group, attached, stranded) = attach_degenerate_vertices(&rest, system.groups().map(|(_, g)| g));
@@ -281,24 +288,22 @@ impl Scene {
         }
     }
 
-    /// A material's groups on `rest` (metres): its hyperelastic energy on every tetrahedron
-    /// (multiplier 1 in static mode; 1/k in dynamic mode, where the solver divides every term
-    /// by the stiffness k, so that the material's stiffness is its own whatever k), and in
-    /// static mode its self-weight, the loads m_v g of the lumped masses (ρ |V_T|/4 per corner)
-    /// under `[solver] gravity` (m/s²), so that a static solve is the simulation's equilibrium.
+    /// A material's groups on `rest` (metres), as a static solve takes them: its hyperelastic
+    /// energy on every tetrahedron (multiplier 1), and its self-weight, the loads m_v g of the
+    /// lumped masses (ρ |V_T|/4 per corner) under `[solver] gravity` (m/s²), so that a static
+    /// solve is the simulation's equilibrium. [`LoadedScene::start_simulation`] turns them into
+    /// the dynamic mode's (whatever the scene's mode: `simulate` of a static scene too). Also
+    /// the flat tetrahedra that carry no material.
     fn material_groups(
         &self,
         rest: &RestGeometry,
         material: &crate::materials::Material,
-    ) -> Vec<Result<ConstraintGroup, crate::materials::MaterialError>> {
-        let multiplier = match self.solver.mode {
-            Mode::Static => 1.0,
-            Mode::Dynamic => 1.0 / self.solver.stiffness,
-        };
-        let mut groups = vec![crate::materials::material_group(rest, material, multiplier)];
+    ) -> Result<(Vec<ConstraintGroup>, Vec<usize>), crate::materials::MaterialError> {
+        let (group, flat) = crate::materials::material_group(rest, material, 1.0)?;
+        let mut groups = vec![group];
         let gravity = DVec3::from_array(self.solver.gravity);
-        if self.solver.mode == Mode::Static && gravity != DVec3::ZERO && !rest.tetrahedra.is_empty() {
-            let weights: Vec<Box<dyn crate::constraints::Constraint>> = lumped_masses(rest, material.density)
+        if gravity != DVec3::ZERO {
+            let weights: Vec<Box<dyn crate::constraints::Constraint>> = material_masses(rest, material.density)
                 .iter()
                 .enumerate()
                 .filter(|(_, m)| **m > 0.0)
@@ -307,9 +312,9 @@ impl Scene {
                         as Box<dyn crate::constraints::Constraint>
                 })
                 .collect();
-            groups.push(Ok(ConstraintGroup::new(SELF_WEIGHT_GROUP, 1.0, weights)));
+            groups.push(ConstraintGroup::new(SELF_WEIGHT_GROUP, 1.0, weights));
         }
-        groups
+        Ok((groups, flat))
     }
 
     /// The scene's colliders and `[contact]` settings as a [`ContactModel`] (`None` when there
@@ -566,6 +571,21 @@ fn fill_with_tetrahedra(mesh: &Mesh) -> Result<Mesh, FillError> {
 #[cfg(not(feature = "tetgen"))]
 fn fill_with_tetrahedra(_mesh: &Mesh) -> Result<Mesh, FillError> {
     Err(FillError::NoTetGen)
+}
+
+/// A material's lumped masses (kg, `rest` in metres): m_i = ρ Σ_{T ∋ i} |V_T| / 4, exactly
+/// (no floor: a part in millimetres has vertex masses of 1e-14 kg, which the 1e-9 floor of
+/// [`lumped_masses`] would multiply), 0 for a vertex in no tetrahedron.
+pub fn material_masses(rest: &RestGeometry, density: f64) -> Vec<f64> {
+    let mut masses = vec![0.0; rest.num_vertices()];
+    for t in &rest.tetrahedra {
+        let p = t.map(|v| rest.positions[v as usize]);
+        let share = density * crate::geometry::tet_volume(p[0], p[1], p[2], p[3]).abs() / 4.0;
+        for &v in t {
+            masses[v as usize] += share;
+        }
+    }
+    masses
 }
 
 /// Lumped masses m_i of `rest` (working frame): ρ Σ|V_T|/4 on a tetrahedral mesh, else
@@ -879,16 +899,11 @@ impl LoadedScene {
     /// Lumped masses m_i (working frame): ρ Σ|V_T|/4 on a tetrahedral mesh, else ρ Σ A_t/3
     /// (floored at 1e-9); 0 for a vertex in no element, which is not simulated and keeps its
     /// position (as in static mode).
+    /// With a material, its masses in kg ([`material_masses`]).
     pub fn masses(&self) -> Vec<f64> {
-        lumped_masses(&self.rest, self.density())
-    }
-
-    /// The density the masses take: the material's (kg/m³, the working frame in metres), else
-    /// `[solver] density`.
-    fn density(&self) -> f64 {
         match self.scene.material() {
-            Ok(Some(material)) => material.density,
-            _ => self.scene.solver.density,
+            Ok(Some(material)) => material_masses(&self.rest, material.density),
+            _ => lumped_masses(&self.rest, self.scene.solver.density),
         }
     }
 
@@ -915,8 +930,23 @@ impl LoadedScene {
         // Checked before the system moves, so that a refused start leaves this scene whole.
         let params =
             self.scene.solver.checked_dynamics_params(self.gravity_scale()).map_err(|e| invalid(e.to_string()))?;
-        let system =
+        let mut system =
             std::mem::replace(&mut self.system, System::new(self.mesh.num_vertices(), SolverParams::default()));
+        // A material's groups as time stepping takes them: gravity comes from the inertial
+        // target, not a load, and every term is divided by the stiffness k (the inertia is
+        // m / (k h²)), so the material's energy is multiplied by 1/k to stay its own.
+        let material_groups: Vec<(GroupId, &'static str)> = system
+            .groups()
+            .filter(|(_, g)| g.kind == crate::materials::MATERIAL_GROUP || g.name == SELF_WEIGHT_GROUP)
+            .map(|(id, g)| (id, if g.name == SELF_WEIGHT_GROUP { SELF_WEIGHT_GROUP } else { "material" }))
+            .collect();
+        for (id, what) in material_groups {
+            if what == SELF_WEIGHT_GROUP {
+                system.remove_group(id);
+            } else {
+                system.set_multiplier(id, 1.0 / params.stiffness).map_err(|e| invalid(e.to_string()))?;
+            }
+        }
         let mut simulation = Simulation::new(system, self.masses(), self.start_positions(), params)
             .map_err(|e| invalid(e.to_string()))?;
         simulation.set_contact(self.contact.clone()).map_err(|e| invalid(e.to_string()))?;

@@ -219,7 +219,7 @@ impl Scene {
             && let Some(units) = scene.mesh.units
         {
             return Err(mesh_error(format!(
-                "units = \"{}\" needs a [material] table (with a material the solver works in metres and the units convert the mesh)",
+                "units = \"{}\" needs a [material] with a model (stvk, corotated, neo_hookean; \"projective\" has none): with one the solver works in metres and the units convert the mesh",
                 units.name()
             )));
         }

@@ -152,14 +152,16 @@ impl System {
                     found = self.line_search(x, d, dir, q, trial, slope, run.objective, report)?;
                 }
                 let Some((energy, objective)) = found else {
-                    // No step lowers the objective measurably along −A⁻¹g: at a minimum to
-                    // round-off. The iteration is recorded unchanged, which meets any tolerance.
+                    // No step lowers the objective measurably along −A⁻¹g: a minimum to
+                    // round-off, or a stall. The iteration is recorded unchanged and the solve
+                    // ends as one that ran out of iterations, so that its residual is measured
+                    // and a stall far from the minimum is said (SolveReport::unconverged).
                     let energy = report.energies.last().copied().unwrap_or(report.initial_energy);
                     let objective = run.objective;
                     // The projections and C q at q again, for the residual measured next.
                     self.evaluate(q);
                     run.record(report, energy, objective, after_iteration)?;
-                    return Ok(true);
+                    return Ok(false);
                 };
                 q.copy_from_slice(trial);
                 let (mut converged, stop) = run.record(report, energy, objective, after_iteration)?;

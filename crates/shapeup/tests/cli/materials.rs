@@ -84,11 +84,23 @@ fn a_cantilever_sags_as_euler_bernoulli_says_closer_with_each_refinement() {
     assert!((mm - metres).abs() <= 1e-5 * metres, "in mm {mm} m, in m {metres} m");
 }
 
-/// Lumped masses are ρ |V| in total, whatever the units.
+/// Lumped masses are ρ |V| in total, whatever the units, and a beam of 1 mm sags as the 1 m
+/// beam scaled: no floor on its vertex masses of 1e-14 kg, no cut-off of its 1e-12 m³
+/// tetrahedra (the trial's small parts sagged 19× too far, or were refused as having none).
 #[test]
 fn the_masses_weigh_the_density_times_the_volume() {
     let dir = tempfile::tempdir().unwrap();
-    for (unit, per_metre) in [("m", 1.0), ("cm", 100.0), ("in", 1.0 / 0.0254)] {
+    let big = beam_scene(dir.path(), "big.toml", 20, ("m", 1.0), "");
+    // 1 mm long in mm units: the same numbers as the 1 m beam in m, 1e-3 of its size.
+    let small = beam_scene(dir.path(), "small.toml", 20, ("mm", 1.0), "");
+    std::fs::write(&small, std::fs::read_to_string(&small).unwrap().replace(&format!("{E:e}"), "1e5")).unwrap();
+    let (big_out, small_out) = (dir.path().join("big.obj"), dir.path().join("small.obj"));
+    deform(&big, &big_out);
+    deform(&small, &small_out);
+    // δ ∝ L² ρ g / E: L × 1e-3 and E × 1e-3 give δ × 1e-3 (m), the same δ/L.
+    let (big_tip, small_tip) = (tip_deflection(&big, &big_out), tip_deflection(&small, &small_out) * 1e-3);
+    assert!((small_tip / big_tip - 1e-3).abs() < 1e-7, "1 mm part sags {small_tip} m, the 1 m beam {big_tip} m");
+    for (unit, per_metre) in [("m", 1.0), ("cm", 100.0), ("mm", 1000.0), ("in", 1.0 / 0.0254)] {
         let scene = beam_scene(dir.path(), "beam.toml", 20, (unit, per_metre), "[solver]\nmode = \"dynamic\"\n");
         let loaded = Scene::from_file(&scene).unwrap().load().unwrap();
         let mass: f64 = loaded.masses().iter().sum();
@@ -131,6 +143,32 @@ fn a_simulated_beam_settles_at_the_static_equilibrium() {
     let last = tip_deflection(&scene, &frames.join("frame_0150.obj"));
     assert!(deepest > 1.2 * settled, "the beam should swing past its rest sag: deepest {deepest}, static {settled}");
     assert!((last - settled).abs() < 0.05 * settled, "after 1.5 s the tip is at {last}, the static sag is {settled}");
+    // Whatever the scene's mode: `deform` of the dynamic scene carries the self-weight, and
+    // `simulate` of the static one neither counts it twice nor scales the material by k.
+    let out = dir.path().join("dynamic-deformed.obj");
+    deform(&scene, &out);
+    let deformed = tip_deflection(&scene, &out);
+    assert!((deformed - settled).abs() <= 1e-9 * settled, "deform of the dynamic scene: {deformed}, static {settled}");
+    let frames = dir.path().join("static-frames");
+    let run = shapeup_in(
+        None,
+        [
+            "simulate".as_ref(),
+            static_scene.as_os_str(),
+            "-o".as_ref(),
+            frames.as_os_str(),
+            "--frames".as_ref(),
+            "150".as_ref(),
+        ],
+    );
+    assert_eq!(run.code, Some(0), "{}", run.describe());
+    let deepest = (1..=150)
+        .map(|k| tip_deflection(&static_scene, &frames.join(format!("frame_{k:04}.obj"))))
+        .fold(f64::MIN, f64::max);
+    assert!(
+        deepest > settled && deepest < 2.5 * settled,
+        "simulate of the static scene swings to {deepest}, static {settled}"
+    );
 }
 
 /// Each bad material key: one line naming the scene and the key, exit 1, nothing written.
@@ -153,6 +191,11 @@ fn bad_material_keys_are_refused_in_one_line() {
         (material("model = \"stvk\"\npoisson_ratio = 0.3\ndensity = 1000.0"), "missing youngs_modulus"),
         (material(&format!("{good}\nthickness = 0.1")), "thickness"),
         (material("model = \"projective\"\nyoungs_modulus = 1e6"), "projective"),
+        (
+            material("model = \"projective\"")
+                .replace("size = [1.0, 0.25, 0.25] }", "size = [1.0, 0.25, 0.25] }\nunits = \"m\""),
+            "\"projective\" has none",
+        ),
         (material(good).replace("size = [1.0, 0.25, 0.25] }", "size = [1.0, 0.25, 0.25] }\nunits = \"km\""), "km"),
         (
             "[mesh]\ngenerate = { kind = \"tet_box\", cells = [4, 1, 1], size = [1.0, 0.25, 0.25] }\nunits = \"mm\"\n"

@@ -113,9 +113,15 @@ impl TetGradient {
     /// The gradient of tetrahedron (a, b, c, d) of the rest shape `rest`; `None` if its rest
     /// volume |V_T| is ≤ 1e-12. Either orientation of the rest tetrahedron works (T = I at rest).
     pub(crate) fn new(vertices: [u32; 4], rest: &[DVec3]) -> Option<Self> {
+        Self::with_min_volume(vertices, rest, MIN_REST_VOLUME)
+    }
+
+    /// [`TetGradient::new`] with another least volume (a material in metres scales it with
+    /// the tetrahedron's size instead).
+    pub(crate) fn with_min_volume(vertices: [u32; 4], rest: &[DVec3], min_volume: f64) -> Option<Self> {
         let [a, b, c, d] = vertices.map(|v| rest[v as usize]);
         let volume = tet_volume(a, b, c, d).abs();
-        if volume.is_nan() || volume <= MIN_REST_VOLUME {
+        if volume.is_nan() || volume <= min_volume {
             return None;
         }
         let rest_inverse = DMat3::from_cols(b - a, c - a, d - a).inverse();
