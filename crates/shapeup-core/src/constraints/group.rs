@@ -38,6 +38,12 @@ impl ConstraintGroup {
         ConstraintGroup { name: name.into(), kind, multiplier, constraints, hard: false }
     }
 
+    /// Whether its terms are projective ([`Constraint::is_projective`]); a group is of one kind,
+    /// so its first term says it (an empty group is).
+    pub fn is_projective(&self) -> bool {
+        self.constraints.first().is_none_or(|c| c.is_projective())
+    }
+
     /// The group made hard (or soft again): see [`ConstraintGroup::hard`].
     pub fn with_hard(mut self, hard: bool) -> Self {
         self.hard = hard;

@@ -137,17 +137,14 @@ impl System {
             }
             // The directional derivative of the objective along −d is −2 gᵀd.
             let slope = -2.0 * lbfgs::dot(g, d);
-            if energy_terms {
+            let (energy, trial_objective, accepted) = if energy_terms {
                 report.global_seconds += t.elapsed().as_secs_f64();
                 let mut found = self.line_search(x, d, dir, q, trial, slope, run.objective, report)?;
                 if found.is_none() && quasi_newton {
                     // Not a descent direction after all: forget the history, search along −A⁻¹g.
                     self.lbfgs.reset();
                     report.rejected += 1;
-                    d.copy_from_slice(g);
-                    if let Some(factor) = self.factor.as_mut() {
-                        factor.solve_permuted_in_place(d);
-                    }
+                    self.plain_direction(g, d);
                     let slope = -2.0 * lbfgs::dot(g, d);
                     found = self.line_search(x, d, dir, q, trial, slope, run.objective, report)?;
                 }
@@ -163,38 +160,29 @@ impl System {
                     run.record(report, energy, objective, after_iteration)?;
                     return Ok(false);
                 };
-                q.copy_from_slice(trial);
-                let (mut converged, stop) = run.record(report, energy, objective, after_iteration)?;
-                confirm = converged && quasi_newton;
-                if confirm {
-                    converged = false;
-                }
-                if converged || stop {
-                    return Ok(true);
-                }
-                continue;
-            }
-            self.step_to(x, d, q, trial)?;
-            report.global_seconds += t.elapsed().as_secs_f64();
-            let t = Instant::now();
-            let (mut energy, mut trial_objective) = self.evaluate(trial);
-            report.local_seconds += t.elapsed().as_secs_f64();
-            let accepted = !quasi_newton || (slope < 0.0 && trial_objective <= run.objective + ARMIJO * slope);
-            if !accepted {
-                // The plain iterate x − A⁻¹ g = G(x): E(G(x)) ≤ E(x) by the local-global argument.
-                self.lbfgs.reset();
-                report.rejected += 1;
-                let t = Instant::now();
-                d.copy_from_slice(g);
-                if let Some(factor) = self.factor.as_mut() {
-                    factor.solve_permuted_in_place(d);
-                }
+                (energy, objective, true)
+            } else {
                 self.step_to(x, d, q, trial)?;
                 report.global_seconds += t.elapsed().as_secs_f64();
                 let t = Instant::now();
-                (energy, trial_objective) = self.evaluate(trial);
+                let (mut energy, mut trial_objective) = self.evaluate(trial);
                 report.local_seconds += t.elapsed().as_secs_f64();
-            }
+                let accepted = !quasi_newton || (slope < 0.0 && trial_objective <= run.objective + ARMIJO * slope);
+                if !accepted {
+                    // The plain iterate x − A⁻¹ g = G(x): E(G(x)) ≤ E(x) by the local-global
+                    // argument.
+                    self.lbfgs.reset();
+                    report.rejected += 1;
+                    let t = Instant::now();
+                    self.plain_direction(g, d);
+                    self.step_to(x, d, q, trial)?;
+                    report.global_seconds += t.elapsed().as_secs_f64();
+                    let t = Instant::now();
+                    (energy, trial_objective) = self.evaluate(trial);
+                    report.local_seconds += t.elapsed().as_secs_f64();
+                }
+                (energy, trial_objective, accepted)
+            };
             q.copy_from_slice(trial);
             let (mut converged, stop) = run.record(report, energy, trial_objective, after_iteration)?;
             confirm = converged && accepted && quasi_newton;
@@ -210,6 +198,15 @@ impl System {
             }
         }
         Ok(false)
+    }
+
+    /// d = A⁻¹ g: the plain local-global step's direction (x − d = G(x)), L-BFGS without
+    /// history.
+    fn plain_direction(&mut self, g: &[[f64; 4]], d: &mut [[f64; 4]]) {
+        d.copy_from_slice(g);
+        if let Some(factor) = self.factor.as_mut() {
+            factor.solve_permuted_in_place(d);
+        }
     }
 
     /// Backtracking (Armijo) line search for terms that are not projective: `trial` = q moved

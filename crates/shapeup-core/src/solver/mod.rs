@@ -372,7 +372,8 @@ impl System {
                     .ok_or(SolveError::WrongLength { expected: self.num_vertices, found: v as usize + 1 })? = true;
             }
         }
-        self.energy_groups = lists.iter().map(|l| l.iter().any(|c| !c.is_projective())).collect();
+        self.energy_groups =
+            self.order.iter().map(|&s| self.slots[s].as_ref().is_some_and(|g| !g.is_projective())).collect();
         self.assembly = Assembly::new(self.num_vertices, &lists, &hard, fixed, self.inertia.as_deref());
         let rows = self.assembly.num_rows();
         self.projections = vec![DVec3::ZERO; rows];
@@ -781,7 +782,7 @@ impl System {
     /// Whether some group's terms are not projective (a material): then every solve is L-BFGS
     /// with a line search, and E is evaluated at every iteration.
     pub fn has_energy_terms(&self) -> bool {
-        self.groups().any(|(_, g)| g.constraints.iter().any(|c| !c.is_projective()))
+        self.groups().any(|(_, g)| !g.is_projective())
     }
 
     fn check_length<T>(&self, q: &[T]) -> Result<(), SolveError> {
