@@ -128,8 +128,10 @@ fn compare(format: Format, a: &LoadedMesh, b: &LoadedMesh) {
                 check!("encoding", x.encoding(), y.encoding());
                 check!("header", x.header_lines(), y.header_lines());
             } else {
-                let no_format =
-                    |h: &[String]| h.iter().filter(|l| !l.starts_with("format ")).cloned().collect::<Vec<_>>();
+                // The format line's keyword may be followed by any whitespace (a tab too).
+                let no_format = |h: &[String]| {
+                    h.iter().filter(|l| l.split_whitespace().next() != Some("format")).cloned().collect::<Vec<_>>()
+                };
                 check!("header", no_format(x.header_lines()), no_format(y.header_lines()));
             }
             check!("element count", x.elements().len(), y.elements().len());
