@@ -330,3 +330,19 @@ def test_a_material_scene_runs_from_python_as_from_the_command_line(tmp_path, cl
     scene.write_text(text.replace("poisson_ratio = 0.3", "poisson_ratio = 0.5"))
     with pytest.raises(ValueError, match=r"\[material\].*poisson_ratio"):
         shapeup.Scene.load(scene).deform()
+
+
+def test_a_balloon_scene_inflates_from_python_as_from_the_command_line(tmp_path, cli):
+    # A shell's thickness and [loads] pressure are scene keys like the others.
+    scene = tmp_path / "balloon.toml"
+    scene.write_text((EXAMPLES / "balloon.toml").read_text().replace("subdivisions = 3", "subdivisions = 2"))
+    V, _ = shapeup.Scene.load(scene).deform()
+    out = tmp_path / "cli.obj"
+    subprocess.run([str(cli), "deform", str(scene), "-o", str(out)], check=True, capture_output=True)
+    np.testing.assert_allclose(V, shapeup.read_mesh(out).V, rtol=0, atol=1e-9)
+    # 100 mm at rest, about 113 mm at 3 kPa (the membrane's law; the math reference).
+    radius = np.linalg.norm(V - V.mean(axis=0), axis=1).mean()
+    assert 110.0 < radius < 116.0
+    scene.write_text(scene.read_text().replace("pressure = 3000.0", "pressure = 1.0e5"))
+    with pytest.raises(shapeup.SolveFailed, match="ran away"):
+        shapeup.Scene.load(scene).deform()

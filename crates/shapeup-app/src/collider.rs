@@ -324,6 +324,7 @@ pub fn contact_model(
         contact: settings,
         output: Default::default(),
         material: None,
+        loads: Default::default(),
         base_dir: PathBuf::new(),
         file: PathBuf::new(),
     };

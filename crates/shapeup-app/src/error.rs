@@ -129,6 +129,11 @@ pub enum LoadError {
         "the editor does not support [material] yet (it would drop it on saving): run the scene with `shapeup deform` or `shapeup simulate`, or from Python"
     )]
     Material,
+    /// A scene with `[loads]` (a pressure), which the editor cannot keep yet.
+    #[error(
+        "the editor does not support [loads] yet (it would drop them on saving): run the scene with `shapeup deform` or `shapeup simulate`, or from Python"
+    )]
+    Loads,
     /// A scene entry that cannot become an editor group.
     #[error("constraints[{index}] (\"{name}\"): {cause}")]
     Entry {

@@ -97,6 +97,7 @@ pub fn scenario_scene(scenario: Scenario, mesh: &Mesh, mesh_path: PathBuf) -> Sc
         contact: Default::default(),
         output: Default::default(),
         material: None,
+        loads: Default::default(),
         base_dir: PathBuf::new(),
         file: mesh_path,
     }

@@ -230,6 +230,10 @@ pub struct Simulation {
     velocities: Vec<DVec3>,
     /// Per-vertex external forces (working frame), if any.
     forces: Option<Vec<DVec3>>,
+    /// The wind on the surface's triangles ([`Simulation::set_wind`]), and its forces of the
+    /// step (reused).
+    wind: Option<(crate::materials::Wind, Vec<[u32; 3]>)>,
+    wind_forces: Vec<DVec3>,
     grab: Option<Grab>,
     /// For a grab by [`Simulation::hold`]: the weight added to each grabbed vertex's inertia
     /// (in the order of the grab's vertices); `None` for a force grab.
@@ -291,6 +295,8 @@ impl Simulation {
             next: positions.clone(),
             positions,
             forces: None,
+            wind: None,
+            wind_forces: Vec::new(),
             grab: None,
             hold: None,
             steps: 0,
@@ -314,7 +320,19 @@ impl Simulation {
     fn step_on_pool(&mut self) -> Result<StepReport, SolveError> {
         let started = Instant::now();
         let h = self.params.time_step;
-        // 1. Inertial target s = x + h v + h² a_ext, q starts at s.
+        // 1. Inertial target s = x + h v + h² a_ext, q starts at s. The wind's force is
+        // explicit: from the step's start.
+        if let Some((wind, triangles)) = &self.wind {
+            self.wind_forces.clear();
+            self.wind_forces.resize(self.positions.len(), DVec3::ZERO);
+            crate::materials::add_wind_forces(
+                wind,
+                triangles,
+                &self.positions,
+                &self.velocities,
+                &mut self.wind_forces,
+            );
+        }
         for (i, s) in self.target.iter_mut().enumerate() {
             if self.masses[i] == 0.0 {
                 // No mass (a vertex in no element): no inertia and no gravity; it stays where it
@@ -327,6 +345,9 @@ impl Simulation {
                 && self.masses[i] > 0.0
             {
                 a += f[i] / self.masses[i];
+            }
+            if self.wind.is_some() {
+                a += self.wind_forces[i] / self.masses[i];
             }
             *s = self.positions[i] + h * self.velocities[i] + h * h * a;
         }
@@ -580,6 +601,35 @@ impl Simulation {
             }
         }
         self.forces = forces;
+        Ok(())
+    }
+
+    /// The wind on `triangles` (the surface, working frame: metres, m/s) from the next step
+    /// on, or none ([`crate::materials::add_wind_forces`]: drag and lift through each face's
+    /// velocity relative to the air, applied explicitly from each step's start).
+    ///
+    /// # Errors
+    /// [`DynamicsError::BadState`] for a non-finite velocity or coefficient, a negative air
+    /// density or a triangle with a vertex out of range.
+    pub fn set_wind(&mut self, wind: Option<(crate::materials::Wind, Vec<[u32; 3]>)>) -> Result<(), DynamicsError> {
+        if let Some((w, triangles)) = &wind {
+            if !(w.velocity.is_finite() && w.drag.is_finite() && w.lift.is_finite()) {
+                return Err(DynamicsError::BadState("the wind's velocity and coefficients must be finite".into()));
+            }
+            if !(w.air_density.is_finite() && w.air_density >= 0.0) {
+                return Err(DynamicsError::BadState(format!(
+                    "the air's density must be a finite number ≥ 0, found {}",
+                    w.air_density
+                )));
+            }
+            if let Some(t) = triangles.iter().find(|t| t.iter().any(|&v| v as usize >= self.masses.len())) {
+                return Err(DynamicsError::BadState(format!(
+                    "wind triangle {t:?} names a vertex out of range ({} vertices)",
+                    self.masses.len()
+                )));
+            }
+        }
+        self.wind = wind;
         Ok(())
     }
 

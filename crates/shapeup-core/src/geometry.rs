@@ -218,6 +218,10 @@ pub struct WorkingFrame {
     pub center: DVec3,
     /// Scale factor from input units to working units.
     pub scale: f64,
+    /// True for a scene with a material, whose working frame is metres: loads are then
+    /// physical (forces in newtons, pressures in pascals) and not scaled with lengths
+    /// ([`WorkingFrame::force_to_working`]).
+    pub physical: bool,
 }
 
 impl Default for WorkingFrame {
@@ -228,7 +232,12 @@ impl Default for WorkingFrame {
 
 impl WorkingFrame {
     /// The identity frame (`normalize = false`).
-    pub const IDENTITY: WorkingFrame = WorkingFrame { center: DVec3::ZERO, scale: 1.0 };
+    pub const IDENTITY: WorkingFrame = WorkingFrame { center: DVec3::ZERO, scale: 1.0, physical: false };
+
+    /// The frame of a scene with a material: metres, `metres` per input unit, no translation.
+    pub fn metres(metres: f64) -> Self {
+        WorkingFrame { center: DVec3::ZERO, scale: metres, physical: true }
+    }
 
     /// center = (1/n) Σ x_i; scale = 0.5 / max_i ‖x_i − center‖ (identity scale if all
     /// vertices coincide).
@@ -239,7 +248,7 @@ impl WorkingFrame {
         let center = positions.iter().copied().sum::<DVec3>() / positions.len() as f64;
         let radius = positions.iter().map(|p| (*p - center).length()).fold(0.0, f64::max);
         let scale = if radius > 0.0 { 0.5 / radius } else { 1.0 };
-        WorkingFrame { center, scale }
+        WorkingFrame { center, scale, physical: false }
     }
 
     /// A point from the input frame to the working frame.
@@ -255,6 +264,20 @@ impl WorkingFrame {
     /// A displacement or direction (no translation) from the input frame to the working frame.
     pub fn vector_to_working(&self, v: DVec3) -> DVec3 {
         v * self.scale
+    }
+
+    /// A force from the scene to the working frame: in newtons with a material (`physical`,
+    /// unchanged); otherwise scaled like a length ([`WorkingFrame::vector_to_working`]), so
+    /// that a scene means the same in millimetres or metres (the `force` type's docs say why).
+    pub fn force_to_working(&self, f: DVec3) -> DVec3 {
+        if self.physical { f } else { self.vector_to_working(f) }
+    }
+
+    /// A pressure (force per area) from the scene to the working frame: in pascals with a
+    /// material (unchanged); otherwise forces scale like lengths and areas like squared
+    /// lengths, so p / scale.
+    pub fn pressure_to_working(&self, p: f64) -> f64 {
+        if self.physical { p } else { p / self.scale }
     }
 }
 

@@ -71,6 +71,9 @@ impl Document {
         if scene.material.as_ref().is_some_and(|m| m.model != "projective") {
             return Err(EditorError::Load(LoadError::Material));
         }
+        if scene.loads != Default::default() {
+            return Err(EditorError::Load(LoadError::Loads));
+        }
         if mesh.triangles.is_empty() {
             return Err(EditorError::Load(LoadError::NoTriangles));
         }
@@ -124,6 +127,7 @@ impl Document {
             contact: self.state.contact,
             output: Default::default(),
             material: None,
+            loads: Default::default(),
             base_dir: PathBuf::new(),
             file: PathBuf::new(),
         }

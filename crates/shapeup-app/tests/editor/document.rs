@@ -934,3 +934,22 @@ fn the_default_shape_model_holds_the_cow_on_a_modest_drag() {
     let (springs99, springs_max, _, _) = cow_drag(ShapeModel::EdgeSprings);
     assert!(springs99 > 45.0 && springs_max > 150.0, "springs fold: {springs99:.1}° (p99), {springs_max:.1}°");
 }
+
+/// A scene the editor cannot keep whole (a `[material]`, `[loads]`) is refused in one line
+/// naming the table, rather than opened and then saved without it.
+#[test]
+fn a_scene_with_a_material_or_loads_is_refused_not_truncated() {
+    const SPOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/spot.obj");
+    for (table, text) in [
+        (
+            "[material]",
+            "[material]\nmodel = \"stvk\"\nyoungs_modulus = 1e6\npoisson_ratio = 0.3\ndensity = 1000.0\nthickness = 0.001\n",
+        ),
+        ("[loads]", "[loads]\npressure = 10.0\n"),
+    ] {
+        let text = format!("[mesh]\npath = '{SPOT}'\n{text}[[constraints]]\ntype = \"edge_spring\"\n");
+        let scene = Scene::parse(&text, SceneFormat::Toml, Path::new("m.toml"), std::path::PathBuf::new()).unwrap();
+        let e = Document::from_scene(&scene).unwrap_err().to_string();
+        assert!(e.contains(table) && e.contains("shapeup deform"), "{e}");
+    }
+}

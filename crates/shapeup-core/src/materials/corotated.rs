@@ -34,4 +34,10 @@ impl Hyperelastic for Corotated {
         let j = f.determinant();
         (f - nearest_rotation3(f)) * (2.0 * lame.mu) + cofactor(&f) * (lame.lambda * (j - 1.0))
     }
+    /// With F = diag(σ₁, σ₂, λ₃), R = I: ∂Ψ/∂λ₃ = 2μ(λ₃ − 1) + λ(J₂λ₃ − 1)J₂ = 0, J₂ = σ₁σ₂, so
+    /// λ₃ = (2μ + λJ₂) / (2μ + λJ₂²).
+    fn plane_stress_stretch(&self, [s1, s2]: [f64; 2], lame: Lame) -> f64 {
+        let j = s1 * s2;
+        (2.0 * lame.mu + lame.lambda * j) / (2.0 * lame.mu + lame.lambda * j * j)
+    }
 }

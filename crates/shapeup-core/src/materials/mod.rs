@@ -19,12 +19,18 @@
 //! every iteration is an L-BFGS step with a backtracking (Armijo) line search.
 
 mod corotated;
+mod membrane;
 mod neo_hookean;
+mod pressure;
 mod stvk;
+mod wind;
 
 pub use corotated::Corotated;
+pub use membrane::{TriMembrane, plane_stress_gradient, plane_stress_modulus, plane_stress_stretch_numeric};
 pub use neo_hookean::NeoHookean;
+pub use pressure::{PRESSURE_GROUP, PressureTerm, pressure_group};
 pub use stvk::StVenantKirchhoff;
+pub use wind::{Wind, add_wind_forces};
 
 use crate::constraints::kit::gradient::TetGradient;
 use crate::constraints::{Constraint, ConstraintGroup, RowSink};
@@ -95,6 +101,13 @@ pub trait Hyperelastic: Sync + Debug {
     fn energy_density(&self, f: DMat3, lame: Lame) -> f64;
     /// The first Piola–Kirchhoff stress P(F) = ∂Ψ/∂F (Pa); 0 at F = I.
     fn first_piola(&self, f: DMat3, lame: Lame) -> DMat3;
+    /// Plane stress (a membrane, [`TriMembrane`]): the stretch λ₃ ≥ 0 of the thickness that
+    /// minimizes Ψ(diag(σ₁, σ₂, λ₃)) for in-plane singular values `sigma` = (σ₁, σ₂) ≥ 0; 1 at
+    /// rest. Default: [`plane_stress_stretch_numeric`]; a model overrides it with its closed
+    /// form (the tests check each against the numerical one).
+    fn plane_stress_stretch(&self, sigma: [f64; 2], lame: Lame) -> f64 {
+        plane_stress_stretch_numeric(self, sigma, lame)
+    }
 }
 
 /// A material setting out of range.
@@ -106,17 +119,34 @@ pub enum MaterialError {
     /// ν outside (−1, ½).
     #[error("poisson_ratio must be greater than -1 and less than 0.5, found {0}")]
     PoissonRatio(f64),
+    /// Fixed corotated with ν < 0: λ < 0 makes λ/2 (J − 1)² unbounded below as J grows, so
+    /// a stretched part has no equilibrium.
+    #[error(
+        "the corotated model needs poisson_ratio ≥ 0 (with {0} its λ is negative and a stretched part has no equilibrium): take neo_hookean or stvk for an auxetic material"
+    )]
+    CorotatedAuxetic(f64),
     /// ρ not a finite number > 0.
     #[error("density must be a finite number > 0 (kg/m³), found {0}")]
     Density(f64),
     /// An unknown model name.
     #[error("unknown material model \"{0}\" (one of: {names})", names = model_names().join(", "))]
     UnknownModel(String),
-    /// No tetrahedron to carry the material.
+    /// No tetrahedron to carry the material, and no thickness to make the surface a shell.
     #[error(
-        "a material needs tetrahedra, and the mesh has none (or only flat ones): give a tetrahedral mesh (.msh, .node/.ele), generate = {{ kind = \"tet_box\", … }} or [mesh] tetrahedralize = true (shells with a thickness are not supported yet)"
+        "a solid material needs tetrahedra, and the mesh has none (or only flat ones): give a tetrahedral mesh (.msh, .node/.ele), generate = {{ kind = \"tet_box\", … }} or [mesh] tetrahedralize = true; or, for a surface (cloth, a balloon, a membrane), give [material] thickness in metres"
     )]
     NoTetrahedra,
+    /// h not a finite number > 0.
+    #[error("thickness must be a finite number > 0 (metres), found {0}")]
+    Thickness(f64),
+    /// A thickness on a tetrahedral mesh.
+    #[error(
+        "thickness is for a surface (a shell of that thickness), and the mesh has tetrahedra: leave thickness out for a solid"
+    )]
+    ThicknessOnSolid,
+    /// A shell without a triangle of positive area.
+    #[error("a shell needs triangles, and the surface has none of positive area")]
+    NoTriangles,
 }
 
 /// A material: a model with its Young's modulus, Poisson's ratio and density.
@@ -128,6 +158,8 @@ pub struct Material {
     pub lame: Lame,
     /// Mass density ρ, kg/m³.
     pub density: f64,
+    /// A shell's thickness h in metres (a surface mesh: [`TriMembrane`]); `None` for a solid.
+    pub thickness: Option<f64>,
 }
 
 impl Material {
@@ -138,10 +170,24 @@ impl Material {
     pub fn new(model: &str, youngs_modulus: f64, poisson_ratio: f64, density: f64) -> Result<Material, MaterialError> {
         let model = self::model(model).ok_or_else(|| MaterialError::UnknownModel(model.into()))?;
         let lame = Lame::from_youngs(youngs_modulus, poisson_ratio)?;
+        if model.info().name == "corotated" && lame.lambda < 0.0 {
+            return Err(MaterialError::CorotatedAuxetic(poisson_ratio));
+        }
         if !(density.is_finite() && density > 0.0) {
             return Err(MaterialError::Density(density));
         }
-        Ok(Material { model, lame, density })
+        Ok(Material { model, lame, density, thickness: None })
+    }
+
+    /// The material of a shell of `thickness` metres.
+    ///
+    /// # Errors
+    /// [`MaterialError::Thickness`] unless h is a finite number > 0.
+    pub fn with_thickness(self, thickness: f64) -> Result<Material, MaterialError> {
+        if !(thickness.is_finite() && thickness > 0.0) {
+            return Err(MaterialError::Thickness(thickness));
+        }
+        Ok(Material { thickness: Some(thickness), ..self })
     }
 }
 
@@ -230,28 +276,47 @@ impl Constraint for TetMaterial {
     }
 }
 
-/// The material's group on every tetrahedron of `rest` (working frame in metres), with
-/// multiplier `multiplier` (1 in static mode; 1/k in dynamic mode, where the solver divides
-/// every term by the stiffness k), and the indices of the flat tetrahedra that carry none
-/// ([`TetMaterial::new`]), for the caller to say.
+/// The material's group on `rest` (working frame in metres), with multiplier `multiplier` (1
+/// in static mode; 1/k in dynamic mode, where the solver divides every term by the stiffness
+/// k): a solid's on every tetrahedron ([`TetMaterial`]), a shell's (a `thickness`) on every
+/// triangle of a surface ([`TriMembrane`]). Also the indices of the flat elements (tetrahedra,
+/// or triangles for a shell) that carry none, for the caller to say.
 ///
 /// # Errors
-/// [`MaterialError::NoTetrahedra`] when `rest` has no tetrahedron of positive volume.
+/// [`MaterialError::NoTetrahedra`] for a solid without a tetrahedron of positive volume,
+/// [`MaterialError::ThicknessOnSolid`] for a thickness on a tetrahedral mesh,
+/// [`MaterialError::NoTriangles`] for a shell without a triangle of positive area.
 pub fn material_group(
     rest: &RestGeometry,
     material: &Material,
     multiplier: f64,
 ) -> Result<(ConstraintGroup, Vec<usize>), MaterialError> {
     let mut flat = Vec::new();
-    let mut terms: Vec<Box<dyn Constraint>> = Vec::with_capacity(rest.tetrahedra.len());
-    for (i, t) in rest.tetrahedra.iter().enumerate() {
-        match TetMaterial::new(*t, &rest.positions, material) {
-            Some(c) => terms.push(Box::new(c)),
-            None => flat.push(i),
+    let mut terms: Vec<Box<dyn Constraint>> = Vec::new();
+    match material.thickness {
+        Some(_) if !rest.tetrahedra.is_empty() => return Err(MaterialError::ThicknessOnSolid),
+        Some(h) => {
+            for (i, t) in rest.triangles.iter().enumerate() {
+                match TriMembrane::new(*t, &rest.positions, material, h) {
+                    Some(c) => terms.push(Box::new(c)),
+                    None => flat.push(i),
+                }
+            }
+            if terms.is_empty() {
+                return Err(MaterialError::NoTriangles);
+            }
         }
-    }
-    if terms.is_empty() {
-        return Err(MaterialError::NoTetrahedra);
+        None => {
+            for (i, t) in rest.tetrahedra.iter().enumerate() {
+                match TetMaterial::new(*t, &rest.positions, material) {
+                    Some(c) => terms.push(Box::new(c)),
+                    None => flat.push(i),
+                }
+            }
+            if terms.is_empty() {
+                return Err(MaterialError::NoTetrahedra);
+            }
+        }
     }
     Ok((ConstraintGroup::new(MATERIAL_GROUP, multiplier, terms), flat))
 }

@@ -45,4 +45,10 @@ impl Hyperelastic for NeoHookean {
         let lambda = reparametrized(lame);
         f * lame.mu + cofactor(&f) * (lambda * (f.determinant() - 1.0) - lame.mu)
     }
+    /// With F = diag(σ₁, σ₂, λ₃): ∂Ψ/∂λ₃ = μλ₃ + (λ'(J₂λ₃ − 1) − μ)J₂ = 0, J₂ = σ₁σ₂, so
+    /// λ₃ = (λ' + μ)J₂ / (μ + λ'J₂²).
+    fn plane_stress_stretch(&self, [s1, s2]: [f64; 2], lame: Lame) -> f64 {
+        let (lambda, j) = (reparametrized(lame), s1 * s2);
+        (lambda + lame.mu) * j / (lame.mu + lambda * j * j)
+    }
 }

@@ -37,4 +37,11 @@ impl Hyperelastic for StVenantKirchhoff {
         let trace = e.x_axis.x + e.y_axis.y + e.z_axis.z;
         f * (e * (2.0 * lame.mu) + DMat3::IDENTITY * (lame.lambda * trace))
     }
+    /// ∂Ψ/∂λ₃ = λ₃ [μ(λ₃² − 1) + (λ/2)(σ₁² + σ₂² + λ₃² − 3)] = 0 gives
+    /// λ₃² = (2μ + λ(3 − σ₁² − σ₂²)) / (2μ + λ), or λ₃ = 0 when that is negative (stretched
+    /// far enough, the model prefers no thickness).
+    fn plane_stress_stretch(&self, [s1, s2]: [f64; 2], lame: Lame) -> f64 {
+        let square = (2.0 * lame.mu + lame.lambda * (3.0 - s1 * s1 - s2 * s2)) / (2.0 * lame.mu + lame.lambda);
+        square.max(0.0).sqrt()
+    }
 }

@@ -406,3 +406,102 @@ fn an_inverted_block_recovers() {
         assert_eq!(inverted, 0, "{name}: {inverted} tetrahedra still inverted");
     }
 }
+
+fn enclosed_volume(q: &[DVec3], triangles: &[[u32; 3]]) -> f64 {
+    triangles.iter().map(|t| t.map(|v| q[v as usize])).map(|[a, b, c]| a.dot(b.cross(c)) / 6.0).sum()
+}
+
+/// A spherical membrane (rubber, 1 mm thick, radius 0.1 m) inflated by a pressure p: its
+/// radius follows the model's pressure–stretch law within 1 %. Under a uniform stretch s the
+/// membrane stores A₀ h Ψ_m(s) and encloses s³ V₀, so equilibrium (dE = p dV) is
+/// p = A₀ h Ψ_m'(s) / (3 V₀ s²), with Ψ_m'(s) = 2 P₁₁(diag(s, s, λ₃(s))) by the envelope
+/// theorem; for a true sphere A₀/(3V₀) = 1/R₀ (the thin-walled balloon's p = 2 h σ_θ/(s² R₀)
+/// in nominal stress). Neo-Hookean's law is written out here from its formula: P₁₁ = μs +
+/// (λ'(J − 1) − μ) s λ₃ with J = s²λ₃.
+#[test]
+fn an_inflated_spherical_membrane_follows_each_models_pressure_stretch_law() {
+    let sphere = crate::generate::icosphere(3, 0.1);
+    let (positions, triangles) = (sphere.positions.clone(), sphere.triangles.clone());
+    let rest = RestGeometry::new(positions.clone(), triangles.clone(), vec![]);
+    let v0 = enclosed_volume(&positions, &triangles);
+    let a0: f64 = rest.triangle_areas.iter().sum();
+    let h = 0.001;
+    for model in MODELS {
+        let name = model.info().name;
+        let material = Material::new(name, RUBBER.0, 0.45, 1100.0).unwrap().with_thickness(h).unwrap();
+        let l = material.lame;
+        let slope = |s: f64| {
+            let l3 = model.plane_stress_stretch([s, s], l);
+            let p11 = if name == "neo_hookean" {
+                let lambda = l.lambda + l.mu;
+                l.mu * s + (lambda * (s * s * l3 - 1.0) - l.mu) * s * l3
+            } else {
+                model.first_piola(DMat3::from_diagonal(DVec3::new(s, s, l3)), l).x_axis.x
+            };
+            2.0 * p11
+        };
+        let law = |s: f64| a0 * h * slope(s) / (3.0 * v0 * s * s);
+        for stretch in [1.05, 1.15, 1.25] {
+            let pressure = law(stretch);
+            let mut system = System::new(positions.len(), SolverParams::default());
+            system.add_group(material_group(&rest, &material, 1.0).unwrap().0).unwrap();
+            system.add_group(pressure_group(&rest, pressure, 1.0).unwrap()).unwrap();
+            let mut q = positions.clone();
+            let report = system.solve(&mut q, 3000, 1e-14).unwrap();
+            assert!(report.energies.windows(2).all(|e| e[1] <= e[0] + 1e-12 * e[0].abs()), "{name}: E rose");
+            assert!(q.iter().all(|p| p.is_finite()), "{name}: NaN");
+            let s = (enclosed_volume(&q, &triangles) / v0).cbrt();
+            let error = (law(s) / pressure - 1.0).abs();
+            assert!(
+                error < 0.01,
+                "{name}: p = {pressure:.1} Pa inflates to s = {s:.5} (aimed at {stretch}), where the law gives {:.1} Pa ({:.2} % off)",
+                law(s),
+                100.0 * error
+            );
+            assert!((s - 1.0).abs() > 0.5 * (stretch - 1.0), "{name}: barely inflated ({s})");
+        }
+    }
+}
+
+/// A horizontal sheet (a membrane, 0.5 mm thick, ρ = 1500 kg/m³) falling in still air reaches
+/// the terminal velocity where drag balances its weight, v = √(2 m g / (ρ_air C_D A)), and
+/// stays flat; in a wind along x it also drifts with it. Through the scene, as `simulate` runs.
+#[test]
+fn a_falling_sheet_reaches_its_terminal_velocity_in_still_air() {
+    use crate::scene::{Scene, SceneFormat};
+    let text = "[mesh]\ngenerate = { kind = \"cloth\", vertices = [6, 6], size = [0.5, 0.5] }\n\
+                [solver]\nmode = \"dynamic\"\ntime_step = 0.01\n\
+                [material]\nmodel = \"stvk\"\nyoungs_modulus = 1e6\npoisson_ratio = 0.3\ndensity = 1500.0\nthickness = 0.0005\n\
+                [loads]\nwind = { velocity = [0.0, 0.0, 0.0], drag = 1.2, air_density = 1.225 }\n";
+    let scene = Scene::parse(text, SceneFormat::Toml, std::path::Path::new("sheet.toml"), Default::default()).unwrap();
+    let mut loaded = scene.load().unwrap();
+    let mut simulation = loaded.start_simulation().unwrap();
+    for _ in 0..300 {
+        simulation.step().unwrap();
+    }
+    let (mass_per_area, g): (f64, f64) = (1500.0 * 0.0005, 9.81);
+    let terminal = (2.0 * mass_per_area * g / (1.225 * 1.2)).sqrt();
+    let v = simulation.velocities();
+    let mean = v.iter().map(|v| v.y).sum::<f64>() / v.len() as f64;
+    assert!((-mean / terminal - 1.0).abs() < 1e-3, "falls at {mean} m/s, terminal {terminal}");
+    let y = simulation.positions().iter().map(|p| p.y);
+    let (lo, hi) = y.clone().fold((f64::MAX, f64::MIN), |(a, b), y| (a.min(y), b.max(y)));
+    assert!(hi - lo < 1e-6, "the sheet stays flat: {lo}..{hi}");
+    // A side wind: the sheet drifts along it, never faster than the air.
+    let windy = text.replace("velocity = [0.0, 0.0, 0.0]", "velocity = [5.0, 0.0, 0.0]");
+    let scene =
+        Scene::parse(&windy, SceneFormat::Toml, std::path::Path::new("sheet.toml"), Default::default()).unwrap();
+    let mut simulation = scene.load().unwrap().start_simulation().unwrap();
+    for _ in 0..100 {
+        simulation.step().unwrap();
+    }
+    let drift = simulation.velocities().iter().map(|v| v.x).sum::<f64>() / v.len() as f64;
+    assert!(drift > 0.0 && drift < 5.0, "drifts at {drift} m/s in a 5 m/s wind");
+    // Static: refused, naming [loads].
+    let mut loaded = Scene::parse(text, SceneFormat::Toml, std::path::Path::new("sheet.toml"), Default::default())
+        .unwrap()
+        .load()
+        .unwrap();
+    let e = loaded.solve_static(None).unwrap_err().to_string();
+    assert!(e.contains("[loads]") && e.contains("simulate"), "{e}");
+}

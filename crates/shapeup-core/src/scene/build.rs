@@ -215,12 +215,54 @@ impl Scene {
             for group in groups {
                 system.add_group(group).map_err(|e| invalid("[material]", e.to_string()))?;
             }
-            warnings.add_many(
-                "flat_tetrahedra_without_material",
-                "flat tetrahedra (rest volume at most 1e-12 of their longest edge cubed) carry no material",
-                flat.len(),
-                || flat.first().map(|t| format!("tetrahedron {t}")).unwrap_or_default(),
-            );
+            if material.thickness.is_some() {
+                warnings.add_many(
+                    "degenerate_triangles_without_material",
+                    "degenerate triangles (rest area at most 1e-12 of their longest edge squared) carry no material",
+                    flat.len(),
+                    || flat.first().map(|t| format!("triangle {t}")).unwrap_or_default(),
+                );
+            } else {
+                warnings.add_many(
+                    "flat_tetrahedra_without_material",
+                    "flat tetrahedra (rest volume at most 1e-12 of their longest edge cubed) carry no material",
+                    flat.len(),
+                    || flat.first().map(|t| format!("tetrahedron {t}")).unwrap_or_default(),
+                );
+            }
+        }
+        if let Some(pressure) = self.loads.pressure {
+            if !pressure.is_finite() {
+                return Err(invalid(
+                    "[loads]",
+                    format!("pressure must be a finite number (pascals), found {pressure}"),
+                ));
+            }
+            if !self.colliders.is_empty() || self.contact.self_collision {
+                return Err(invalid(
+                    "[loads]",
+                    "colliders and self-collision do not work with a pressure yet: contact iterates plain local-global \
+                     steps, which a pressure's energy needs a line search for; leave out the pressure or the contact"
+                        .into(),
+                ));
+            }
+            let group =
+                crate::materials::pressure_group(&rest, frame.pressure_to_working(pressure), 1.0).ok_or_else(|| {
+                    invalid("[loads]", "a pressure acts on a surface's triangles, and the mesh has none".into())
+                })?;
+            system.add_group(group).map_err(|e| invalid("[loads]", e.to_string()))?;
+        }
+        if let Some(wind) = &self.loads.wind {
+            wind.wind().map_err(|message| invalid("[loads]", message))?;
+            if material.is_none() {
+                return Err(invalid(
+                    "[loads]",
+                    "wind needs a [material]: its force, ½ ρ C A u², is in newtons on masses in kg".into(),
+                ));
+            }
+            if rest.triangles.is_empty() {
+                return Err(invalid("[loads]", "wind acts on a surface's triangles, and the mesh has none".into()));
+            }
         }
         // Vertices that only zero-area triangles use follow their edge (math reference, "Edge cases").
         let (group, attached, stranded) = attach_degenerate_vertices(&rest, system.groups().map(|(_, g)| g));
@@ -280,7 +322,7 @@ impl Scene {
     /// frame when `[mesh] normalize` (the default), else the input's.
     pub fn working_frame(&self, positions: &[DVec3], material: bool) -> WorkingFrame {
         if material {
-            WorkingFrame { center: DVec3::ZERO, scale: self.mesh.units.unwrap_or_default().metres() }
+            WorkingFrame::metres(self.mesh.units.unwrap_or_default().metres())
         } else if self.mesh.normalize {
             WorkingFrame::fit(positions)
         } else {
@@ -303,7 +345,7 @@ impl Scene {
         let mut groups = vec![group];
         let gravity = DVec3::from_array(self.solver.gravity);
         if gravity != DVec3::ZERO {
-            let weights: Vec<Box<dyn crate::constraints::Constraint>> = material_masses(rest, material.density)
+            let weights: Vec<Box<dyn crate::constraints::Constraint>> = material_masses(rest, material)
                 .iter()
                 .enumerate()
                 .filter(|(_, m)| **m > 0.0)
@@ -573,11 +615,21 @@ fn fill_with_tetrahedra(_mesh: &Mesh) -> Result<Mesh, FillError> {
     Err(FillError::NoTetGen)
 }
 
-/// A material's lumped masses (kg, `rest` in metres): m_i = ρ Σ_{T ∋ i} |V_T| / 4, exactly
-/// (no floor: a part in millimetres has vertex masses of 1e-14 kg, which the 1e-9 floor of
-/// [`lumped_masses`] would multiply), 0 for a vertex in no tetrahedron.
-pub fn material_masses(rest: &RestGeometry, density: f64) -> Vec<f64> {
+/// A material's lumped masses (kg, `rest` in metres): for a solid m_i = ρ Σ_{T ∋ i} |V_T| / 4,
+/// for a shell of thickness h m_i = ρ h Σ_{t ∋ i} A_t / 3, exactly (no floor: a part in
+/// millimetres has vertex masses of 1e-14 kg, which the 1e-9 floor of [`lumped_masses`] would
+/// multiply), 0 for a vertex in no element.
+pub fn material_masses(rest: &RestGeometry, material: &crate::materials::Material) -> Vec<f64> {
+    let density = material.density;
     let mut masses = vec![0.0; rest.num_vertices()];
+    if let Some(h) = material.thickness {
+        for (t, &area) in rest.triangles.iter().zip(&rest.triangle_areas) {
+            for &v in t {
+                masses[v as usize] += density * h * area / 3.0;
+            }
+        }
+        return masses;
+    }
     for t in &rest.tetrahedra {
         let p = t.map(|v| rest.positions[v as usize]);
         let share = density * crate::geometry::tet_volume(p[0], p[1], p[2], p[3]).abs() / 4.0;
@@ -690,6 +742,16 @@ impl LoadedScene {
         iterations: Option<usize>,
         after_iteration: impl FnMut(usize, f64) -> std::ops::ControlFlow<()>,
     ) -> Result<(Vec<DVec3>, SolveReport), SceneError> {
+        if self.scene.loads.wind.is_some() {
+            return Err(SceneError::Invalid {
+                path: self.scene.file.clone(),
+                entry: "[loads]".into(),
+                message:
+                    "wind acts in a simulation (its force depends on the faces' velocities): run `shapeup simulate`, \
+                          or give a static load as a pressure or a force"
+                        .into(),
+            });
+        }
         let iterations = self.static_iterations(iterations);
         self.warn_of_collider_motion();
         self.warn_of_handle_spin();
@@ -902,7 +964,7 @@ impl LoadedScene {
     /// With a material, its masses in kg ([`material_masses`]).
     pub fn masses(&self) -> Vec<f64> {
         match self.scene.material() {
-            Ok(Some(material)) => material_masses(&self.rest, material.density),
+            Ok(Some(material)) => material_masses(&self.rest, &material),
             _ => lumped_masses(&self.rest, self.scene.solver.density),
         }
     }
@@ -932,24 +994,33 @@ impl LoadedScene {
             self.scene.solver.checked_dynamics_params(self.gravity_scale()).map_err(|e| invalid(e.to_string()))?;
         let mut system =
             std::mem::replace(&mut self.system, System::new(self.mesh.num_vertices(), SolverParams::default()));
-        // A material's groups as time stepping takes them: gravity comes from the inertial
-        // target, not a load, and every term is divided by the stiffness k (the inertia is
-        // m / (k h²)), so the material's energy is multiplied by 1/k to stay its own.
-        let material_groups: Vec<(GroupId, &'static str)> = system
+        // Physical groups as time stepping takes them: gravity comes from the inertial target,
+        // not a load, and every term is divided by the stiffness k (the inertia is m / (k h²)),
+        // so a material's energy and a pressure are multiplied by 1/k to stay their own (a
+        // force is a load, which the simulation scales by 1/k itself: `set_load_scale`).
+        let physical: Vec<(GroupId, bool, f64)> = system
             .groups()
-            .filter(|(_, g)| g.kind == crate::materials::MATERIAL_GROUP || g.name == SELF_WEIGHT_GROUP)
-            .map(|(id, g)| (id, if g.name == SELF_WEIGHT_GROUP { SELF_WEIGHT_GROUP } else { "material" }))
+            .filter(|(_, g)| {
+                g.kind == crate::materials::MATERIAL_GROUP
+                    || g.kind == crate::materials::PRESSURE_GROUP
+                    || g.name == SELF_WEIGHT_GROUP
+            })
+            .map(|(id, g)| (id, g.name == SELF_WEIGHT_GROUP, g.multiplier))
             .collect();
-        for (id, what) in material_groups {
-            if what == SELF_WEIGHT_GROUP {
+        for (id, self_weight, multiplier) in physical {
+            if self_weight {
                 system.remove_group(id);
             } else {
-                system.set_multiplier(id, 1.0 / params.stiffness).map_err(|e| invalid(e.to_string()))?;
+                system.set_multiplier(id, multiplier / params.stiffness).map_err(|e| invalid(e.to_string()))?;
             }
         }
         let mut simulation = Simulation::new(system, self.masses(), self.start_positions(), params)
             .map_err(|e| invalid(e.to_string()))?;
         simulation.set_contact(self.contact.clone()).map_err(|e| invalid(e.to_string()))?;
+        if let Some(wind) = &self.scene.loads.wind {
+            let wind = wind.wind().map_err(invalid)?;
+            simulation.set_wind(Some((wind, self.rest.triangles.clone()))).map_err(|e| invalid(e.to_string()))?;
+        }
         Ok(simulation)
     }
 

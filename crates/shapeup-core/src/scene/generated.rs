@@ -17,6 +17,14 @@ pub enum GeneratedMesh {
         /// Extent along x and z.
         size: [f64; 2],
     },
+    /// A sphere of triangles ([`crate::generate::icosphere`]): `subdivisions` (0: the
+    /// icosahedron), `radius`.
+    Sphere {
+        /// Times each triangle of the icosahedron is split into four.
+        subdivisions: usize,
+        /// Its radius.
+        radius: f64,
+    },
     /// A box of tetrahedra ([`crate::generate::tet_box`]): `cells = [nx, ny, nz]`,
     /// `size = [x, y, z]`.
     TetBox {
@@ -74,6 +82,9 @@ impl GeneratedMesh {
         let (counts, minimum, sizes): (&[usize], usize, &[f64]) = match self {
             GeneratedMesh::Cloth { vertices, size } => (vertices, 2, size),
             GeneratedMesh::TetBox { cells, size } => (cells, 1, size),
+            GeneratedMesh::Sphere { subdivisions, radius } => {
+                (std::slice::from_ref(subdivisions), 0, std::slice::from_ref(radius))
+            }
         };
         if let Some(n) = counts.iter().find(|&&n| n < minimum) {
             return Err(GenerateError::Count { minimum, found: *n });
@@ -91,6 +102,9 @@ impl GeneratedMesh {
             }
             GeneratedMesh::TetBox { .. } => {
                 ("tet_box", "cells", format!("{} tetrahedra", count(self.element_counts()[2])))
+            }
+            GeneratedMesh::Sphere { .. } => {
+                ("sphere", "subdivisions", format!("{} triangles", count(self.element_counts()[1])))
             }
         };
         let shown = |c: &[usize]| c.iter().map(|&n| grouped(n as u64)).collect::<Vec<_>>().join(" × ");
@@ -118,6 +132,10 @@ impl GeneratedMesh {
                 let [x, y, z] = cells.map(|n| n.max(1) as f64);
                 [(x + 1.0) * (y + 1.0) * (z + 1.0), 4.0 * (x * y + y * z + z * x), 6.0 * x * y * z]
             }
+            GeneratedMesh::Sphere { subdivisions, .. } => {
+                let faces = 20.0 * 4f64.powi(subdivisions.min(1000) as i32);
+                [faces / 2.0 + 2.0, faces, 0.0]
+            }
         }
     }
 
@@ -138,6 +156,11 @@ impl GeneratedMesh {
                     GeneratedMesh::Cloth { vertices: vertices.map(|n| f(n, 2)), size }
                 }
                 GeneratedMesh::TetBox { cells, size } => GeneratedMesh::TetBox { cells: cells.map(|n| f(n, 1)), size },
+                // Each subdivision quadruples the mesh: one fewer per halving of the scale.
+                GeneratedMesh::Sphere { subdivisions, radius } => GeneratedMesh::Sphere {
+                    subdivisions: subdivisions.saturating_sub((-s.max(1e-300).log2()).ceil() as usize),
+                    radius,
+                },
             }
         };
         let fits = |s: f64| scaled(s).estimated_bytes() <= MAX_GENERATED_BYTES as f64;
@@ -157,6 +180,7 @@ impl GeneratedMesh {
         match *self {
             GeneratedMesh::Cloth { vertices: [nx, nz], size: [w, d] } => crate::generate::cloth_grid(nx, nz, w, d),
             GeneratedMesh::TetBox { cells, size } => crate::generate::tet_box(cells, DVec3::from_array(size)),
+            GeneratedMesh::Sphere { subdivisions, radius } => crate::generate::icosphere(subdivisions, radius),
         }
     }
 }
@@ -165,6 +189,7 @@ fn counts_of(generated: &GeneratedMesh) -> &[usize] {
     match generated {
         GeneratedMesh::Cloth { vertices, .. } => vertices,
         GeneratedMesh::TetBox { cells, .. } => cells,
+        GeneratedMesh::Sphere { subdivisions, .. } => std::slice::from_ref(subdivisions),
     }
 }
 

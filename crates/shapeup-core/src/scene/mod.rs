@@ -25,8 +25,8 @@ pub use generated::{GeneratedMesh, MAX_GENERATED_BYTES};
 pub use parse::{SceneFormat, from_json_entry};
 pub use run::{RunError, SceneSimulation, StepError, StepTotals, relative_changes};
 pub use settings::{
-    MATERIAL_ITERATIONS, MATERIAL_TOLERANCE, MaterialSettings, MeshSettings, Mode, OutputSettings, SolverSettings,
-    Units,
+    LoadSettings, MATERIAL_ITERATIONS, MATERIAL_TOLERANCE, MaterialSettings, MeshSettings, Mode, OutputSettings,
+    SolverSettings, Units, WindSettings,
 };
 pub use spec::{GroupSpec, Rotate, SelectionSpec, SpecError, Spin, Targets, resolve_selection, unique_group_name};
 
@@ -49,6 +49,8 @@ pub struct Scene {
     pub output: OutputSettings,
     /// The `[material]` table, when given.
     pub material: Option<MaterialSettings>,
+    /// The `[loads]` table (empty when not given).
+    pub loads: LoadSettings,
     /// Directory that relative paths start from.
     pub base_dir: PathBuf,
     /// The scene file, for messages.

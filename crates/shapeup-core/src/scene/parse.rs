@@ -28,6 +28,12 @@ struct RawScene {
     output: OutputSettings,
     #[serde(default, deserialize_with = "material_table")]
     material: Option<MaterialSettings>,
+    #[serde(default, deserialize_with = "loads_table")]
+    loads: super::LoadSettings,
+}
+
+fn loads_table<'de, D: serde::Deserializer<'de>>(deserializer: D) -> Result<super::LoadSettings, D::Error> {
+    deserializer.deserialize_any(OneTable("loads", std::marker::PhantomData))
 }
 
 fn material_table<'de, D: serde::Deserializer<'de>>(deserializer: D) -> Result<Option<MaterialSettings>, D::Error> {
@@ -211,6 +217,7 @@ impl Scene {
             contact: raw.contact,
             output: raw.output,
             material: raw.material,
+            loads: raw.loads,
             base_dir,
             file: path.into(),
         };

@@ -181,6 +181,79 @@ pub struct MaterialSettings {
     /// Density ρ, kg/m³.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub density: Option<f64>,
+    /// A shell's thickness h, metres (whatever `[mesh] units`): the material on a surface's
+    /// triangles as a membrane ([`crate::materials::TriMembrane`]); absent for a solid.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub thickness: Option<f64>,
+}
+
+/// The `[loads]` table: loads on the surface beside gravity (`[solver] gravity`) and the
+/// constraint groups' forces.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LoadSettings {
+    /// A gas pressure p inside the surface ([`crate::materials::PressureTerm`]): pascals with a
+    /// `[material]`, else a force per area in the scene's units (forces scaling like lengths);
+    /// positive inflates. On every triangle of the surface (a tetrahedral mesh's boundary), which
+    /// must be closed or held along its boundary.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pressure: Option<f64>,
+    /// Wind on the surface's triangles, in a simulation ([`crate::materials::Wind`]); needs a
+    /// `[material]` (its force is in newtons).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub wind: Option<WindSettings>,
+}
+
+/// `[loads] wind = { velocity = [x, y, z], drag = 1.0, lift = 0.0, air_density = 1.225 }`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WindSettings {
+    /// The air's velocity, m/s.
+    pub velocity: [f64; 3],
+    /// C_D ≥ 0 (default 1).
+    #[serde(default = "one")]
+    pub drag: f64,
+    /// C_L (default 0).
+    #[serde(default)]
+    pub lift: f64,
+    /// ρ_air > 0, kg/m³ (default 1.225, sea level at 15 °C).
+    #[serde(default = "sea_level_air")]
+    pub air_density: f64,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+fn sea_level_air() -> f64 {
+    1.225
+}
+
+impl WindSettings {
+    /// The wind, checked.
+    ///
+    /// # Errors
+    /// One line naming the bad key.
+    pub fn wind(&self) -> Result<crate::materials::Wind, String> {
+        if let Some(x) = self.velocity.iter().find(|x| !x.is_finite()) {
+            return Err(format!("wind velocity must be three finite numbers (m/s), found {x}"));
+        }
+        if !(self.drag.is_finite() && self.drag >= 0.0) {
+            return Err(format!("wind drag must be a finite number ≥ 0, found {}", self.drag));
+        }
+        if !self.lift.is_finite() {
+            return Err(format!("wind lift must be a finite number, found {}", self.lift));
+        }
+        if !(self.air_density.is_finite() && self.air_density > 0.0) {
+            return Err(format!("wind air_density must be a finite number > 0 (kg/m³), found {}", self.air_density));
+        }
+        Ok(crate::materials::Wind {
+            velocity: glam::DVec3::from_array(self.velocity),
+            drag: self.drag,
+            lift: self.lift,
+            air_density: self.air_density,
+        })
+    }
 }
 
 /// Iterations a static solve or a time step with a material runs at most when `[solver]
@@ -197,8 +270,12 @@ impl MaterialSettings {
     /// # Errors
     /// One line naming the first bad key.
     pub fn material(&self) -> Result<Option<crate::materials::Material>, String> {
-        let keys =
-            [("youngs_modulus", self.youngs_modulus), ("poisson_ratio", self.poisson_ratio), ("density", self.density)];
+        let keys = [
+            ("youngs_modulus", self.youngs_modulus),
+            ("poisson_ratio", self.poisson_ratio),
+            ("density", self.density),
+            ("thickness", self.thickness),
+        ];
         if self.model == "projective" {
             if let Some((key, _)) = keys.iter().find(|(_, v)| v.is_some()) {
                 return Err(format!(
@@ -209,13 +286,17 @@ impl MaterialSettings {
             return Ok(None);
         }
         let mut values = [0.0; 3];
-        for (value, (key, given)) in values.iter_mut().zip(keys) {
+        for (value, (key, given)) in values.iter_mut().zip(&keys[..3]) {
             *value = given.ok_or_else(|| {
                 format!("missing {key} (a material needs youngs_modulus in Pa, poisson_ratio and density in kg/m³)")
             })?;
         }
         let [e, nu, rho] = values;
-        crate::materials::Material::new(&self.model, e, nu, rho).map(Some).map_err(|e| e.to_string())
+        let material = crate::materials::Material::new(&self.model, e, nu, rho).map_err(|e| e.to_string())?;
+        match self.thickness {
+            Some(h) => material.with_thickness(h).map(Some).map_err(|e| e.to_string()),
+            None => Ok(Some(material)),
+        }
     }
 }
 

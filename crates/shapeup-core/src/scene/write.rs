@@ -76,13 +76,30 @@ impl Scene {
         if let Some(m) = &self.material {
             out.push_str("\n[material]\n");
             line(&mut out, "model", Value::String(m.model.clone()));
-            for (key, value) in
-                [("youngs_modulus", m.youngs_modulus), ("poisson_ratio", m.poisson_ratio), ("density", m.density)]
-            {
+            for (key, value) in [
+                ("youngs_modulus", m.youngs_modulus),
+                ("poisson_ratio", m.poisson_ratio),
+                ("density", m.density),
+                ("thickness", m.thickness),
+            ] {
                 if let Some(v) = value {
                     line(&mut out, key, Value::Float(v));
                 }
             }
+        }
+        if self.loads != Default::default() {
+            out.push_str("\n[loads]\n");
+        }
+        if let Some(p) = self.loads.pressure {
+            line(&mut out, "pressure", Value::Float(p));
+        }
+        if let Some(w) = &self.loads.wind {
+            let mut table = toml::map::Map::new();
+            table.insert("velocity".into(), Value::Array(w.velocity.iter().map(|&x| Value::Float(x)).collect()));
+            for (key, v) in [("drag", w.drag), ("lift", w.lift), ("air_density", w.air_density)] {
+                table.insert(key.into(), Value::Float(v));
+            }
+            line(&mut out, "wind", Value::Table(table));
         }
 
         for group in &self.groups {
@@ -283,6 +300,7 @@ mod tests {
             contact: crate::contact::ContactSettings { self_collision: true, thickness: Some(0.01), friction: 0.2 },
             output: super::super::OutputSettings { path: Some("out/result.obj".into()), report: None },
             material: None,
+            loads: Default::default(),
             base_dir: PathBuf::from("dir"),
             file: PathBuf::from("s.toml"),
         };
@@ -295,6 +313,7 @@ mod tests {
         for generate in [
             "{ kind = \"cloth\", vertices = [4, 5], size = [1.5, 2.0] }",
             "{ kind = \"tet_box\", cells = [2, 3, 4], size = [1.0, 0.5, 0.25] }",
+            "{ kind = \"sphere\", subdivisions = 2, radius = 0.5 }",
         ] {
             let scene = parse(&format!("[mesh]\ngenerate = {generate}\n[[constraints]]\ntype = \"edge_spring\"\n"));
             assert!(scene.mesh.generate.is_some());

@@ -2,6 +2,11 @@
 
 use super::FactorError;
 
+/// How far, in sizes of the start shape, a static solve with terms that are not projective may
+/// carry a vertex before it is [`SolveError::RanAway`]: a minimum a million sizes away is no
+/// minimum (a balloon past its limit point reaches 1e80 in a few dozen iterations).
+pub const RUNAWAY: f64 = 1e6;
+
 /// An error from the solver. Messages are one line and say what to do.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum SolveError {
@@ -49,6 +54,15 @@ pub enum SolveError {
          of them (springs or strain instead of bending)"
     )]
     TooLarge(FactorError),
+    /// A static solve with terms that are not projective (a material, a pressure) carried a
+    /// vertex [`RUNAWAY`] times the size of the start shape or more: the energy has no minimum.
+    #[error(
+        "the solve ran away (a vertex moved {factor:.1e} times the shape's size): the energy has no minimum, as for a part that nothing anchors under a load (gravity, a force, a pressure) or a pressure past the most a membrane can hold (a rubber balloon's limit point); anchor the part with a position group, or lower the load"
+    )]
+    RanAway {
+        /// The largest displacement over the start shape's bounding-box diagonal.
+        factor: f64,
+    },
     /// The solve produced NaN or infinity.
     #[error("the solve produced non-finite positions (the system is numerically singular); check the weights")]
     NonFinite,

@@ -40,7 +40,7 @@ pub use convergence::{
     ENERGY_FLOOR, GRADIENT_ROUND_OFF, ROUND_OFF_FLOOR, ROW_ROUND_OFF_FLOOR, STATIC_RESIDUAL_LIMIT, SolveReport,
     is_converged,
 };
-pub use error::SolveError;
+pub use error::{RUNAWAY, SolveError};
 pub use params::{
     Acceleration, DEFAULT_ANDERSON_WINDOW, DEFAULT_LBFGS_MEMORY, MAX_ANDERSON_WINDOW, MAX_LBFGS_MEMORY, SolverParams,
 };
@@ -576,6 +576,7 @@ impl System {
             && self.factor.is_some();
         // L-BFGS's first iteration computes it (SolveReport::start_gradient); the others do not.
         let start_gradient = if measured && !lbfgs { self.half_gradient_norm(q, &mut scratch.g) } else { 0.0 };
+        let start = (measured && energy_terms).then(|| q.to_vec());
         let result = if lbfgs {
             if !continuing {
                 self.lbfgs.reset();
@@ -596,6 +597,9 @@ impl System {
             report.unconverged = residual > STATIC_RESIDUAL_LIMIT;
         }
         self.scratch = scratch;
+        if let Some(start) = start {
+            ran_away(&start, q)?;
+        }
         result.map(|_| report)
     }
 
@@ -899,4 +903,16 @@ impl System {
     pub fn factor_sizes(&self) -> (usize, usize) {
         self.factor.as_ref().map_or((0, 0), |f| (f.nnz(), f.nnz_l()))
     }
+}
+
+/// [`SolveError::RanAway`] when a vertex of `q` is [`error::RUNAWAY`] sizes of `start` (its
+/// bounding-box diagonal, at least 1e-300) from where it started.
+fn ran_away(start: &[DVec3], q: &[DVec3]) -> Result<(), SolveError> {
+    let (lo, hi) = start.iter().fold((DVec3::MAX, DVec3::MIN), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
+    let size = if start.is_empty() { 1.0 } else { (hi - lo).length().max(1e-300) };
+    let moved = start.iter().zip(q).map(|(a, b)| (*a - *b).length()).fold(0.0, f64::max);
+    if moved.is_nan() || moved > error::RUNAWAY * size {
+        return Err(SolveError::RanAway { factor: moved / size });
+    }
+    Ok(())
 }

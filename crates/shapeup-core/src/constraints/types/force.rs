@@ -12,7 +12,8 @@
 //! ω = 1 (it multiplies nothing: there are no rows).
 //!
 //! Option `force`: the vector [x, y, z] in input units (default [0, −1, 0]), converted with
-//! `frame.vector_to_working` (multiplied by the working frame's scale).
+//! `frame.force_to_working`: multiplied by the working frame's scale, or, in a scene with a
+//! material, in newtons and unchanged.
 //!
 //! Sources: ShapeOp's external forces (Deuss et al. 2015), in the ShapeUp solver (Bouaziz et
 //! al. 2012).
@@ -31,10 +32,9 @@
 //! - Loads make E negative: E is bounded below only if the rows anchor every loaded piece (a
 //!   position group, a hard handle); a loaded piece of shape terms that nothing anchors is the
 //!   solver's singular-system error (`SolveError::Unanchored`), as for any unanchored piece.
-//! - Meant for static mode. In dynamic mode the solver adds the same right-hand side term to an
-//!   objective whose constraint terms carry the stiffness k (the inertia is m/(k h²)), so as the
-//!   solver stands a load acts there as the physical force k g f; the dynamic mode's own gravity
-//!   and per-vertex forces are the physical ones.
+//! - In dynamic mode the objective's constraint terms carry the stiffness k (the inertia is
+//!   m/(k h²)), and the simulation multiplies every load by 1/k (`System::set_load_scale`), so
+//!   a force acts there as the physical force g f. In a scene with a material it is in newtons.
 
 use crate::constraints::contract::{TypeInfo, BuildContext, Constraint, ConstraintType};
 use crate::constraints::error::ConstraintError;
@@ -50,7 +50,7 @@ const KIND: &str = "force";
 /// `force`: the force on each vertex, input units.
 const FORCE: OptionSpec = OptionSpec {
     key: "force",
-    doc: "the force on each selected vertex [x, y, z], in input units (scaled like lengths); default [0, -1, 0]",
+    doc: "the force on each selected vertex [x, y, z]: newtons with a [material], else input units (scaled like lengths); default [0, -1, 0]",
     kind: OptionKind::Vector { default: [0.0, -1.0, 0.0] },
 };
 
@@ -75,7 +75,7 @@ impl ConstraintType for ForceType {
         &INFO
     }
     fn build(&self, ctx: &BuildContext, params: &mut Params) -> Result<Vec<Box<dyn Constraint>>, ConstraintError> {
-        let force = ctx.frame.vector_to_working(params.vector(KIND, &FORCE)?);
+        let force = ctx.frame.force_to_working(params.vector(KIND, &FORCE)?);
         let rest = &ctx.rest.positions;
         let built = (0..rest.len() as u32)
             .filter(|&v| ctx.selection.contains(v))
@@ -115,7 +115,7 @@ mod tests {
     #[test]
     fn the_option_is_in_input_units_and_scales_like_a_length() {
         let rest = octahedron();
-        let frame = WorkingFrame { center: DVec3::new(5.0, 0.0, 0.0), scale: 0.001 };
+        let frame = WorkingFrame { center: DVec3::new(5.0, 0.0, 0.0), scale: 0.001, physical: false };
         let ctx = BuildContext { rest: &rest, selection: &Selection::All, frame: &frame };
         let built = build_constraints(KIND, &ctx, Params::default().with("force", vec![0.0, 0.0, 2000.0])).unwrap();
         assert_eq!(built.len(), 6);

@@ -132,7 +132,7 @@ mod tests {
     fn the_weights_are_the_lumped_masses_times_the_acceleration() {
         let mesh = crate::generate::cloth_grid(5, 4, 1.0, 0.6);
         let rest = RestGeometry::new(mesh.positions.clone(), mesh.triangles.clone(), vec![]);
-        let frame = WorkingFrame { center: DVec3::ZERO, scale: 0.5 };
+        let frame = WorkingFrame { center: DVec3::ZERO, scale: 0.5, physical: false };
         let ctx = BuildContext { rest: &rest, selection: &Selection::All, frame: &frame };
         let params = Params::default().with("density", 2.0).with("acceleration", vec![0.0, -10.0, 4.0]);
         let built = build_constraints(KIND, &ctx, params).unwrap();
