@@ -5,7 +5,7 @@ use std::fmt::Write as _;
 use std::path::{Component, Path, PathBuf};
 use std::sync::OnceLock;
 
-use shapeup_core::scene::{GeneratedMesh, Scene, SceneFormat};
+use shapeup_core::scene::{Scene, SceneFormat};
 
 use crate::{check_message, expect_valid};
 
@@ -213,11 +213,8 @@ fn cube_ele() -> String {
 /// [`MAX_LOADED_VERTICES`], or a relative mesh path that goes up at most once (`../data/…`).
 pub fn worth_loading(scene: &Scene) -> bool {
     if let Some(generated) = &scene.mesh.generate {
-        let vertices: f64 = match generated {
-            GeneratedMesh::Cloth { vertices, .. } => vertices.iter().map(|&n| n as f64).product(),
-            GeneratedMesh::TetBox { cells, .. } => cells.iter().map(|&n| n as f64 + 1.0).product(),
-        };
-        return vertices <= MAX_LOADED_VERTICES;
+        // The library's own count, for every kind (cloth, sphere, tet_box).
+        return generated.element_counts()[0] <= MAX_LOADED_VERTICES;
     }
     let mut ups = 0;
     for (i, component) in scene.mesh.path.components().enumerate() {
