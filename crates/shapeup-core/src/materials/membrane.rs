@@ -117,7 +117,7 @@ impl TriMembrane {
     /// longest edge, or [`TriangleGradient::new`]'s tests).
     pub fn new(vertices: [u32; 3], rest: &[DVec3], material: &Material, thickness: f64) -> Option<Self> {
         let p = vertices.map(|v| rest[v as usize]);
-        let longest = [(0, 1), (0, 2), (1, 2)].iter().map(|&(i, j)| (p[i] - p[j]).length()).fold(0.0, f64::max);
+        let longest = super::longest_edge(&p);
         let gradient = TriangleGradient::new(vertices, rest)?;
         (gradient.rest_area > 1e-12 * longest * longest).then(|| TriMembrane {
             gradient,

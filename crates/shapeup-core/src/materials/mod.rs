@@ -211,10 +211,7 @@ impl TetMaterial {
     /// millimetres has tetrahedra of 1e-12 m³).
     pub fn new(vertices: [u32; 4], rest: &[DVec3], material: &Material) -> Option<Self> {
         let p = vertices.map(|v| rest[v as usize]);
-        let longest = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)]
-            .iter()
-            .map(|&(i, j)| (p[i] - p[j]).length())
-            .fold(0.0, f64::max);
+        let longest = longest_edge(&p);
         TetGradient::with_min_volume(vertices, rest, 1e-12 * longest.powi(3)).map(|gradient| TetMaterial {
             gradient,
             model: material.model,
@@ -227,6 +224,18 @@ impl TetMaterial {
     pub fn rest_volume(&self) -> f64 {
         self.gradient.rest_volume
     }
+}
+
+/// An element's longest edge: the largest distance between two of its corners `p` (what the
+/// materials and the pressure measure their elements' size by).
+fn longest_edge(p: &[DVec3]) -> f64 {
+    let mut longest: f64 = 0.0;
+    for (i, a) in p.iter().enumerate() {
+        for b in &p[i + 1..] {
+            longest = longest.max((*a - *b).length());
+        }
+    }
+    longest
 }
 
 fn from_rows(rows: &[DVec3]) -> DMat3 {

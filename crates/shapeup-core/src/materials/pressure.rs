@@ -38,7 +38,7 @@ impl PressureTerm {
     /// The term of triangle `vertices` of `rest` under pressure `pressure`, cones from `center`.
     pub fn new(vertices: [u32; 3], rest: &[DVec3], pressure: f64, center: DVec3) -> Self {
         let p = vertices.map(|v| rest[v as usize]);
-        let longest = [(0, 1), (0, 2), (1, 2)].iter().map(|&(i, j)| (p[i] - p[j]).length()).fold(0.0, f64::max);
+        let longest = super::longest_edge(&p);
         PressureTerm { vertices, pressure, center, weight: (pressure.abs() * longest / 6.0).max(1e-300) }
     }
 
